@@ -1,0 +1,20 @@
+"""Command line of ``arbiter-tui``."""
+
+from __future__ import annotations
+
+import sys
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if argv and argv[0] == "stats":
+        from .stats_cmd import run
+
+        return run(argv[1:])
+    from .launch import run_app
+
+    return run_app(argv)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

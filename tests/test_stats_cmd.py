@@ -1,0 +1,66 @@
+"""``arbiter-tui stats FILE`` as a user runs it: a real subprocess on real files."""
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from arbiter_backend.core.analytics import STATS_FIELDS, stats_of_points
+from arbiter_backend.core.exports import to_csv, to_json
+
+from .helpers import random_points
+
+
+def run(*args):
+    return subprocess.run(
+        [sys.executable, "-m", "arbiter_tui.cli", "stats", *map(str, args)],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+
+
+@pytest.mark.parametrize("fmt", ["csv", "json"])
+def test_stats_json_matches_the_store(tmp_path, fmt):
+    pts = random_points(40, seed=9)
+    f = tmp_path / f"export.{fmt}"
+    f.write_text(to_csv(pts) if fmt == "csv" else to_json(pts))
+    r = run(f, "--json")
+    assert r.returncode == 0, r.stderr
+    got = json.loads(r.stdout)
+    want = stats_of_points(pts).as_dict()
+    assert list(got) == list(STATS_FIELDS)
+    for k in want:
+        assert got[k] == pytest.approx(want[k], rel=1e-12)
+
+
+def test_stats_table_lists_nine_lines(tmp_path):
+    f = tmp_path / "e.csv"
+    f.write_text(to_csv(random_points(5)))
+    r = run(f)
+    assert r.returncode == 0
+    lines = r.stdout.strip().splitlines()
+    assert [ln.split()[0] for ln in lines] == list(STATS_FIELDS)
+    assert lines[0].split()[1] == "5"
+
+
+@pytest.mark.parametrize(
+    "content",
+    [b"", b"\x00\xff\xfe binary", b"hello,world\n1,2\n", b'{"dataPoints": [1]}', b"{oops"],
+)
+def test_bad_files_get_one_line_errors(tmp_path, content):
+    f = tmp_path / "bad"
+    f.write_bytes(content)
+    r = run(f)
+    assert r.returncode == 1
+    assert "Traceback" not in r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1
+    assert r.stderr.startswith("arbiter-tui stats: ")
+
+
+def test_missing_file_and_directory(tmp_path):
+    for target in (tmp_path / "missing.csv", tmp_path):
+        r = run(target)
+        assert r.returncode == 1
+        assert "Traceback" not in r.stderr and len(r.stderr.strip().splitlines()) == 1
