@@ -1,0 +1,58 @@
+"""The tracker's HTTP API (port 8085): ``GET /api/latency`` and ``GET /api/health``, JSON everywhere."""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+from aiohttp import web
+
+from .tracker import DEFAULT_LIMIT, LatencyTracker
+
+
+def _json(body: Any, status: int = 200) -> web.Response:
+    return web.Response(
+        text=json.dumps(body, allow_nan=False, separators=(",", ":")),
+        status=status,
+        content_type="application/json",
+    )
+
+
+def _error(status: int, message: str) -> web.Response:
+    return _json({"error": message, "status": status}, status)
+
+
+@web.middleware
+async def json_errors(request: web.Request, handler: Any) -> web.StreamResponse:
+    try:
+        return await handler(request)
+    except web.HTTPMethodNotAllowed as exc:
+        resp = _error(405, f"method {request.method} not allowed on {request.path}")
+        resp.headers["Allow"] = ", ".join(sorted(exc.allowed_methods))
+        return resp
+    except web.HTTPNotFound:
+        return _error(404, f"no such endpoint: {request.path}")
+    except web.HTTPException as exc:
+        return _error(exc.status, exc.reason)
+
+
+def make_app(tracker: LatencyTracker) -> web.Application:
+    async def latency(request: web.Request) -> web.Response:
+        raw = request.query.get("limit")
+        if raw is None:
+            return _json(tracker.latency_response(min(DEFAULT_LIMIT, tracker.max_records)))
+        try:
+            limit = int(raw)
+        except ValueError:
+            return _error(400, f"limit must be an integer, got {raw[:40]!r}")
+        if not 0 <= limit <= tracker.max_records:
+            return _error(400, f"limit must be between 0 and {tracker.max_records}")
+        return _json(tracker.latency_response(limit))
+
+    async def health(request: web.Request) -> web.Response:
+        return _json(tracker.health())
+
+    app = web.Application(middlewares=[json_errors])
+    app.router.add_get("/api/latency", latency)
+    app.router.add_get("/api/health", health)
+    return app

@@ -1,0 +1,382 @@
+"""A rosbridge v2 WebSocket endpoint on the in-process topic bus (aiohttp).
+
+Ops: advertise, unadvertise, publish, subscribe (throttle_rate, queue_length),
+unsubscribe, call_service for the rosapi basics (/rosapi/topics,
+/rosapi/topic_type, /rosapi/topics_for_type), set_level. Unlike the real ROS 2
+server, every bad frame is answered with a ``status`` frame naming the problem
+(and the request's ``id``), and the connection stays open.
+
+Each client has a bounded outgoing queue drained by its own writer task: a
+slow client loses its oldest frames (counted), never blocks the bus or the
+other clients. Per-client state is dropped when the socket closes.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import itertools
+import json
+import logging
+import time
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+from aiohttp import WSMsgType, web
+
+from .bus import TopicBus
+from .msgtypes import MessageError, normalize_type
+
+log = logging.getLogger(__name__)
+
+MAX_FRAME_BYTES = 1024 * 1024  # answered with a status error above this
+TRANSPORT_MAX_FRAME = 16 * 1024 * 1024  # aiohttp closes the socket (1009) above this
+CLIENT_QUEUE = 1000
+LEVELS = ("info", "warning", "error", "none")
+
+
+class BadFrame(ValueError):
+    pass
+
+
+def _reject_constant(token: str) -> Any:
+    raise BadFrame(f"non-finite number {token} is not allowed")
+
+
+def _dumps(obj: Any) -> str:
+    return json.dumps(obj, separators=(",", ":"), allow_nan=False)
+
+
+@dataclass
+class _Sub:
+    """One client's subscription to one topic (requests with several ids are merged, as rosbridge does)."""
+
+    topic: str
+    requests: dict[Any, tuple[int, int]] = field(default_factory=dict)  # id -> (throttle_ms, queue_length)
+    unsubscribe: Callable[[], None] | None = None
+    last_sent: float = -1e18
+    pending: deque[str] = field(default_factory=deque)
+    timer: asyncio.TimerHandle | None = None
+
+    @property
+    def throttle_s(self) -> float:
+        return min(t for t, _ in self.requests.values()) / 1000.0
+
+    @property
+    def queue_length(self) -> int:
+        return min(q for _, q in self.requests.values())
+
+
+class Client:
+    _ids = itertools.count(1)
+
+    def __init__(self, ws: web.WebSocketResponse, queue_size: int) -> None:
+        self.id = next(self._ids)
+        self.ws = ws
+        self.out: deque[str] = deque(maxlen=queue_size)
+        self.wakeup = asyncio.Event()
+        self.dropped = 0
+        self.advertised: dict[str, str] = {}
+        self.subs: dict[str, _Sub] = {}
+        self.level = "error"
+        self.closed = False
+
+    def send(self, frame: str) -> None:
+        if self.closed:
+            return
+        if len(self.out) == self.out.maxlen:
+            self.dropped += 1
+        self.out.append(frame)
+        self.wakeup.set()
+
+    def status(self, level: str, msg: str, req_id: Any = None) -> None:
+        if self.level == "none" or LEVELS.index(level) < LEVELS.index(self.level):
+            return
+        frame: dict[str, Any] = {"op": "status", "level": level, "msg": msg}
+        if req_id is not None:
+            frame["id"] = req_id
+        self.send(_dumps(frame))
+
+
+class RosbridgeEndpoint:
+    def __init__(
+        self,
+        bus: TopicBus,
+        max_frame: int = MAX_FRAME_BYTES,
+        client_queue: int = CLIENT_QUEUE,
+        services: dict[str, Callable[[Any], dict[str, Any]]] | None = None,
+    ) -> None:
+        self.bus = bus
+        self.max_frame = max_frame
+        self.client_queue = client_queue
+        self.clients: set[Client] = set()
+        self.errors = 0
+        self.services: dict[str, Callable[[Any], dict[str, Any]]] = {
+            "/rosapi/topics": self._svc_topics,
+            "/rosapi/topic_type": self._svc_topic_type,
+            "/rosapi/topics_for_type": self._svc_topics_for_type,
+        }
+        if services:
+            self.services.update(services)
+        self._ops: dict[str, Callable[[Client, dict[str, Any]], None]] = {
+            "advertise": self._advertise,
+            "unadvertise": self._unadvertise,
+            "publish": self._publish,
+            "subscribe": self._subscribe,
+            "unsubscribe": self._unsubscribe,
+            "call_service": self._call_service,
+            "set_level": self._set_level,
+        }
+
+    # -- connection lifecycle ------------------------------------------------------------
+    async def handle(self, request: web.Request) -> web.WebSocketResponse:
+        ws = web.WebSocketResponse(max_msg_size=TRANSPORT_MAX_FRAME, heartbeat=None)
+        await ws.prepare(request)
+        client = Client(ws, self.client_queue)
+        self.clients.add(client)
+        writer = asyncio.get_running_loop().create_task(self._writer(client))
+        log.info("client %d connected from %s", client.id, request.remote)
+        try:
+            async for msg in ws:
+                if msg.type == WSMsgType.TEXT:
+                    self.handle_frame(client, msg.data)
+                elif msg.type == WSMsgType.BINARY:
+                    try:
+                        text = msg.data.decode("utf-8")
+                    except UnicodeDecodeError:
+                        self._error(client, "binary frame is not UTF-8 JSON text")
+                        continue
+                    self.handle_frame(client, text)
+                elif msg.type == WSMsgType.ERROR:
+                    log.info("client %d socket error: %s", client.id, ws.exception())
+                    break
+        finally:
+            self._drop_client(client)
+            writer.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await writer
+            log.info("client %d disconnected (dropped %d outgoing frames)", client.id, client.dropped)
+        return ws
+
+    async def _writer(self, client: Client) -> None:
+        ws = client.ws
+        try:
+            while True:
+                await client.wakeup.wait()
+                client.wakeup.clear()
+                while client.out:
+                    frame = client.out.popleft()
+                    await ws.send_str(frame)
+        except (ConnectionResetError, RuntimeError, asyncio.CancelledError):
+            pass
+        except Exception:
+            log.exception("writer for client %d failed", client.id)
+
+    def _drop_client(self, client: Client) -> None:
+        client.closed = True
+        for sub in client.subs.values():
+            if sub.unsubscribe:
+                sub.unsubscribe()
+            if sub.timer:
+                sub.timer.cancel()
+        client.subs.clear()
+        client.advertised.clear()
+        self.clients.discard(client)
+
+    async def close_all(self) -> None:
+        for client in list(self.clients):
+            with contextlib.suppress(Exception):
+                await client.ws.close()
+
+    # -- frames ------------------------------------------------------------------------------
+    def _error(self, client: Client, msg: str, req_id: Any = None) -> None:
+        self.errors += 1
+        client.status("error", msg, req_id)
+
+    def handle_frame(self, client: Client, text: str) -> None:
+        if len(text) > self.max_frame:
+            self._error(client, f"frame of {len(text)} bytes exceeds the {self.max_frame}-byte limit")
+            return
+        try:
+            frame = json.loads(text, parse_constant=_reject_constant)
+        except BadFrame as exc:
+            self._error(client, f"invalid JSON: {exc}")
+            return
+        except (ValueError, RecursionError) as exc:
+            self._error(client, f"invalid JSON: {str(exc)[:200]}")
+            return
+        if not isinstance(frame, dict):
+            self._error(client, f"a frame must be a JSON object, got {type(frame).__name__}")
+            return
+        req_id = frame.get("id")
+        if isinstance(req_id, (dict, list)):
+            req_id = None
+        op = frame.get("op")
+        if not isinstance(op, str):
+            self._error(client, "frame has no string field 'op'", req_id)
+            return
+        handler = self._ops.get(op)
+        if handler is None:
+            self._error(client, f"unknown operation {op[:60]!r}", req_id)
+            return
+        try:
+            handler(client, frame)
+        except (BadFrame, MessageError) as exc:
+            self._error(client, f"{op}: {exc}", req_id)
+        except Exception as exc:  # never let one frame take the connection down
+            log.exception("op %s failed", op)
+            self._error(client, f"{op}: internal error: {type(exc).__name__}", req_id)
+
+    @staticmethod
+    def _field(frame: dict[str, Any], name: str, kind: type | tuple[type, ...], required: bool = True) -> Any:
+        if name not in frame:
+            if required:
+                raise BadFrame(f"missing field {name!r}")
+            return None
+        value = frame[name]
+        if isinstance(value, bool) and bool not in (kind if isinstance(kind, tuple) else (kind,)):
+            raise BadFrame(f"field {name!r} has the wrong type (bool)")
+        if not isinstance(value, kind):
+            raise BadFrame(f"field {name!r} has the wrong type ({type(value).__name__})")
+        return value
+
+    @staticmethod
+    def _topic(frame: dict[str, Any]) -> str:
+        topic = RosbridgeEndpoint._field(frame, "topic", str)
+        if not topic or len(topic) > 256:
+            raise BadFrame("topic must be a non-empty string of at most 256 characters")
+        return topic if topic.startswith("/") else "/" + topic
+
+    def _advertise(self, client: Client, frame: dict[str, Any]) -> None:
+        topic = self._topic(frame)
+        type_name = self.bus.declare(topic, self._field(frame, "type", str))
+        client.advertised[topic] = type_name
+
+    def _unadvertise(self, client: Client, frame: dict[str, Any]) -> None:
+        client.advertised.pop(self._topic(frame), None)
+
+    def _publish(self, client: Client, frame: dict[str, Any]) -> None:
+        topic = self._topic(frame)
+        msg = frame.get("msg", {})
+        type_name = client.advertised.get(topic) or self.bus.type_of(topic)
+        if type_name is None:
+            raise BadFrame(f"cannot infer the type of {topic}: advertise it first")
+        self.bus.publish(topic, msg, type_name)
+
+    def _subscribe(self, client: Client, frame: dict[str, Any]) -> None:
+        topic = self._topic(frame)
+        type_name = self._field(frame, "type", str, required=False)
+        throttle = self._field(frame, "throttle_rate", int, required=False) or 0
+        queue_length = self._field(frame, "queue_length", int, required=False) or 0
+        if throttle < 0 or queue_length < 0:
+            raise BadFrame("throttle_rate and queue_length must not be negative")
+        queue_length = min(queue_length, self.client_queue)
+        if type_name is not None:
+            self.bus.declare(topic, type_name)
+        elif self.bus.type_of(topic) is None:
+            raise BadFrame(f"cannot subscribe to {topic}: type unknown; give 'type'")
+        sub = client.subs.get(topic)
+        if sub is None:
+            sub = _Sub(topic)
+            client.subs[topic] = sub
+            sub.unsubscribe = self.bus.subscribe(topic, lambda m, c=client, s=sub: self._deliver(c, s, m))
+        sub.requests[frame.get("id", f"_anon{len(sub.requests)}")] = (throttle, queue_length)
+
+    def _unsubscribe(self, client: Client, frame: dict[str, Any]) -> None:
+        topic = self._topic(frame)
+        sub = client.subs.get(topic)
+        if sub is None:
+            return
+        req_id = frame.get("id")
+        if req_id is not None and req_id in sub.requests:
+            del sub.requests[req_id]
+        elif req_id is None or isinstance(req_id, (dict, list)):
+            sub.requests.clear()
+        if not sub.requests:
+            if sub.unsubscribe:
+                sub.unsubscribe()
+            if sub.timer:
+                sub.timer.cancel()
+            del client.subs[topic]
+
+    def _deliver(self, client: Client, sub: _Sub, msg: dict[str, Any]) -> None:
+        frame = _dumps({"op": "publish", "topic": sub.topic, "msg": msg})
+        throttle = sub.throttle_s
+        if throttle <= 0:
+            client.send(frame)
+            return
+        now = time.monotonic()
+        if now - sub.last_sent >= throttle and not sub.pending:
+            sub.last_sent = now
+            client.send(frame)
+            return
+        qlen = sub.queue_length
+        if qlen <= 0:
+            return
+        sub.pending.append(frame)
+        while len(sub.pending) > qlen:
+            sub.pending.popleft()
+        if sub.timer is None:
+            delay = max(0.0, sub.last_sent + throttle - now)
+            sub.timer = asyncio.get_running_loop().call_later(delay, self._flush, client, sub)
+
+    def _flush(self, client: Client, sub: _Sub) -> None:
+        sub.timer = None
+        if client.closed or not sub.pending:
+            return
+        sub.last_sent = time.monotonic()
+        client.send(sub.pending.popleft())
+        if sub.pending:
+            sub.timer = asyncio.get_running_loop().call_later(sub.throttle_s, self._flush, client, sub)
+
+    def _call_service(self, client: Client, frame: dict[str, Any]) -> None:
+        service = self._field(frame, "service", str)
+        req_id = frame.get("id")
+        reply: dict[str, Any] = {"op": "service_response", "service": service}
+        if req_id is not None:
+            reply["id"] = req_id
+        handler = self.services.get(service)
+        if handler is None:
+            reply.update(result=False, values=f"Service {service} does not exist")
+        else:
+            try:
+                reply.update(result=True, values=handler(frame.get("args")))
+            except (BadFrame, MessageError, ValueError) as exc:
+                reply.update(result=False, values=f"{service}: {exc}")
+        client.send(_dumps(reply))
+
+    def _set_level(self, client: Client, frame: dict[str, Any]) -> None:
+        level = self._field(frame, "level", str)
+        if level not in LEVELS:
+            raise BadFrame(f"level must be one of {', '.join(LEVELS)}")
+        client.level = level
+
+    # -- rosapi --------------------------------------------------------------------------------
+    def _svc_topics(self, args: Any) -> dict[str, Any]:
+        topics = self.bus.topics()
+        return {"topics": [t for t, _ in topics], "types": [ty for _, ty in topics]}
+
+    def _svc_topic_type(self, args: Any) -> dict[str, Any]:
+        topic = (
+            args.get("topic")
+            if isinstance(args, dict)
+            else (args[0] if isinstance(args, list) and args else None)
+        )
+        if not isinstance(topic, str):
+            raise BadFrame("args.topic must be a string")
+        return {"type": self.bus.type_of(topic) or ""}
+
+    def _svc_topics_for_type(self, args: Any) -> dict[str, Any]:
+        t = args.get("type") if isinstance(args, dict) else None
+        if not isinstance(t, str):
+            raise BadFrame("args.type must be a string")
+        want = normalize_type(t)
+        return {"topics": [topic for topic, ty in self.bus.topics() if ty == want]}
+
+
+def make_app(endpoint: RosbridgeEndpoint) -> web.Application:
+    app = web.Application()
+    app.router.add_get("/", endpoint.handle)
+    return app

@@ -1,0 +1,74 @@
+"""The in-process topic bus: the embedded stand-in for the ROS graph.
+
+Messages travel in rosbridge's JSON form (dicts). Callbacks run synchronously
+on the publisher's thread (in the backend, the one asyncio loop), so a command
+reaches the tracker without a queue hop. A callback that raises is logged and
+skipped; it never breaks delivery to the others.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+from typing import Any
+
+from .msgtypes import MessageError, check_message, normalize_type
+
+log = logging.getLogger(__name__)
+
+Callback = Callable[[dict[str, Any]], None]
+
+
+class TypeClash(MessageError):
+    """A topic was used with a type other than the one it has."""
+
+
+class TopicBus:
+    def __init__(self) -> None:
+        self._types: dict[str, str] = {}
+        self._subs: dict[str, list[Callback]] = {}
+        self.published = 0
+
+    def declare(self, topic: str, type_name: str) -> str:
+        """Give ``topic`` a type (normalised), or check it against the one it has."""
+        t = normalize_type(type_name)
+        have = self._types.get(topic)
+        if have is not None and have != t:
+            raise TypeClash(f"topic {topic} has type {have}, not {t}")
+        self._types[topic] = t
+        return t
+
+    def type_of(self, topic: str) -> str | None:
+        return self._types.get(topic)
+
+    def topics(self) -> list[tuple[str, str]]:
+        return sorted(self._types.items())
+
+    def subscribe(self, topic: str, callback: Callback, type_name: str | None = None) -> Callable[[], None]:
+        if type_name is not None:
+            self.declare(topic, type_name)
+        self._subs.setdefault(topic, []).append(callback)
+
+        def unsubscribe() -> None:
+            subs = self._subs.get(topic)
+            if subs and callback in subs:
+                subs.remove(callback)
+
+        return unsubscribe
+
+    def subscriber_count(self, topic: str) -> int:
+        return len(self._subs.get(topic, ()))
+
+    def publish(self, topic: str, msg: Any, type_name: str | None = None) -> dict[str, Any]:
+        """Check ``msg`` against the topic's type and deliver it; returns the normalised message."""
+        t = self.declare(topic, type_name) if type_name is not None else self._types.get(topic)
+        if t is None:
+            raise MessageError(f"cannot infer the type of {topic}: not yet advertised")
+        checked = check_message(t, msg)
+        self.published += 1
+        for cb in tuple(self._subs.get(topic, ())):
+            try:
+                cb(checked)
+            except Exception:
+                log.exception("subscriber of %s failed", topic)
+        return checked

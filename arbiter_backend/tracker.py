@@ -1,0 +1,135 @@
+"""The latency tracker (the seed's ``latency_tracker.py``), independent of transport.
+
+A transport hands it the text of each ``/stamped_cmd_vel`` message with the
+wall-clock receive time; it answers with the record to publish on
+``/latency_report`` and the clamped twist to forward on ``/cmd_vel_measured``.
+Malformed envelopes are counted and their last error kept; they are never
+raised and never forwarded. The watchdog asks for one zero twist when commands
+stop arriving.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from .core import envelope
+from .core.kinematics import DEFAULT_LIMITS, Limits, clamp_twist
+from .core.record import build_record, latency_stats
+
+NODE_NAME = "latency_tracker"
+DEFAULT_LIMIT = 100
+
+
+@dataclass(frozen=True)
+class Accepted:
+    record: dict[str, Any]
+    linear_x: float  # clamped, safe to forward
+    angular_z: float
+
+
+class LatencyTracker:
+    def __init__(
+        self,
+        deploy_mode: str = "native",
+        max_records: int = 10_000,
+        cmd_timeout: float = 0.5,
+        limits: Limits = DEFAULT_LIMITS,
+        clock_ns: Callable[[], int] = time.time_ns,
+        monotonic: Callable[[], float] = time.monotonic,
+    ) -> None:
+        if max_records < 1:
+            raise ValueError("max_records must be at least 1")
+        self.deploy_mode = deploy_mode
+        self.max_records = max_records
+        self.cmd_timeout = cmd_timeout
+        self.limits = limits
+        self._clock_ns = clock_ns
+        self._monotonic = monotonic
+        self._lock = threading.Lock()
+        self._records: deque[dict[str, Any]] = deque(maxlen=max_records)
+        self._latencies = np.zeros(max_records, dtype=np.float64)
+        self._lat_next = 0
+        self.total_seen = 0
+        self.rejected = 0
+        self.last_error: str | None = None
+        self._started = monotonic()
+        self._last_cmd: float | None = None
+        self._stopped_sent = True  # nothing to stop before the first command
+
+    # -- input ------------------------------------------------------------------------
+    def on_stamped(self, text: Any, recv_ns: int | None = None) -> Accepted | None:
+        """Handle one ``/stamped_cmd_vel`` payload; None when it was rejected (and counted)."""
+        if recv_ns is None:
+            recv_ns = self._clock_ns()
+        try:
+            if not isinstance(text, (str, bytes)):
+                raise envelope.EnvelopeError("bad_type", f"data must be a string, got {type(text).__name__}")
+            cmd = envelope.parse(text)
+        except envelope.EnvelopeError as exc:
+            with self._lock:
+                self.rejected += 1
+                self.last_error = f"{exc.kind}: {exc}"
+            return None
+        record = build_record(cmd, recv_ns, self.deploy_mode)
+        v, w = clamp_twist(cmd.linear_x, cmd.angular_z, self.limits)
+        with self._lock:
+            self._records.append(record)
+            self._latencies[self._lat_next] = record["latency_ms"]
+            self._lat_next = (self._lat_next + 1) % self.max_records
+            self.total_seen += 1
+            self._last_cmd = self._monotonic()
+            self._stopped_sent = False
+        return Accepted(record, v, w)
+
+    def watchdog_due(self) -> bool:
+        """True exactly once after ``cmd_timeout`` without a valid command (send one zero twist)."""
+        with self._lock:
+            if self._stopped_sent or self._last_cmd is None:
+                return False
+            if self._monotonic() - self._last_cmd < self.cmd_timeout:
+                return False
+            self._stopped_sent = True
+            return True
+
+    # -- API ----------------------------------------------------------------------------
+    def latency_response(self, limit: int = DEFAULT_LIMIT) -> dict[str, Any]:
+        """The seed's ``GET /api/latency`` body, plus totals; stats cover the whole window."""
+        with self._lock:
+            n = len(self._records)
+            window = self._latencies[:n] if n < self.max_records else self._latencies
+            stats = latency_stats(window)
+            recent = list(self._records)[-limit:] if limit > 0 else []
+            total, rejected, last_error = self.total_seen, self.rejected, self.last_error
+        return {
+            "stats": stats,
+            "records": recent,
+            "deploy_mode": self.deploy_mode,
+            "total_seen": total,
+            "window": n,
+            "dropped": total - n,
+            "rejected": rejected,
+            "last_error": last_error,
+        }
+
+    def health(self) -> dict[str, Any]:
+        now = self._monotonic()
+        with self._lock:
+            since = None if self._last_cmd is None else round(now - self._last_cmd, 3)
+            return {
+                "status": "ok",
+                "node": NODE_NAME,
+                "uptime_s": round(now - self._started, 3),
+                "records_count": len(self._records),
+                "total_seen": self.total_seen,
+                "rejected": self.rejected,
+                "last_error": self.last_error,
+                "seconds_since_last_command": since,
+                "deploy_mode": self.deploy_mode,
+            }
