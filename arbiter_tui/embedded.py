@@ -1,0 +1,90 @@
+"""Embedded mode: run the bundled backend as a child process on loopback, like a real deployment."""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import os
+import re
+import select
+import signal
+import socket
+import subprocess
+import sys
+import time
+from dataclasses import dataclass
+
+LISTEN_RE = re.compile(r"rosbridge=ws://([\d.]+):(\d+) api=http://[\d.]+:(\d+)")
+
+
+class EmbeddedError(RuntimeError):
+    pass
+
+
+def port_free(port: int, host: str = "127.0.0.1") -> bool:
+    with socket.socket() as s:
+        try:
+            s.bind((host, port))
+        except OSError:
+            return False
+    return True
+
+
+def _die_with_parent() -> None:  # pragma: no cover - runs in the child
+    # Linux: the backend gets SIGTERM if the TUI dies, so a crashed console never leaves it running.
+    with contextlib.suppress(Exception):
+        ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
+    os.setpgrp()  # and a terminal's Ctrl-C reaches only the TUI, which stops the robot first
+
+
+@dataclass
+class EmbeddedBackend:
+    proc: subprocess.Popen[str]
+    bridge_port: int
+    api_port: int
+
+    @classmethod
+    def start(
+        cls, bridge_port: int = 9090, api_port: int = 8085, log_file: str | None = None, timeout: float = 15.0
+    ) -> EmbeddedBackend:
+        bp = bridge_port if bridge_port == 0 or port_free(bridge_port) else 0
+        ap = api_port if api_port == 0 or port_free(api_port) else 0
+        cmd = [sys.executable, "-m", "arbiter_backend.cli", "--bridge-port", str(bp), "--api-port", str(ap)]
+        if log_file:
+            cmd += ["--log-file", log_file]
+        proc = subprocess.Popen(
+            cmd,
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            preexec_fn=_die_with_parent if sys.platform.startswith("linux") else None,
+        )
+        assert proc.stdout is not None
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            ready, _, _ = select.select([proc.stdout], [], [], 0.2)
+            if ready:
+                line = proc.stdout.readline()
+                m = LISTEN_RE.search(line)
+                if m:
+                    return cls(proc, int(m.group(2)), int(m.group(3)))
+            if proc.poll() is not None:
+                err = proc.stderr.read().strip() if proc.stderr else ""
+                raise EmbeddedError(
+                    f"the bundled backend exited: {err.splitlines()[-1] if err else proc.returncode}"
+                )
+        proc.kill()
+        raise EmbeddedError("the bundled backend did not start within %.0f s" % timeout)
+
+    def stop(self, timeout: float = 5.0) -> None:
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGTERM)
+            try:
+                self.proc.wait(timeout)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait()
+        for stream in (self.proc.stdout, self.proc.stderr):
+            if stream:
+                stream.close()

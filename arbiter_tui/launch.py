@@ -1,0 +1,156 @@
+"""``arbiter-tui`` (no subcommand): parse flags, start the backend if embedded, run the app."""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import math
+import os
+import sys
+import tempfile
+from pathlib import Path
+from urllib.parse import urlparse
+
+from .settings import CONNECT, EMBEDDED, SIM, Settings
+
+
+def _positive(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not (math.isfinite(v) and v > 0):
+        raise argparse.ArgumentTypeError(f"must be a positive finite number, got {text}")
+    return v
+
+
+def _count(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a whole number: {text!r}") from None
+    if not 1 <= v <= 1_000_000:
+        raise argparse.ArgumentTypeError("must be between 1 and 1000000")
+    return v
+
+
+def _port(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a port: {text!r}") from None
+    if not 0 <= v <= 65535:
+        raise argparse.ArgumentTypeError("port must be 0-65535")
+    return v
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="arbiter-tui",
+        description="Teleop console and analytics/latency monitor for ROS 2 robots. With no mode flag it "
+        "starts the bundled backend (rosbridge endpoint, latency tracker, simulated robot) on 127.0.0.1 and "
+        "drives it. 'arbiter-tui stats FILE' prints the statistics of an export.",
+    )
+    m = p.add_mutually_exclusive_group()
+    m.add_argument(
+        "--connect", action="store_true", help="use servers that already run (--rosbridge, --tracker)"
+    )
+    m.add_argument("--sim", action="store_true", help="client-side simulation: no network, latency N/A")
+    p.add_argument("--rosbridge", default="ws://127.0.0.1:9090", help="rosbridge URL for --connect")
+    p.add_argument("--tracker", default="http://127.0.0.1:8085", help="latency tracker URL for --connect")
+    p.add_argument(
+        "--bridge-port", type=_port, default=9090, help="embedded: rosbridge port (a free one if taken)"
+    )
+    p.add_argument(
+        "--api-port", type=_port, default=8085, help="embedded: tracker API port (a free one if taken)"
+    )
+    p.add_argument(
+        "--export-dir", type=Path, default=Path("."), help="where exports are written (default: .)"
+    )
+    p.add_argument(
+        "--collection-rate", type=_positive, default=10.0, help="analytics samples per second (10)"
+    )
+    p.add_argument("--max-points", type=_count, default=1000, help="analytics ring buffer size (1000)")
+    p.add_argument("--speed", type=_positive, default=0.5, help="teleop start speed, m/s (0.5)")
+    p.add_argument("--turn", type=_positive, default=1.0, help="teleop start turn rate, rad/s (1.0)")
+    p.add_argument(
+        "--repeat-rate", type=_positive, default=10.0, help="commands per second while a key is held (10)"
+    )
+    p.add_argument(
+        "--key-timeout", type=_positive, default=0.6, help="stop this long after the last key, s (0.6)"
+    )
+    p.add_argument(
+        "--log-file", help="log file for the client libraries (default: a file in the temp directory)"
+    )
+    return p
+
+
+def _host_port(url: str, default_port: int) -> tuple[str, int]:
+    u = urlparse(url)
+    if u.scheme not in ("ws", "wss") or not u.hostname:
+        raise ValueError(f"--rosbridge must be a ws:// URL, got {url!r}")
+    return u.hostname, u.port or default_port
+
+
+def run_app(argv: list[str]) -> int:
+    args = build_parser().parse_args(argv)
+    log_file = args.log_file or os.path.join(tempfile.gettempdir(), "arbiter-tui.log")
+    # roslibpy/twisted/autobahn must never write to the terminal the TUI owns.
+    logging.basicConfig(
+        filename=log_file, level=logging.INFO, format="%(asctime)s %(name)s %(levelname)s %(message)s"
+    )
+    if not args.export_dir.is_dir():
+        print(f"arbiter-tui: --export-dir {args.export_dir} is not a directory", file=sys.stderr)
+        return 2
+    mode = CONNECT if args.connect else SIM if args.sim else EMBEDDED
+    settings = Settings(
+        mode=mode,
+        export_dir=args.export_dir,
+        collection_rate=args.collection_rate,
+        max_points=args.max_points,
+        speed=args.speed,
+        turn=args.turn,
+        repeat_rate=args.repeat_rate,
+        key_timeout=args.key_timeout,
+    )
+    from .app import make_app
+    from .links import RosLink, SimLink
+    from .tracker_client import TrackerClient
+
+    backend = None
+    try:
+        if mode == SIM:
+            link = SimLink()
+            tracker = None
+        else:
+            if mode == EMBEDDED:
+                from .embedded import EmbeddedBackend, EmbeddedError
+
+                try:
+                    backend = EmbeddedBackend.start(args.bridge_port, args.api_port, log_file=log_file)
+                except EmbeddedError as exc:
+                    print(f"arbiter-tui: {exc}", file=sys.stderr)
+                    return 1
+                host, port = "127.0.0.1", backend.bridge_port
+                tracker_url = f"http://127.0.0.1:{backend.api_port}"
+                settings.rosbridge_url = f"ws://{host}:{port}"
+            else:
+                try:
+                    host, port = _host_port(args.rosbridge, 9090)
+                except ValueError as exc:
+                    print(f"arbiter-tui: {exc}", file=sys.stderr)
+                    return 2
+                tracker_url = args.tracker
+                settings.rosbridge_url = args.rosbridge
+            settings.tracker_url = tracker_url
+            link = RosLink(host, port)
+            tracker = TrackerClient(tracker_url)
+        app = make_app(settings, link, tracker)
+        if backend is not None:
+            app.sub_title = f"embedded backend {settings.rosbridge_url} {settings.tracker_url}"
+        app.run()
+        link.close()
+    finally:
+        if backend is not None:
+            backend.stop()
+    return 0

@@ -1,0 +1,203 @@
+"""Links to the robot: the rosbridge link (roslibpy) and the client-side simulation link.
+
+Both expose the same small surface to the control loop: ``state``, ``send(v, w)``,
+``telemetry`` (latest pose and latency, thread-safe) and ``close()``. roslibpy runs
+Twisted in its own thread; its callbacks only write into :class:`Telemetry`
+under a lock, and the UI reads from it at its own pace.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+from arbiter_backend.core import envelope
+from arbiter_backend.core.kinematics import Pose, quaternion_to_yaw
+from arbiter_backend.simulator import DiffDriveSimulator
+
+log = logging.getLogger(__name__)
+
+CONNECTING = "CONNECTING"
+CONNECTED = "CONNECTED"
+RECONNECTING = "RECONNECTING"
+DISCONNECTED = "DISCONNECTED"
+SIMULATED = "SIMULATED"
+MAX_RECONNECT_DELAY_S = 2.0
+
+
+@dataclass
+class Telemetry:
+    """Latest robot state as seen by the console (written from any thread)."""
+
+    lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
+    pose: Pose = field(default_factory=Pose)
+    v: float = 0.0
+    w: float = 0.0
+    odom_count: int = 0
+    latency_ms: float | None = None
+    reports: int = 0
+    sent: int = 0
+    last_status: str | None = None
+
+    def set_odom(self, msg: dict[str, Any]) -> None:
+        try:
+            p = msg["pose"]["pose"]
+            pose = Pose(
+                float(p["position"]["x"]), float(p["position"]["y"]), quaternion_to_yaw(p["orientation"])
+            )
+            v = float(msg["twist"]["twist"]["linear"]["x"])
+            w = float(msg["twist"]["twist"]["angular"]["z"])
+        except (KeyError, TypeError, ValueError):
+            return
+        with self.lock:
+            self.pose, self.v, self.w = pose, v, w
+            self.odom_count += 1
+
+    def set_report(self, msg: dict[str, Any]) -> None:
+        try:
+            record = json.loads(msg["data"])
+            latency = float(record["latency_ms"])
+        except (KeyError, TypeError, ValueError):
+            return
+        with self.lock:
+            self.latency_ms = latency
+            self.reports += 1
+
+    def snapshot(self) -> tuple[Pose, float, float, float | None]:
+        with self.lock:
+            return self.pose, self.v, self.w, self.latency_ms
+
+
+class Link(Protocol):
+    telemetry: Telemetry
+
+    @property
+    def state(self) -> str: ...
+
+    def send(self, v: float, w: float) -> bool: ...
+
+    def close(self) -> None: ...
+
+
+class SimLink:
+    """Client-side simulation: no network, the simulator steps inside the TUI process; no latency."""
+
+    def __init__(self, clock: Callable[[], float] = time.monotonic) -> None:
+        self.telemetry = Telemetry()
+        self.sim = DiffDriveSimulator()
+        self._clock = clock
+
+    @property
+    def state(self) -> str:
+        return SIMULATED
+
+    def send(self, v: float, w: float) -> bool:
+        self.sim.on_twist({"linear": {"x": v}, "angular": {"z": w}}, self._clock())
+        self.telemetry.sent += 1
+        return True
+
+    def step(self) -> None:
+        odom = self.sim.tick(self._clock(), time.time_ns())
+        self.telemetry.set_odom(odom)
+
+    def close(self) -> None:
+        pass
+
+
+class RosLink:
+    """The rosbridge link: stamped commands out, /odom and /latency_report in (roslibpy, Twisted thread)."""
+
+    def __init__(self, host: str, port: int, odom_throttle_ms: int = 50) -> None:
+        import roslibpy
+        from roslibpy.comm import select_factory
+
+        factory_cls = select_factory()
+        factory_cls.set_max_delay(MAX_RECONNECT_DELAY_S)  # roslibpy's default is an hour
+        factory_cls.set_initial_delay(0.3)
+        self.telemetry = Telemetry()
+        self._lock = threading.Lock()
+        self._state = CONNECTING
+        self._seq = 0
+        self._zero_first = False
+        self._ever_connected = False
+        self.ros = roslibpy.Ros(host, port)
+        factory = self.ros.factory
+        original_started = factory.startedConnecting
+
+        def started(connector: Any) -> None:
+            with self._lock:
+                if self._state == DISCONNECTED:
+                    self._state = RECONNECTING
+            original_started(connector)
+
+        factory.startedConnecting = started
+        factory.on("ready", self._on_ready)
+        self.ros.on("close", self._on_close)
+        self._cmd = roslibpy.Topic(self.ros, "/stamped_cmd_vel", "std_msgs/String", queue_size=1)
+        self._odom = roslibpy.Topic(
+            self.ros, "/odom", "nav_msgs/Odometry", throttle_rate=odom_throttle_ms, queue_length=1
+        )
+        self._report = roslibpy.Topic(self.ros, "/latency_report", "std_msgs/String", queue_length=10)
+        self._cmd.advertise()
+        self._odom.subscribe(self.telemetry.set_odom)
+        self._report.subscribe(self.telemetry.set_report)
+        self._message = roslibpy.Message
+        self.ros.factory.manager.run()  # start the reactor thread without blocking on the connection
+
+    def _on_ready(self, proto: Any) -> None:
+        # roslibpy has no handler for rosbridge "status" frames; ours records the message.
+        proto._message_handlers["status"] = self._on_status
+        with self._lock:
+            self._state = CONNECTED
+            if self._ever_connected:
+                self._zero_first = True
+            self._ever_connected = True
+
+    def _on_close(self, *args: Any) -> None:
+        with self._lock:
+            if self._state != "CLOSED":
+                self._state = DISCONNECTED
+
+    def _on_status(self, message: dict[str, Any]) -> None:
+        with self.telemetry.lock:
+            self.telemetry.last_status = f"{message.get('level', '?')}: {message.get('msg', '')}"[:200]
+
+    @property
+    def state(self) -> str:
+        with self._lock:
+            if self._state == CONNECTED and not self.ros.is_connected:
+                return DISCONNECTED
+            return self._state
+
+    def send(self, v: float, w: float) -> bool:
+        """Publish one stamped command; refuses (False) while not connected, so nothing is
+        queued for a burst replay on reconnect. After a reconnect the first command is a zero."""
+        if self.state != CONNECTED:
+            return False
+        with self._lock:
+            zero_first, self._zero_first = self._zero_first, False
+        if zero_first:
+            self._publish(0.0, 0.0)
+        self._publish(v, w)
+        return True
+
+    def _publish(self, v: float, w: float) -> None:
+        with self._lock:
+            seq = self._seq
+            self._seq += 1
+        self._cmd.publish(self._message({"data": envelope.build(v, w, seq=seq)}))
+        self.telemetry.sent += 1
+
+    def close(self) -> None:
+        with self._lock:
+            self._state = "CLOSED"
+        try:
+            if self.ros.is_connected:
+                self.ros.close(timeout=2)
+        except Exception:  # closing a dead link must never take the app down
+            log.debug("closing the rosbridge link failed", exc_info=True)

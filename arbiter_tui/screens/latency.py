@@ -1,0 +1,81 @@
+"""Latency screen: the tracker's stats, a sparkline of the rolling window, recent records."""
+
+from __future__ import annotations
+
+from rich.text import Text
+from textual.app import ComposeResult
+from textual.widgets import DataTable, Sparkline, Static
+
+from .base import BaseScreen
+
+CARDS = (("count", "count"), ("mean_ms", "mean"), ("min_ms", "min"), ("max_ms", "max"), ("p95_ms", "p95"),
+         ("stddev_ms", "stddev"))  # fmt: skip
+
+
+def fmt_ms(value: object) -> str:
+    if value is None:
+        return "N/A"
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        return f"{value:.3f} ms"
+    return "?"
+
+
+class LatencyScreen(BaseScreen):
+    DEFAULT_CSS = """
+    LatencyScreen #lat-cards { height: 3; padding: 0 1; }
+    LatencyScreen #lat-state { height: 1; padding: 0 1; }
+    LatencyScreen #lat-spark { height: 5; border: round $primary; }
+    LatencyScreen #lat-records { height: 1fr; }
+    """
+
+    def compose_body(self) -> ComposeResult:
+        yield Static(id="lat-state")
+        yield Static(id="lat-cards")
+        yield Sparkline([], id="lat-spark")
+        yield DataTable(id="lat-records", show_cursor=False, zebra_stripes=True)
+
+    def on_mount(self) -> None:
+        self.query_one("#lat-records", DataTable).add_columns(
+            "seq", "latency", "linear_x", "angular_z", "mode"
+        )
+        super().on_mount()
+
+    def refresh_view(self) -> None:
+        super().refresh_view()
+        app = self.arbiter
+        view = app.latency_view()
+        state = Text()
+        if view is None:
+            state.append("Client-side simulation: no network path, latency N/A", "bold")
+        elif view.reachable is None:
+            state.append("Polling the tracker…", "bold")
+        elif not view.reachable:
+            state.append(f"TRACKER UNREACHABLE ({view.error}) — retrying every 0.5 s", "bold red")
+        else:
+            state.append("tracker reachable", "bold green")
+            state.append(f" · deploy mode {view.deploy_mode} · {len(view.window)} samples in window")
+        self.query_one("#lat-state", Static).update(state)
+        stats = view.stats if view is not None else {}
+        cards = Text()
+        for i, (key, label) in enumerate(CARDS):
+            value = stats.get(key)
+            text = str(value) if key == "count" and value is not None else fmt_ms(value)
+            if key == "count" and value is None:
+                text = "N/A"
+            cards.append(f"{label:>7} ", "bold")
+            cards.append(f"{text:<14}")
+            if i == 2:
+                cards.append("\n")
+        self.query_one("#lat-cards", Static).update(cards)
+        self.query_one("#lat-spark", Sparkline).data = list(view.window) if view is not None else []
+        table = self.query_one("#lat-records", DataTable)
+        table.clear()
+        if view is not None:
+            for r in reversed(view.records[-30:]):
+                table.add_row(
+                    str(r.get("seq", "")),
+                    fmt_ms(r.get("latency_ms")),
+                    f"{r.get('linear_x', 0):+.2f}",
+                    f"{r.get('angular_z', 0):+.2f}",
+                    str(r.get("deploy_mode", "")),
+                )

@@ -1,0 +1,29 @@
+"""What the command line decides, in one object the app factory takes."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+EMBEDDED = "embedded"
+CONNECT = "connect"
+SIM = "sim"
+
+
+@dataclass
+class Settings:
+    mode: str = EMBEDDED
+    rosbridge_url: str = "ws://127.0.0.1:9090"
+    tracker_url: str | None = "http://127.0.0.1:8085"
+    deploy_mode: str = "native"
+    export_dir: Path = Path(".")
+    collection_rate: float = 10.0
+    max_points: int = 1000
+    speed: float = 0.5
+    turn: float = 1.0
+    repeat_rate: float = 10.0
+    key_timeout: float = 0.6
+    ui_rate: float = 5.0  # redraws per second, however fast data arrives
+    poll_period: float = 0.5  # tracker API poll, 2 Hz
+    live: bool = True  # timers and workers on; snapshot tests turn it off for still frames
+    handle_signals: bool = True
