@@ -75,7 +75,7 @@ class EmbeddedBackend:
                     f"the bundled backend exited: {err.splitlines()[-1] if err else proc.returncode}"
                 )
         proc.kill()
-        raise EmbeddedError("the bundled backend did not start within %.0f s" % timeout)
+        raise EmbeddedError(f"the bundled backend did not start within {timeout:.0f} s")
 
     def stop(self, timeout: float = 5.0) -> None:
         if self.proc.poll() is None:

@@ -14,7 +14,7 @@ ARROWS = "→↗↑↖←↙↓↘"
 
 
 def heading_arrow(theta: float) -> str:
-    return ARROWS[int(round(theta / (math.pi / 4))) % 8]
+    return ARROWS[round(theta / (math.pi / 4)) % 8]
 
 
 def render_map(
@@ -46,8 +46,8 @@ def render_map(
     styles: dict[tuple[int, int], str] = {}
 
     def cell(x: float, y: float) -> tuple[int, int] | None:
-        c = int(round((x - cx) / m_per_col + width / 2 - 0.5))
-        r = int(round(height / 2 - 0.5 - (y - cy) / m_per_row))
+        c = round((x - cx) / m_per_col + width / 2 - 0.5)
+        r = round(height / 2 - 0.5 - (y - cy) / m_per_row)
         if 0 <= c < width and 0 <= r < height:
             return r, c
         return None

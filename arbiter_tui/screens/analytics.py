@@ -98,5 +98,5 @@ class AnalyticsScreen(BaseScreen):
             ]
             table.add_row(*row)
         xs, ys = store.column("x", last=2000), store.column("y", last=2000)
-        self.query_one("#traj", MapView).show(list(zip(xs.tolist(), ys.tolist())), None, None)
+        self.query_one("#traj", MapView).show(list(zip(xs.tolist(), ys.tolist(), strict=True)), None, None)
         self.query_one("#err-spark", Sparkline).data = store.column("distanceError", last=200).tolist()

@@ -15,13 +15,13 @@ HELP = """[b]arbiter-tui[/b] — teleop console, analytics and latency monitor
 
 [b]Control[/b] (teleop_twist_keyboard keys; hold a key to keep moving)
   u i o / j k l / m , .   move;  arrows too;  k or space: stop
-  q/z  speed and turn ×1.1/×0.9   w/x linear only   e/c angular only
+  q/z  speed and turn x1.1 / x0.9   w/x linear only   e/c angular only
   a algorithm (manual, go_to_goal, pure_pursuit)   n mission   g go
   The robot stops when keys stop, on leaving this screen, on focus loss.
 
 [b]Analytics[/b]  r start/stop collection   x clear   c CSV   j JSON   m MCAP
 
-[b]Latency[/b]    polls GET /api/latency at 2 Hz; one-way latency = receive − stamp
+[b]Latency[/b]    polls GET /api/latency at 2 Hz; one-way latency = receive - stamp
 
 Press escape or ? to close."""
 
@@ -29,7 +29,9 @@ Press escape or ? to close."""
 class HelpScreen(ModalScreen[None]):
     DEFAULT_CSS = """
     HelpScreen { align: center middle; }
-    HelpScreen > Vertical { width: 78; height: auto; border: thick $primary; background: $surface; padding: 1 2; }
+    HelpScreen > Vertical {
+        width: 78; height: auto; border: thick $primary; background: $surface; padding: 1 2;
+    }
     """
     BINDINGS = [Binding("escape,question_mark,q", "dismiss", "Close")]
 

@@ -1,0 +1,89 @@
+"""Test doubles at the link boundary and a deterministic app builder for snapshot and Pilot tests."""
+
+from arbiter_backend.core.analytics import AnalyticsStore
+from arbiter_backend.core.kinematics import Pose
+from arbiter_tui.app import make_app
+from arbiter_tui.links import CONNECTED, Telemetry
+from arbiter_tui.settings import Settings
+from arbiter_tui.tracker_client import TrackerClient
+
+from .helpers import make_point
+
+
+class FakeClock:
+    def __init__(self, t: float = 1000.0):
+        self.t = t
+
+    def __call__(self) -> float:
+        return self.t
+
+
+class RecordingLink:
+    """Stands in for the rosbridge link where a test must see exactly what would go on the wire."""
+
+    def __init__(self, state: str = CONNECTED):
+        self.telemetry = Telemetry()
+        self._state = state
+        self.sent: list[tuple[float, float]] = []
+
+    @property
+    def state(self) -> str:
+        return self._state
+
+    def send(self, v: float, w: float) -> bool:
+        if self._state != CONNECTED:
+            return False
+        self.sent.append((v, w))
+        return True
+
+    def close(self) -> None:
+        pass
+
+
+def still_app(tmp_path=None, link=None, store=None, tracker_view=True, mode="embedded"):
+    """An app with no timers, seeded data and a fixed pose: every frame is the same."""
+    settings = Settings(mode=mode, live=False, handle_signals=False, export_dir=tmp_path or ".")
+    link = link or RecordingLink()
+    link.telemetry.pose = Pose(1.25, -0.5, 0.6)
+    link.telemetry.v, link.telemetry.w = 0.4, 0.2
+    link.telemetry.latency_ms = 0.42
+    if store is None:
+        store = AnalyticsStore()
+        store.start_collection()
+        for i in range(120):
+            store.record(make_point(i, ("manual", "go_to_goal", "pure_pursuit")[i // 40]))
+        store.stop_collection()
+    tracker = None
+    if mode != "sim":
+        tracker = TrackerClient("http://127.0.0.1:9")
+        if tracker_view:
+            tracker.view.apply(
+                {
+                    "stats": {
+                        "count": 3,
+                        "mean_ms": 0.31,
+                        "min_ms": 0.2,
+                        "max_ms": 0.45,
+                        "p95_ms": 0.45,
+                        "stddev_ms": 0.1,
+                    },
+                    "records": [
+                        {
+                            "latency_ms": 0.2 + 0.1 * i,
+                            "linear_x": 0.5,
+                            "angular_z": 0.0,
+                            "timestamp": 1.0 + i,
+                            "deploy_mode": "native",
+                            "seq": i,
+                        }
+                        for i in range(3)
+                    ],
+                    "deploy_mode": "native",
+                }
+            )
+    clock = FakeClock()
+    app = make_app(settings, link, tracker, store=store, clock=clock)
+    app.fake_clock = clock
+    for _ in range(30):
+        app.loop.trail.append((0.05 * _, 0.01 * _ * _ / 10))
+    return app
