@@ -4,13 +4,15 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import logging
 import signal
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 
 from textual import events
-from textual.app import App
+from textual.app import App, SystemCommand
 from textual.binding import Binding
+from textual.screen import Screen
 
 from arbiter_backend.core.analytics import STORE, AnalyticsStore
 from arbiter_backend.files import ExportError, export_store
@@ -24,6 +26,8 @@ from .screens.latency import LatencyScreen
 from .settings import SIM, Settings
 from .teleop import Teleop
 from .tracker_client import LatencyView, TrackerClient
+
+log = logging.getLogger(__name__)
 
 
 class ArbiterApp(App[None]):
@@ -67,7 +71,7 @@ class ArbiterApp(App[None]):
     def on_mount(self) -> None:
         if self.settings.live:
             self.set_interval(1.0 / self.settings.repeat_rate, self._control_tick)
-            self.set_interval(1.0 / self.store.collection_rate, self.loop.sample)
+            self.set_interval(1.0 / self.store.collection_rate, self._sample)
             self.set_interval(1.0 / self.settings.ui_rate, self._redraw)
             if isinstance(self.link, SimLink):
                 self.set_interval(1.0 / 50.0, self.link.step)
@@ -92,13 +96,25 @@ class ArbiterApp(App[None]):
             await asyncio.sleep(max(0.0, period - (time.monotonic() - started)))
 
     def _control_tick(self) -> None:
-        self.loop.tick_control(self.clock())
+        try:
+            self.loop.tick_control(self.clock())
+        except Exception:  # a failing link must not take the console (and its stop keys) down
+            log.exception("control tick failed")
+
+    def _sample(self) -> None:
+        try:
+            self.loop.sample()
+        except Exception:
+            log.exception("sampling failed")
 
     def _redraw(self) -> None:
-        screen = self.screen
-        refresh = getattr(screen, "refresh_view", None)
-        if refresh is not None:
+        refresh = getattr(self.screen, "refresh_view", None)
+        if refresh is None:
+            return
+        try:
             refresh()
+        except Exception:
+            log.exception("redraw failed")
 
     async def on_unmount(self) -> None:
         self.stop_robot("quit")
@@ -133,6 +149,19 @@ class ArbiterApp(App[None]):
             self.loop.running = False
             self._control_tick()  # respond to the first press at once, not at the next tick
         return True
+
+    def get_system_commands(self, screen: Screen[object]) -> Iterable[SystemCommand]:
+        yield from super().get_system_commands(screen)
+        for name in self.MODES:
+            yield SystemCommand(
+                f"Screen: {name}", f"Switch to the {name} screen", lambda n=name: self.action_mode(n)
+            )
+        yield SystemCommand("Stop the robot", "Zero velocity now", lambda: self.stop_robot("palette"))
+        yield SystemCommand("Start/stop collection", "Toggle analytics collection", self.toggle_collection)
+        for fmt in ("csv", "json", "mcap"):
+            yield SystemCommand(
+                f"Export {fmt.upper()}", f"Write the collected data as {fmt}", lambda f=fmt: self.export(f)
+            )
 
     # -- actions -------------------------------------------------------------------------------
     def action_mode(self, name: str) -> None:
@@ -173,15 +202,18 @@ class ArbiterApp(App[None]):
 
     def status_text(self) -> str:
         link_state = self.link.state
-        collecting = (
-            f"REC {len(self.store)} pts" if self.store.is_collecting else f"idle {len(self.store)} pts"
-        )
+        collecting = f"REC {len(self.store)}" if self.store.is_collecting else f"idle {len(self.store)}"
         tracker = ""
         if self.tracker is not None:
             reach = self.tracker.view.reachable
-            tracker = " · tracker " + ("?" if reach is None else ("ok" if reach else "UNREACHABLE"))
+            tracker = " · api " + ("?" if reach is None else ("ok" if reach else "UNREACHABLE"))
+        ports = ""
+        if self.settings.mode == "embedded":
+            bridge = self.settings.rosbridge_url.rsplit(":", 1)[-1]
+            api = (self.settings.tracker_url or "").rsplit(":", 1)[-1]
+            ports = f" {bridge}/{api}"
         return (
-            f"{link_state} · {self.settings.mode} · deploy {self.deploy_mode()} · "
+            f"{link_state} · {self.settings.mode}{ports} · deploy {self.deploy_mode()} · "
             f"{self.loop.algorithm} · {collecting}{tracker}"
         )
 

@@ -84,6 +84,8 @@ class AnalyticsScreen(BaseScreen):
         self.refresh_view()
 
     def refresh_view(self) -> None:
+        if not self.ready:
+            return
         super().refresh_view()
         store = self.arbiter.store
         self.query_one("#cards", Static).update(stats_cards(store.stats()))

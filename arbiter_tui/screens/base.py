@@ -44,6 +44,7 @@ class BaseScreen(Screen[None]):
         yield from ()
 
     def on_mount(self) -> None:
+        self._mounted_once = True
         self._check_size(self.app.size.width, self.app.size.height)
         self.refresh_view()
 
@@ -56,6 +57,13 @@ class BaseScreen(Screen[None]):
 
     def _check_size(self, width: int, height: int) -> None:
         self.set_class(width < MIN_WIDTH or height < MIN_HEIGHT, "too-small")
+
+    _mounted_once = False
+
+    @property
+    def ready(self) -> bool:
+        """False until on_mount ran: the app's redraw timer can reach a screen made current just before."""
+        return self._mounted_once
 
     def refresh_view(self) -> None:
         """Redraw from the shared state (called by the app at its fixed UI rate)."""

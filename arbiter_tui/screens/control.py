@@ -62,6 +62,8 @@ class ControlScreen(BaseScreen):
         self.refresh_view()
 
     def refresh_view(self) -> None:
+        if not self.ready:
+            return
         super().refresh_view()
         app = self.arbiter
         loop = app.loop

@@ -41,6 +41,8 @@ class LatencyScreen(BaseScreen):
         super().on_mount()
 
     def refresh_view(self) -> None:
+        if not self.ready:
+            return
         super().refresh_view()
         app = self.arbiter
         view = app.latency_view()
