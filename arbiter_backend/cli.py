@@ -9,31 +9,9 @@ import logging
 import signal
 import sys
 
+from .cliargs import count, port, positive_float
 from .core.kinematics import Limits
 from .server import Backend, BackendConfig
-
-
-def _port(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a port number: {text!r}") from None
-    if not 0 <= value <= 65535:
-        raise argparse.ArgumentTypeError(f"port must be 0-65535 (0 picks a free one), got {value}")
-    return value
-
-
-def _positive(kind: type) -> object:
-    def parse(text: str) -> float | int:
-        try:
-            value = kind(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"not a {kind.__name__}: {text!r}") from None
-        if not value > 0 or value != value or value == float("inf"):
-            raise argparse.ArgumentTypeError(f"must be a positive finite number, got {text}")
-        return value
-
-    return parse
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -43,8 +21,8 @@ def build_parser() -> argparse.ArgumentParser:
         "endpoint, in one process with no ROS install. Stops on SIGINT/SIGTERM.",
     )
     p.add_argument("--host", default="127.0.0.1", help="address to bind (default: 127.0.0.1, loopback only)")
-    p.add_argument("--bridge-port", type=_port, default=9090, help="rosbridge WebSocket port (default: 9090)")
-    p.add_argument("--api-port", type=_port, default=8085, help="tracker HTTP API port (default: 8085)")
+    p.add_argument("--bridge-port", type=port, default=9090, help="rosbridge WebSocket port (default: 9090)")
+    p.add_argument("--api-port", type=port, default=8085, help="tracker HTTP API port (default: 8085)")
     p.add_argument(
         "--deploy-mode",
         default="native",
@@ -56,18 +34,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--no-bridge", action="store_true", help="no rosbridge endpoint: another rosbridge server is used"
     )
-    p.add_argument(
-        "--max-records", type=_positive(int), default=10_000, help="latency records kept (default: 10000)"
-    )
+    p.add_argument("--max-records", type=count, default=10_000, help="latency records kept (default: 10000)")
     p.add_argument(
         "--cmd-timeout",
-        type=_positive(float),
+        type=positive_float,
         default=0.5,
         help="seconds without a command before the robot is stopped (default: 0.5)",
     )
-    p.add_argument("--max-linear", type=_positive(float), default=1.0, help="linear limit m/s (default: 1.0)")
+    p.add_argument("--max-linear", type=positive_float, default=1.0, help="linear limit m/s (default: 1.0)")
     p.add_argument(
-        "--max-angular", type=_positive(float), default=2.0, help="angular limit rad/s (default: 2.0)"
+        "--max-angular", type=positive_float, default=2.0, help="angular limit rad/s (default: 2.0)"
     )
     p.add_argument("--log-file", help="write logs to this file (default: warnings to stderr)")
     return p

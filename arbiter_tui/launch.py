@@ -4,44 +4,15 @@ from __future__ import annotations
 
 import argparse
 import logging
-import math
 import os
 import sys
 import tempfile
 from pathlib import Path
 from urllib.parse import urlparse
 
+from arbiter_backend.cliargs import count, port, positive_float
+
 from .settings import CONNECT, EMBEDDED, SIM, Settings
-
-
-def _positive(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not (math.isfinite(v) and v > 0):
-        raise argparse.ArgumentTypeError(f"must be a positive finite number, got {text}")
-    return v
-
-
-def _count(text: str) -> int:
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a whole number: {text!r}") from None
-    if not 1 <= v <= 1_000_000:
-        raise argparse.ArgumentTypeError("must be between 1 and 1000000")
-    return v
-
-
-def _port(text: str) -> int:
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a port: {text!r}") from None
-    if not 0 <= v <= 65535:
-        raise argparse.ArgumentTypeError("port must be 0-65535")
-    return v
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -59,25 +30,28 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--rosbridge", default="ws://127.0.0.1:9090", help="rosbridge URL for --connect")
     p.add_argument("--tracker", default="http://127.0.0.1:8085", help="latency tracker URL for --connect")
     p.add_argument(
-        "--bridge-port", type=_port, default=9090, help="embedded: rosbridge port (a free one if taken)"
+        "--bridge-port", type=port, default=9090, help="embedded: rosbridge port (a free one if taken)"
     )
     p.add_argument(
-        "--api-port", type=_port, default=8085, help="embedded: tracker API port (a free one if taken)"
+        "--api-port", type=port, default=8085, help="embedded: tracker API port (a free one if taken)"
     )
     p.add_argument(
         "--export-dir", type=Path, default=Path("."), help="where exports are written (default: .)"
     )
     p.add_argument(
-        "--collection-rate", type=_positive, default=10.0, help="analytics samples per second (10)"
+        "--collection-rate", type=positive_float, default=10.0, help="analytics samples per second (10)"
     )
-    p.add_argument("--max-points", type=_count, default=1000, help="analytics ring buffer size (1000)")
-    p.add_argument("--speed", type=_positive, default=0.5, help="teleop start speed, m/s (0.5)")
-    p.add_argument("--turn", type=_positive, default=1.0, help="teleop start turn rate, rad/s (1.0)")
+    p.add_argument("--max-points", type=count, default=1000, help="analytics ring buffer size (1000)")
+    p.add_argument("--speed", type=positive_float, default=0.5, help="teleop start speed, m/s (0.5)")
+    p.add_argument("--turn", type=positive_float, default=1.0, help="teleop start turn rate, rad/s (1.0)")
     p.add_argument(
-        "--repeat-rate", type=_positive, default=10.0, help="commands per second while a key is held (10)"
+        "--repeat-rate",
+        type=positive_float,
+        default=10.0,
+        help="commands per second while a key is held (10)",
     )
     p.add_argument(
-        "--key-timeout", type=_positive, default=0.6, help="stop this long after the last key, s (0.6)"
+        "--key-timeout", type=positive_float, default=0.6, help="stop this long after the last key, s (0.6)"
     )
     p.add_argument(
         "--log-file", help="log file for the client libraries (default: a file in the temp directory)"

@@ -64,3 +64,23 @@ def test_missing_file_and_directory(tmp_path):
         r = run(target)
         assert r.returncode == 1
         assert "Traceback" not in r.stderr and len(r.stderr.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["--speed", "-1"],
+        ["--repeat-rate", "nan"],
+        ["--max-points", "0"],
+        ["--bridge-port", "70000"],
+        ["--export-dir", "/definitely/missing"],
+        ["--connect", "--rosbridge", "http://x"],
+    ],
+)
+def test_bad_command_line_values_are_one_line_errors(args):
+    r = subprocess.run(
+        [sys.executable, "-m", "arbiter_tui.cli", *args], capture_output=True, text=True, timeout=60
+    )
+    assert r.returncode == 2
+    assert "Traceback" not in r.stderr
+    assert r.stderr.strip().splitlines()[-1].startswith("arbiter-tui")
