@@ -28,7 +28,7 @@ class DiffDriveSimulator:
 
     def on_twist(self, msg: dict[str, Any], now: float) -> None:
         """Take a ``geometry_msgs/Twist`` (or the twist of a TwistStamped) in JSON form."""
-        twist = msg.get("twist", msg) if "twist" in msg else msg
+        twist = msg["twist"] if "linear" not in msg and isinstance(msg.get("twist"), dict) else msg
         try:
             v = float(twist["linear"]["x"])
             w = float(twist["angular"]["z"])

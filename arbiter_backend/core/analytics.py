@@ -365,11 +365,12 @@ class AnalyticsStore:
             codes = self._alg[order]
             names = list(self._algos)
         out: dict[str, AnalyticsStats] = {}
+        x, y = num[1], num[2]
+        steps = S.step_lengths(x, y)  # once, shared by every algorithm
         for code in dict.fromkeys(codes.tolist()):
             mask = codes == code
-            x, y = num[1], num[2]
             same = mask[1:] & mask[:-1]
-            path = float(S.step_lengths(x, y)[same].sum())
+            path = float(steps[same].sum())
             out[names[code]] = compute_stats(
                 x[mask], y[mask], num[4][mask], num[5][mask], num[6][mask], num[7][mask], path=path
             )
