@@ -10,7 +10,7 @@ import time
 from collections.abc import Callable, Iterable
 
 from textual import events
-from textual.app import App, SystemCommand
+from textual.app import App, ScreenStackError, SystemCommand
 from textual.binding import Binding
 from textual.screen import Screen
 
@@ -108,7 +108,11 @@ class ArbiterApp(App[None]):
             log.exception("sampling failed")
 
     def _redraw(self) -> None:
-        refresh = getattr(self.screen, "refresh_view", None)
+        try:
+            screen = self.screen
+        except ScreenStackError:  # mid mode-switch the new mode's stack is briefly empty: skip this frame
+            return
+        refresh = getattr(screen, "refresh_view", None)
         if refresh is None:
             return
         try:
