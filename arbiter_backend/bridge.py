@@ -26,7 +26,7 @@ from typing import Any
 
 from aiohttp import WSMsgType, web
 
-from .bus import TopicBus
+from .bus import Bus
 from .msgtypes import MessageError, normalize_type
 
 log = logging.getLogger(__name__)
@@ -103,7 +103,7 @@ class Client:
 class RosbridgeEndpoint:
     def __init__(
         self,
-        bus: TopicBus,
+        bus: Bus,
         max_frame: int = MAX_FRAME_BYTES,
         client_queue: int = CLIENT_QUEUE,
         services: dict[str, Callable[[Any], dict[str, Any]]] | None = None,
@@ -182,6 +182,8 @@ class RosbridgeEndpoint:
             if sub.timer:
                 sub.timer.cancel()
         client.subs.clear()
+        for topic in client.advertised:
+            self.bus.unadvertise(topic)
         client.advertised.clear()
         self.clients.discard(client)
 
@@ -251,11 +253,16 @@ class RosbridgeEndpoint:
 
     def _advertise(self, client: Client, frame: dict[str, Any]) -> None:
         topic = self._topic(frame)
-        type_name = self.bus.declare(topic, self._field(frame, "type", str))
-        client.advertised[topic] = type_name
+        type_name = self._field(frame, "type", str)
+        if topic in client.advertised:
+            client.advertised[topic] = self.bus.declare(topic, type_name)
+        else:
+            client.advertised[topic] = self.bus.advertise(topic, type_name)
 
     def _unadvertise(self, client: Client, frame: dict[str, Any]) -> None:
-        client.advertised.pop(self._topic(frame), None)
+        topic = self._topic(frame)
+        if client.advertised.pop(topic, None) is not None:
+            self.bus.unadvertise(topic)
 
     def _publish(self, client: Client, frame: dict[str, Any]) -> None:
         topic = self._topic(frame)

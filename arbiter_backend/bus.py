@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable
-from typing import Any
+from typing import Any, Protocol
 
 from .msgtypes import MessageError, check_message, normalize_type
 
@@ -21,6 +21,20 @@ Callback = Callable[[dict[str, Any]], None]
 
 class TypeClash(MessageError):
     """A topic was used with a type other than the one it has."""
+
+
+class Bus(Protocol):
+    """What the rosbridge endpoint needs of a bus: this module's TopicBus, or ``ros.bus.RosBus`` (DDS)."""
+
+    def declare(self, topic: str, type_name: str) -> str: ...
+    def advertise(self, topic: str, type_name: str) -> str: ...
+    def unadvertise(self, topic: str) -> None: ...
+    def type_of(self, topic: str) -> str | None: ...
+    def topics(self) -> list[tuple[str, str]]: ...
+    def subscribe(
+        self, topic: str, callback: Callback, type_name: str | None = None
+    ) -> Callable[[], None]: ...
+    def publish(self, topic: str, msg: Any, type_name: str | None = None) -> dict[str, Any]: ...
 
 
 class TopicBus:
@@ -37,6 +51,12 @@ class TopicBus:
             raise TypeClash(f"topic {topic} has type {have}, not {t}")
         self._types[topic] = t
         return t
+
+    def advertise(self, topic: str, type_name: str) -> str:
+        return self.declare(topic, type_name)
+
+    def unadvertise(self, topic: str) -> None:
+        """Nothing to release: the in-process bus keeps a topic's type for its lifetime."""
 
     def type_of(self, topic: str) -> str | None:
         return self._types.get(topic)

@@ -8,10 +8,15 @@ import errno
 import logging
 import signal
 import sys
+from typing import TYPE_CHECKING
 
 from .cliargs import count, port, positive_float
 from .core.kinematics import Limits
 from .server import Backend, BackendConfig
+from .topics import MEASURED_TYPES
+
+if TYPE_CHECKING:
+    from .ros.backend import RosBackend as RosBackendT
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -45,17 +50,71 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--max-angular", type=positive_float, default=2.0, help="angular limit rad/s (default: 2.0)"
     )
+    p.add_argument(
+        "--transport",
+        choices=("embedded", "ros"),
+        default="embedded",
+        help="embedded: in-process topic bus, no ROS needed (default); ros: the tracker and simulator as "
+        "rclpy nodes on DDS (needs the [ros] extra or a sourced ROS 2), the endpoint relays to DDS",
+    )
+    p.add_argument(
+        "--measured-type",
+        choices=tuple(MEASURED_TYPES),
+        default="twist",
+        help="type of /cmd_vel_measured: twist (geometry_msgs/Twist, default) or twist_stamped "
+        "(TwistStamped with the tracker's receive time, for Jazzy+ diff_drive_controller)",
+    )
     p.add_argument("--log-file", help="write logs to this file (default: warnings to stderr)")
+    p.epilog = (
+        "In ROS mode, arguments after --ros-args go to rclpy: e.g. --ros-args -p deploy_mode:=pi "
+        "-r __ns:=/robot1. Parameters override the flags."
+    )
     return p
 
 
-async def _run(config: BackendConfig) -> int:
-    backend = Backend(config)
+def split_ros_args(argv: list[str]) -> tuple[list[str], list[str]]:
+    """``[... --ros-args X Y]`` -> (our arguments, ["--ros-args", X, Y])."""
+    if "--ros-args" in argv:
+        i = argv.index("--ros-args")
+        return argv[:i], argv[i:]
+    return argv, []
+
+
+def make_backend(config: BackendConfig, ros_args: list[str]) -> Backend | RosBackendT:
+    if config.transport != "ros":
+        if ros_args:
+            raise UsageError("--ros-args needs --transport ros")
+        return Backend(config)
+    from .ros import ROS_HINT, rclpy_available
+
+    reason = rclpy_available()
+    if reason is not None:
+        raise UsageError(f"{ROS_HINT} ({reason})")
+    from .ros.backend import RosBackend
+    from .ros.nodes import ParameterError
+
+    try:
+        return RosBackend(config, ros_args)
+    except (ParameterError, ValueError, TypeError) as exc:  # rclpy's parameter type errors are ValueErrors
+        raise UsageError(str(exc).splitlines()[0] if str(exc) else type(exc).__name__) from None
+
+
+class UsageError(Exception):
+    pass
+
+
+async def _run(config: BackendConfig, ros_args: list[str]) -> int:
+    try:
+        backend = make_backend(config, ros_args)
+    except UsageError as exc:
+        print(f"arbiter-backend: {exc}", file=sys.stderr)
+        return 2
     try:
         await backend.start()
     except OSError as exc:
+        await backend.stop()
         if exc.errno in (errno.EADDRINUSE, errno.EACCES, errno.EADDRNOTAVAIL):
-            print(f"arbiter-backend: cannot listen on {config.host}: {exc.strerror}", file=sys.stderr)
+            print(f"arbiter-backend: cannot listen on {backend.config.host}: {exc.strerror}", file=sys.stderr)
             return 2
         raise
     stop = asyncio.Event()
@@ -70,7 +129,8 @@ async def _run(config: BackendConfig) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+    ours, ros_args = split_ros_args(sys.argv[1:] if argv is None else list(argv))
+    args = build_parser().parse_args(ours)
     if args.log_file:
         logging.basicConfig(
             filename=args.log_file,
@@ -89,9 +149,11 @@ def main(argv: list[str] | None = None) -> int:
         max_records=args.max_records,
         cmd_timeout=args.cmd_timeout,
         limits=Limits(max_linear=args.max_linear, max_angular=args.max_angular),
+        measured_type=args.measured_type,
+        transport=args.transport,
     )
     try:
-        return asyncio.run(_run(config))
+        return asyncio.run(_run(config, ros_args))
     except KeyboardInterrupt:
         return 0
 

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import json
 import logging
 import time
 from dataclasses import dataclass, field
@@ -18,7 +17,7 @@ from typing import Any
 
 from aiohttp import web
 
-from . import api, bridge
+from . import api, bridge, topics
 from .bus import TopicBus
 from .core.kinematics import DEFAULT_LIMITS, Limits
 from .simulator import RATE_HZ, DiffDriveSimulator
@@ -26,13 +25,10 @@ from .tracker import LatencyTracker
 
 log = logging.getLogger(__name__)
 
-TOPIC_STAMPED = "/stamped_cmd_vel"
-TOPIC_MEASURED = "/cmd_vel_measured"
-TOPIC_REPORT = "/latency_report"
-TOPIC_ODOM = "/odom"
-TYPE_STRING = "std_msgs/msg/String"
-TYPE_TWIST = "geometry_msgs/msg/Twist"
-TYPE_ODOM = "nav_msgs/msg/Odometry"
+TOPIC_STAMPED = topics.absolute(topics.STAMPED)
+TOPIC_MEASURED = topics.absolute(topics.MEASURED)
+TOPIC_REPORT = topics.absolute(topics.REPORT)
+TOPIC_ODOM = topics.absolute(topics.ODOM)
 
 
 @dataclass
@@ -46,35 +42,84 @@ class BackendConfig:
     max_records: int = 10_000
     cmd_timeout: float = 0.5
     limits: Limits = field(default_factory=lambda: DEFAULT_LIMITS)
+    measured_type: str = "twist"  # a key of topics.MEASURED_TYPES
+    transport: str = "embedded"  # or "ros"
+
+    def make_tracker(self) -> LatencyTracker:
+        return LatencyTracker(
+            deploy_mode=self.deploy_mode,
+            max_records=self.max_records,
+            cmd_timeout=self.cmd_timeout,
+            limits=self.limits,
+        )
+
+    def make_simulator(self) -> DiffDriveSimulator:
+        return DiffDriveSimulator(self.limits, cmd_timeout=self.cmd_timeout)
 
 
-def twist_msg(v: float, w: float) -> dict[str, Any]:
-    return {"linear": {"x": v, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0, "y": 0.0, "z": w}}
+class Servers:
+    """The two listening sockets every transport has: the rosbridge endpoint and the tracker's HTTP API."""
 
-
-class Backend:
     def __init__(self, config: BackendConfig) -> None:
         self.config = config
-        self.bus = TopicBus()
-        self.tracker = LatencyTracker(
-            deploy_mode=config.deploy_mode,
-            max_records=config.max_records,
-            cmd_timeout=config.cmd_timeout,
-            limits=config.limits,
-        )
-        self.simulator = (
-            DiffDriveSimulator(config.limits, cmd_timeout=config.cmd_timeout) if config.sim else None
-        )
-        self.endpoint = bridge.RosbridgeEndpoint(self.bus)
         self._runners: list[web.AppRunner] = []
-        self._tasks: list[asyncio.Task[None]] = []
         self.bridge_port: int | None = None
         self.api_port: int | None = None
+        self.sim_enabled = False
+
+    async def _serve(self, app: web.Application, port: int) -> int:
+        runner = web.AppRunner(app, access_log=None, handle_signals=False)
+        await runner.setup()
+        self._runners.append(runner)
+        site = web.TCPSite(runner, self.config.host, port, reuse_address=True)
+        await site.start()
+        server = site._server
+        assert server is not None and server.sockets  # type: ignore[union-attr]
+        return int(server.sockets[0].getsockname()[1])  # type: ignore[union-attr]
+
+    async def start_servers(self, endpoint: bridge.RosbridgeEndpoint | None, tracker: LatencyTracker) -> None:
+        try:
+            if endpoint is not None:
+                self.bridge_port = await self._serve(bridge.make_app(endpoint), self.config.bridge_port)
+            self.api_port = await self._serve(api.make_app(tracker), self.config.api_port)
+        except BaseException:
+            await self.stop_servers(endpoint)
+            raise
+
+    async def stop_servers(self, endpoint: bridge.RosbridgeEndpoint | None) -> None:
+        if endpoint is not None:
+            await endpoint.close_all()
+        for runner in self._runners:
+            await runner.cleanup()
+        self._runners.clear()
+
+    def describe(self) -> str:
+        parts = []
+        if self.bridge_port is not None:
+            parts.append(f"rosbridge=ws://{self.config.host}:{self.bridge_port}")
+        parts.append(f"api=http://{self.config.host}:{self.api_port}")
+        parts.append(f"deploy_mode={self.config.deploy_mode}")
+        parts.append(f"sim={'on' if self.sim_enabled else 'off'}")
+        parts.append(f"transport={self.config.transport}")
+        return "arbiter-backend listening: " + " ".join(parts)
+
+
+class Backend(Servers):
+    """The embedded transport: an in-process topic bus instead of DDS."""
+
+    def __init__(self, config: BackendConfig) -> None:
+        super().__init__(config)
+        self.bus = TopicBus()
+        self.tracker = config.make_tracker()
+        self.simulator = config.make_simulator() if config.sim else None
+        self.sim_enabled = self.simulator is not None
+        self.endpoint = bridge.RosbridgeEndpoint(self.bus)
+        self._tasks: list[asyncio.Task[None]] = []
         for topic, type_name in (
-            (TOPIC_STAMPED, TYPE_STRING),
-            (TOPIC_MEASURED, TYPE_TWIST),
-            (TOPIC_REPORT, TYPE_STRING),
-            (TOPIC_ODOM, TYPE_ODOM),
+            (TOPIC_STAMPED, topics.TYPE_STRING),
+            (TOPIC_MEASURED, topics.MEASURED_TYPES[config.measured_type]),
+            (TOPIC_REPORT, topics.TYPE_STRING),
+            (TOPIC_ODOM, topics.TYPE_ODOM),
         ):
             self.bus.declare(topic, type_name)
         self.bus.subscribe(TOPIC_STAMPED, self._on_stamped)
@@ -87,8 +132,10 @@ class Backend:
         accepted = self.tracker.on_stamped(msg.get("data"), recv_ns)
         if accepted is None:
             return
-        self.bus.publish(TOPIC_REPORT, {"data": json.dumps(accepted.record, allow_nan=False)})
-        self.bus.publish(TOPIC_MEASURED, twist_msg(accepted.linear_x, accepted.angular_z))
+        self.bus.publish(TOPIC_REPORT, {"data": topics.report_text(accepted.record)})
+        mt = self.config.measured_type
+        twist = topics.measured_message(accepted.linear_x, accepted.angular_z, mt, recv_ns)
+        self.bus.publish(TOPIC_MEASURED, twist)
 
     async def _watchdog(self) -> None:
         period = min(0.05, self.config.cmd_timeout / 4)
@@ -96,7 +143,10 @@ class Backend:
             await asyncio.sleep(period)
             if self.tracker.watchdog_due():
                 log.info("no command for %.2fs: publishing zero twist", self.config.cmd_timeout)
-                self.bus.publish(TOPIC_MEASURED, twist_msg(0.0, 0.0))
+                self.bus.publish(
+                    TOPIC_MEASURED,
+                    topics.measured_message(0.0, 0.0, self.config.measured_type, time.time_ns()),
+                )
 
     async def _sim_loop(self) -> None:
         assert self.simulator is not None
@@ -113,24 +163,8 @@ class Backend:
                 delay = 0.0
             await asyncio.sleep(max(0.0, delay))
 
-    async def _serve(self, app: web.Application, port: int) -> int:
-        runner = web.AppRunner(app, access_log=None, handle_signals=False)
-        await runner.setup()
-        self._runners.append(runner)
-        site = web.TCPSite(runner, self.config.host, port, reuse_address=True)
-        await site.start()
-        server = site._server
-        assert server is not None and server.sockets  # type: ignore[union-attr]
-        return int(server.sockets[0].getsockname()[1])  # type: ignore[union-attr]
-
     async def start(self) -> None:
-        try:
-            if self.config.bridge:
-                self.bridge_port = await self._serve(bridge.make_app(self.endpoint), self.config.bridge_port)
-            self.api_port = await self._serve(api.make_app(self.tracker), self.config.api_port)
-        except BaseException:
-            await self.stop()
-            raise
+        await self.start_servers(self.endpoint if self.config.bridge else None, self.tracker)
         loop = asyncio.get_running_loop()
         self._tasks.append(loop.create_task(self._watchdog()))
         if self.simulator is not None:
@@ -143,16 +177,4 @@ class Backend:
             with contextlib.suppress(asyncio.CancelledError):
                 await task
         self._tasks.clear()
-        await self.endpoint.close_all()
-        for runner in self._runners:
-            await runner.cleanup()
-        self._runners.clear()
-
-    def describe(self) -> str:
-        parts = []
-        if self.bridge_port is not None:
-            parts.append(f"rosbridge=ws://{self.config.host}:{self.bridge_port}")
-        parts.append(f"api=http://{self.config.host}:{self.api_port}")
-        parts.append(f"deploy_mode={self.config.deploy_mode}")
-        parts.append(f"sim={'on' if self.simulator else 'off'}")
-        return "arbiter-backend listening: " + " ".join(parts)
+        await self.stop_servers(self.endpoint)

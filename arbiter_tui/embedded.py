@@ -45,11 +45,18 @@ class EmbeddedBackend:
 
     @classmethod
     def start(
-        cls, bridge_port: int = 9090, api_port: int = 8085, log_file: str | None = None, timeout: float = 15.0
+        cls,
+        bridge_port: int = 9090,
+        api_port: int = 8085,
+        log_file: str | None = None,
+        timeout: float = 15.0,
+        transport: str = "embedded",
     ) -> EmbeddedBackend:
         bp = bridge_port if bridge_port == 0 or port_free(bridge_port) else 0
         ap = api_port if api_port == 0 or port_free(api_port) else 0
         cmd = [sys.executable, "-m", "arbiter_backend.cli", "--bridge-port", str(bp), "--api-port", str(ap)]
+        if transport != "embedded":
+            cmd += ["--transport", transport]
         if log_file:
             cmd += ["--log-file", log_file]
         proc = subprocess.Popen(

@@ -36,6 +36,12 @@ def build_parser() -> argparse.ArgumentParser:
         "--api-port", type=port, default=8085, help="embedded: tracker API port (a free one if taken)"
     )
     p.add_argument(
+        "--transport",
+        choices=("embedded", "ros"),
+        default="embedded",
+        help="embedded mode: the backend's transport; ros runs its nodes on DDS (needs the [ros] extra)",
+    )
+    p.add_argument(
         "--export-dir", type=Path, default=Path("."), help="where exports are written (default: .)"
     )
     p.add_argument(
@@ -101,7 +107,9 @@ def run_app(argv: list[str]) -> int:
                 from .embedded import EmbeddedBackend, EmbeddedError
 
                 try:
-                    backend = EmbeddedBackend.start(args.bridge_port, args.api_port, log_file=log_file)
+                    backend = EmbeddedBackend.start(
+                        args.bridge_port, args.api_port, log_file=log_file, transport=args.transport
+                    )
                 except EmbeddedError as exc:
                     print(f"arbiter-tui: {exc}", file=sys.stderr)
                     return 1
@@ -121,7 +129,9 @@ def run_app(argv: list[str]) -> int:
             tracker = TrackerClient(tracker_url)
         app = make_app(settings, link, tracker)
         if backend is not None:
-            app.sub_title = f"embedded backend {settings.rosbridge_url} {settings.tracker_url}"
+            app.sub_title = (
+                f"embedded backend ({args.transport}) {settings.rosbridge_url} {settings.tracker_url}"
+            )
         app.run()
         link.close()
     finally:

@@ -175,3 +175,28 @@ def test_limit_returns_the_most_recent_records(backend):
         assert get_json(f"{backend.api}/api/latency?limit=0")["records"] == []
     finally:
         ros.close()
+
+
+def test_measured_type_twist_stamped_in_the_embedded_transport():
+    from .conftest import start_backend
+
+    backend = start_backend("--measured-type", "twist_stamped", "--no-sim")
+    ros = connect(backend.bridge_port)
+    try:
+        got = []
+        roslibpy.Topic(ros, "/cmd_vel_measured", "geometry_msgs/TwistStamped").subscribe(got.append)
+        pub = roslibpy.Topic(ros, "/stamped_cmd_vel", "std_msgs/String")
+        pub.advertise()
+        time.sleep(0.2)
+        pub.publish(roslibpy.Message({"data": envelope.build(0.25, 0.5, seq=1)}))
+        assert wait_for(lambda: len(got) >= 1)
+        rec = get_json(f"{backend.api}/api/latency")["records"][0]
+        msg = got[0]
+        assert msg["twist"]["linear"]["x"] == 0.25 and msg["twist"]["angular"]["z"] == 0.5
+        stamp = msg["header"]["stamp"]["sec"] + msg["header"]["stamp"]["nanosec"] * 1e-9
+        assert abs(stamp - rec["timestamp"]) < 0.5 and msg["header"]["frame_id"] == "base_link"
+        assert wait_for(lambda: len(got) >= 2, timeout=2)  # the watchdog zero is stamped too
+        assert got[1]["twist"]["linear"]["x"] == 0.0 and got[1]["header"]["stamp"]["sec"] > 0
+    finally:
+        ros.close()
+        backend.stop()

@@ -1,0 +1,103 @@
+"""``arbiter-backend --transport ros``: rclpy nodes on DDS, with our rosbridge endpoint and HTTP API.
+
+Threads: the rclpy executor spins the nodes (tracker, simulator, bridge relay)
+in its own thread; aiohttp (rosbridge WebSocket endpoint, tracker HTTP API) runs
+on the asyncio loop in the main thread. The API reads the tracker under its lock
+and never blocks the executor; the relay crosses threads with
+``call_soon_threadsafe``.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+import threading
+
+import rclpy
+from rclpy.context import Context
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.node import Node
+
+from .. import bridge
+from ..server import BackendConfig, Servers
+from .bus import RosBus
+from .nodes import SimulatorNode, TrackerNode
+
+log = logging.getLogger(__name__)
+
+BRIDGE_NODE_NAME = "arbiter_bridge"
+
+
+def _init(context: Context, args: list[str]) -> None:
+    try:
+        from rclpy.signals import SignalHandlerOptions
+
+        # Our asyncio loop owns SIGINT/SIGTERM/SIGHUP, so shutdown is orderly (robot stop first).
+        rclpy.init(args=args, context=context, signal_handler_options=SignalHandlerOptions.NO)
+    except ImportError:  # an older rclpy without signal options
+        rclpy.init(args=args, context=context)
+
+
+class RosBackend(Servers):
+    def __init__(self, config: BackendConfig, ros_args: list[str] | None = None) -> None:
+        super().__init__(config)
+        self.context = Context()
+        _init(self.context, ["arbiter-backend", *(ros_args or [])])
+        self.nodes: list[Node] = []
+        try:
+            self.tracker_node = TrackerNode(config, self.context)
+            self.nodes.append(self.tracker_node)
+            self.config = self.tracker_node.config  # parameters may override flags
+            self.tracker = self.tracker_node.tracker
+            if config.sim:
+                self.nodes.append(SimulatorNode(self.config, self.context))
+            self.sim_enabled = config.sim
+            self.bridge_node: Node | None = None
+            if config.bridge:
+                self.bridge_node = Node(BRIDGE_NODE_NAME, context=self.context)
+                port = int(self.bridge_node.declare_parameter("port", config.bridge_port).value)
+                self.config.bridge_port = port
+                self.nodes.append(self.bridge_node)
+        except BaseException:
+            self._shutdown_ros()
+            raise
+        self.bus: RosBus | None = None
+        self.endpoint: bridge.RosbridgeEndpoint | None = None
+        self.executor = SingleThreadedExecutor(context=self.context)
+        for node in self.nodes:
+            self.executor.add_node(node)
+        self._thread: threading.Thread | None = None
+
+    def _spin(self) -> None:
+        try:
+            self.executor.spin()
+        except ExternalShutdownException:
+            pass
+        except Exception:
+            log.exception("rclpy executor stopped")
+
+    async def start(self) -> None:
+        if self.bridge_node is not None:
+            self.bus = RosBus(self.bridge_node, asyncio.get_running_loop())
+            self.endpoint = bridge.RosbridgeEndpoint(self.bus)
+        await self.start_servers(self.endpoint, self.tracker)
+        self._thread = threading.Thread(target=self._spin, name="rclpy-executor", daemon=True)
+        self._thread.start()
+
+    async def stop(self) -> None:
+        await self.stop_servers(self.endpoint)
+        if self.bus is not None:
+            self.bus.close()
+        self.executor.shutdown(timeout_sec=2.0)
+        if self._thread is not None:
+            self._thread.join(timeout=2.0)
+        self._shutdown_ros()
+
+    def _shutdown_ros(self) -> None:
+        for node in self.nodes:
+            with contextlib.suppress(Exception):
+                node.destroy_node()
+        self.nodes.clear()
+        with contextlib.suppress(Exception):
+            self.context.try_shutdown()

@@ -1,0 +1,184 @@
+"""rosbridge JSON <-> ROS 2 messages, for any installed type, by introspecting the generated classes.
+
+A message class says what it holds: ``get_fields_and_field_types()`` names the
+fields and ``SLOT_TYPES`` gives each one's rosidl type (basic, string, nested
+message, array, bounded or unbounded sequence). Both directions walk those, so
+there is no table per type. The conventions are rosbridge's: missing fields keep
+their defaults, unknown fields are errors, ints are accepted for floats,
+``uint8[]``/``char[]``/``byte[]`` travel as base64 strings (lists of ints are
+accepted on the way in), non-finite floats leave as ``null`` (JSON has no NaN).
+"""
+
+from __future__ import annotations
+
+import base64
+import binascii
+import importlib
+import math
+from functools import lru_cache
+from typing import Any
+
+from rosidl_parser import definition as rd
+
+from ..msgtypes import MessageError, normalize_type
+
+_FLOATS = {"float", "double", "long double"}
+_BYTES = {"octet", "uint8", "char"}
+_INT_RANGES = {
+    "int8": (-(2**7), 2**7 - 1),
+    "uint8": (0, 2**8 - 1),
+    "char": (0, 2**8 - 1),
+    "octet": (0, 2**8 - 1),
+    "int16": (-(2**15), 2**15 - 1),
+    "uint16": (0, 2**16 - 1),
+    "int32": (-(2**31), 2**31 - 1),
+    "uint32": (0, 2**32 - 1),
+    "int64": (-(2**63), 2**63 - 1),
+    "uint64": (0, 2**64 - 1),
+    "wchar": (0, 2**16 - 1),
+}
+MAX_DEPTH = 32
+
+
+@lru_cache(maxsize=256)
+def message_class(type_name: str) -> type:
+    """The generated class for ``pkg/msg/Type`` (or ``pkg/Type``); MessageError if it is not installed."""
+    pkg, _, name = normalize_type(type_name).split("/")
+    try:
+        module = importlib.import_module(f"{pkg}.msg")
+        cls = getattr(module, name)
+    except (ImportError, AttributeError):
+        raise MessageError(f"message type {pkg}/msg/{name} is not installed") from None
+    if not hasattr(cls, "get_fields_and_field_types"):
+        raise MessageError(f"{pkg}/msg/{name} is not a message type")
+    return cls
+
+
+def type_name_of(cls: type) -> str:
+    """``geometry_msgs.msg.Twist`` -> ``geometry_msgs/msg/Twist``."""
+    pkg = cls.__module__.split(".")[0]
+    return f"{pkg}/msg/{cls.__name__}"
+
+
+@lru_cache(maxsize=256)
+def _fields(cls: type) -> tuple[tuple[str, Any], ...]:
+    return tuple(zip(cls.get_fields_and_field_types(), cls.SLOT_TYPES, strict=True))
+
+
+def _nested_class(t: rd.NamespacedType) -> type:
+    return message_class("/".join([*t.namespaces, t.name]))
+
+
+# -- JSON -> ROS ----------------------------------------------------------------------------------
+def to_ros(cls: type, data: Any, path: str = "msg", depth: int = 0) -> Any:
+    """Build an instance of ``cls`` from rosbridge JSON; MessageError naming the field on any mismatch."""
+    if depth > MAX_DEPTH:
+        raise MessageError(f"{path}: nested too deeply")
+    if not isinstance(data, dict):
+        raise MessageError(f"{path} must be an object, got {_kind(data)}")
+    msg = cls()
+    fields = dict(_fields(cls))
+    for key, value in data.items():
+        slot = fields.get(key)
+        if slot is None:
+            raise MessageError(f"{path} has unknown field {str(key)[:40]!r}")
+        converted = _to_ros_value(slot, value, f"{path}.{key}", depth)
+        try:
+            setattr(msg, key, converted)
+        except (AssertionError, TypeError, ValueError, OverflowError) as exc:
+            raise MessageError(f"{path}.{key}: {exc}") from None
+    return msg
+
+
+def _to_ros_value(t: Any, value: Any, path: str, depth: int) -> Any:
+    if isinstance(t, rd.BasicType):
+        return _basic(t.typename, value, path)
+    if isinstance(t, (rd.AbstractString, rd.AbstractWString)):
+        if not isinstance(value, str):
+            raise MessageError(f"{path} must be a string, got {_kind(value)}")
+        return value
+    if isinstance(t, rd.NamespacedType):
+        return to_ros(_nested_class(t), value, path, depth + 1)
+    if isinstance(t, rd.AbstractNestedType):
+        elem = t.value_type
+        if isinstance(elem, rd.BasicType) and elem.typename in _BYTES and isinstance(value, str):
+            try:
+                raw = base64.b64decode(value, validate=True)
+            except (binascii.Error, ValueError):
+                raise MessageError(f"{path} must be base64 or a list of integers") from None
+            value = list(raw)
+        if not isinstance(value, list):
+            raise MessageError(f"{path} must be an array, got {_kind(value)}")
+        if isinstance(t, rd.Array) and len(value) != t.size:
+            raise MessageError(f"{path} must have exactly {t.size} elements, got {len(value)}")
+        if isinstance(t, rd.BoundedSequence) and len(value) > t.maximum_size:
+            raise MessageError(f"{path} may have at most {t.maximum_size} elements, got {len(value)}")
+        out = [_to_ros_value(elem, v, f"{path}[{i}]", depth + 1) for i, v in enumerate(value)]
+        if isinstance(elem, rd.BasicType) and elem.typename == "octet":
+            return [bytes([b]) for b in out]
+        return out
+    raise MessageError(f"{path}: unsupported field type {type(t).__name__}")
+
+
+def _basic(typename: str, value: Any, path: str) -> Any:
+    if typename == "boolean":
+        if not isinstance(value, bool):
+            raise MessageError(f"{path} must be true or false, got {_kind(value)}")
+        return value
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise MessageError(f"{path} must be a number, got {_kind(value)}")
+    if typename in _FLOATS:
+        try:
+            f = float(value)
+        except OverflowError:
+            raise MessageError(f"{path} is too large for {typename}") from None
+        if not math.isfinite(f):
+            raise MessageError(f"{path} must be finite")
+        return f
+    if isinstance(value, float):
+        if not value.is_integer():
+            raise MessageError(f"{path} must be an integer, got {value!r}")
+        value = int(value)
+    lo, hi = _INT_RANGES.get(typename, (-(2**63), 2**64 - 1))
+    if not lo <= value <= hi:
+        raise MessageError(f"{path} is out of range for {typename}")
+    return value
+
+
+# -- ROS -> JSON ----------------------------------------------------------------------------------
+def to_json(msg: Any) -> dict[str, Any]:
+    """rosbridge JSON of a message instance."""
+    return {name: _to_json_value(t, getattr(msg, name)) for name, t in _fields(type(msg))}
+
+
+def _to_json_value(t: Any, value: Any) -> Any:
+    if isinstance(t, rd.BasicType):
+        return _basic_json(t.typename, value)
+    if isinstance(t, (rd.AbstractString, rd.AbstractWString)):
+        return value
+    if isinstance(t, rd.NamespacedType):
+        return to_json(value)
+    if isinstance(t, rd.AbstractNestedType):
+        elem = t.value_type
+        if isinstance(elem, rd.BasicType):
+            if elem.typename in _BYTES:
+                raw = b"".join(value) if elem.typename == "octet" else bytes(bytearray(value))
+                return base64.b64encode(raw).decode("ascii")
+            return [_basic_json(elem.typename, v) for v in value]
+        return [_to_json_value(elem, v) for v in value]
+    return None
+
+
+def _basic_json(typename: str, value: Any) -> Any:
+    if typename == "boolean":
+        return bool(value)
+    if typename in _FLOATS:
+        f = float(value)
+        return f if math.isfinite(f) else None
+    if typename == "octet" and isinstance(value, bytes):
+        return value[0] if value else 0
+    return int(value)
+
+
+def _kind(value: Any) -> str:
+    return "null" if value is None else type(value).__name__

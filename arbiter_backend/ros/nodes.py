@@ -1,0 +1,139 @@
+"""The tracker and the simulator as ordinary rclpy nodes, around the same classes the embedded transport uses.
+
+``latency_tracker``: ``stamped_cmd_vel`` (std_msgs/String) in; ``latency_report``
+(String) and ``cmd_vel_measured`` (Twist, or TwistStamped stamped with the receive
+time) out; a watchdog timer sends one zero when commands stop. ``arbiter_simulator``:
+``cmd_vel_measured`` in, ``odom`` (nav_msgs/Odometry) out at ``rate_hz``. Every
+subscription is reliable and VOLATILE, so a node that starts late never receives
+old commands. Flags become parameter defaults; ``--ros-args -p name:=value``
+overrides them.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import time
+from typing import Any
+
+from rclpy.context import Context
+from rclpy.node import Node
+
+from .. import simulator, topics, tracker
+from ..core.kinematics import Limits
+from ..server import BackendConfig
+from .bus import default_qos
+from .convert import message_class, to_json, to_ros
+
+log = logging.getLogger(__name__)
+
+
+class ParameterError(ValueError):
+    """A ROS parameter with a value the node cannot use."""
+
+
+def _positive(name: str, value: float) -> float:
+    if not value > 0:
+        raise ParameterError(f"parameter {name} must be positive, got {value}")
+    return float(value)
+
+
+def _measured(value: str) -> str:
+    if value not in topics.MEASURED_TYPES:
+        raise ParameterError(f"parameter measured_type must be one of {', '.join(topics.MEASURED_TYPES)}")
+    return value
+
+
+def _limits_params(node: Node, config: BackendConfig) -> tuple[Limits, float, str]:
+    max_linear = node.declare_parameter("max_linear", float(config.limits.max_linear)).value
+    max_angular = node.declare_parameter("max_angular", float(config.limits.max_angular)).value
+    cmd_timeout = node.declare_parameter("cmd_timeout", float(config.cmd_timeout)).value
+    measured_type = node.declare_parameter("measured_type", config.measured_type).value
+    limits = dataclasses.replace(
+        config.limits,
+        max_linear=_positive("max_linear", max_linear),
+        max_angular=_positive("max_angular", max_angular),
+    )
+    return limits, _positive("cmd_timeout", cmd_timeout), _measured(measured_type)
+
+
+class TrackerNode(Node):
+    def __init__(self, config: BackendConfig, context: Context) -> None:
+        super().__init__(tracker.NODE_NAME, context=context)
+        limits, cmd_timeout, measured_type = _limits_params(self, config)
+        deploy_mode = self.declare_parameter("deploy_mode", config.deploy_mode).value
+        max_records = int(self.declare_parameter("max_records", config.max_records).value)
+        if max_records < 1:
+            raise ParameterError(f"parameter max_records must be at least 1, got {max_records}")
+        api_port = int(self.declare_parameter("api_port", config.api_port).value)
+        if not 0 <= api_port <= 65535:
+            raise ParameterError(f"parameter api_port must be 0..65535, got {api_port}")
+        host = self.declare_parameter("host", config.host).value
+        self.config = dataclasses.replace(
+            config,
+            limits=limits,
+            cmd_timeout=cmd_timeout,
+            measured_type=measured_type,
+            deploy_mode=str(deploy_mode),
+            max_records=max_records,
+            api_port=api_port,
+            host=str(host),
+        )
+        self.tracker = self.config.make_tracker()
+        qos = default_qos()
+        self._string = message_class(topics.TYPE_STRING)
+        self._measured_cls = message_class(topics.MEASURED_TYPES[measured_type])
+        self.report_pub = self.create_publisher(self._string, topics.REPORT, qos)
+        self.measured_pub = self.create_publisher(self._measured_cls, topics.MEASURED, qos)
+        self.create_subscription(self._string, topics.STAMPED, self._on_stamped, qos)
+        self.create_timer(min(0.05, cmd_timeout / 4), self._watchdog)
+
+    def _forward(self, v: float, w: float, stamp_ns: int) -> None:
+        msg = topics.measured_message(v, w, self.config.measured_type, stamp_ns)
+        self.measured_pub.publish(to_ros(self._measured_cls, msg))
+
+    def _on_stamped(self, msg: Any) -> None:
+        recv_ns = self.get_clock().now().nanoseconds
+        try:
+            accepted = self.tracker.on_stamped(msg.data, recv_ns)
+            if accepted is None:
+                return
+            self.report_pub.publish(self._string(data=topics.report_text(accepted.record)))
+            self._forward(accepted.linear_x, accepted.angular_z, recv_ns)
+        except Exception:  # a callback that raises would stop the executor, and with it the robot's stop
+            log.exception("latency_tracker: command handling failed")
+
+    def _watchdog(self) -> None:
+        try:
+            if self.tracker.watchdog_due():
+                log.info("no command for %.2fs: publishing zero twist", self.config.cmd_timeout)
+                self._forward(0.0, 0.0, self.get_clock().now().nanoseconds)
+        except Exception:
+            log.exception("latency_tracker: watchdog failed")
+
+
+class SimulatorNode(Node):
+    def __init__(self, config: BackendConfig, context: Context) -> None:
+        super().__init__(simulator.NODE_NAME, context=context)
+        limits, cmd_timeout, measured_type = _limits_params(self, config)
+        rate = _positive("rate_hz", self.declare_parameter("rate_hz", simulator.RATE_HZ).value)
+        self.sim = simulator.DiffDriveSimulator(limits, cmd_timeout=cmd_timeout)
+        qos = default_qos()
+        self._odom_cls = message_class(topics.TYPE_ODOM)
+        self.odom_pub = self.create_publisher(self._odom_cls, topics.ODOM, qos)
+        measured_cls = message_class(topics.MEASURED_TYPES[measured_type])
+        self.create_subscription(measured_cls, topics.MEASURED, self._on_twist, qos)
+        self.create_timer(1.0 / rate, self._tick)
+
+    def _on_twist(self, msg: Any) -> None:
+        try:
+            self.sim.on_twist(to_json(msg), time.monotonic())
+        except Exception:
+            log.exception("arbiter_simulator: bad twist")
+
+    def _tick(self) -> None:
+        try:
+            odom = self.sim.tick(time.monotonic(), self.get_clock().now().nanoseconds)
+            self.odom_pub.publish(to_ros(self._odom_cls, odom))
+        except Exception:
+            log.exception("arbiter_simulator: tick failed")

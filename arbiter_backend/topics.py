@@ -1,0 +1,51 @@
+"""The ROS graph contract (names, types, QoS depth) and the messages both transports publish.
+
+Pure: messages are built in rosbridge JSON form; the ROS transport converts them
+with ``ros.convert``, so each message is defined once for both transports.
+"""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+# Names without the leading slash resolve to /stamped_cmd_vel etc. in the root namespace and
+# follow a namespace remap (``--ros-args -r __ns:=/robot1``) in ROS mode.
+STAMPED = "stamped_cmd_vel"
+MEASURED = "cmd_vel_measured"
+REPORT = "latency_report"
+ODOM = "odom"
+
+TYPE_STRING = "std_msgs/msg/String"
+TYPE_TWIST = "geometry_msgs/msg/Twist"
+TYPE_TWIST_STAMPED = "geometry_msgs/msg/TwistStamped"
+TYPE_ODOM = "nav_msgs/msg/Odometry"
+
+MEASURED_TYPES = {"twist": TYPE_TWIST, "twist_stamped": TYPE_TWIST_STAMPED}
+QOS_DEPTH = 10  # reliable, volatile, keep last 10: a late subscriber never gets old commands
+
+
+def absolute(name: str) -> str:
+    return name if name.startswith("/") else "/" + name
+
+
+def twist(v: float, w: float) -> dict[str, Any]:
+    return {"linear": {"x": v, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0, "y": 0.0, "z": w}}
+
+
+def measured_message(v: float, w: float, measured_type: str, stamp_ns: int) -> dict[str, Any]:
+    """``/cmd_vel_measured``: a Twist, or a TwistStamped stamped with the tracker's receive time."""
+    if MEASURED_TYPES[measured_type] == TYPE_TWIST:
+        return twist(v, w)
+    return {
+        "header": {
+            "stamp": {"sec": stamp_ns // 1_000_000_000, "nanosec": stamp_ns % 1_000_000_000},
+            "frame_id": "base_link",
+        },
+        "twist": twist(v, w),
+    }
+
+
+def report_text(record: dict[str, Any]) -> str:
+    """The ``/latency_report`` payload: the record as JSON, as the seed publishes it."""
+    return json.dumps(record, allow_nan=False)
