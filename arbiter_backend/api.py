@@ -18,6 +18,10 @@ def _json(body: Any, status: int = 200) -> web.Response:
     )
 
 
+class BadQuery(ValueError):
+    pass
+
+
 def _error(status: int, message: str) -> web.Response:
     return _json({"error": message, "status": status}, status)
 
@@ -37,17 +41,27 @@ async def json_errors(request: web.Request, handler: Any) -> web.StreamResponse:
 
 
 def make_app(tracker: LatencyTracker) -> web.Application:
-    async def latency(request: web.Request) -> web.Response:
-        raw = request.query.get("limit")
+    def _int(request: web.Request, name: str, lo: int, hi: int) -> int | None:
+        raw = request.query.get(name)
         if raw is None:
-            return _json(tracker.latency_response(min(DEFAULT_LIMIT, tracker.max_records)))
+            return None
         try:
-            limit = int(raw)
+            value = int(raw)
         except ValueError:
-            return _error(400, f"limit must be an integer, got {raw[:40]!r}")
-        if not 0 <= limit <= tracker.max_records:
-            return _error(400, f"limit must be between 0 and {tracker.max_records}")
-        return _json(tracker.latency_response(limit))
+            raise BadQuery(f"{name} must be an integer, got {raw[:40]!r}") from None
+        if not lo <= value <= hi:
+            raise BadQuery(f"{name} must be between {lo} and {hi}")
+        return value
+
+    async def latency(request: web.Request) -> web.Response:
+        try:
+            limit = _int(request, "limit", 0, tracker.max_records)
+            since = _int(request, "since", 0, 2**63 - 1)
+        except BadQuery as exc:
+            return _error(400, str(exc))
+        if limit is None:
+            limit = min(DEFAULT_LIMIT, tracker.max_records)
+        return _json(tracker.latency_response(limit, since))
 
     async def health(request: web.Request) -> web.Response:
         return _json(tracker.health())

@@ -10,6 +10,7 @@ stop arriving.
 
 from __future__ import annotations
 
+import itertools
 import threading
 import time
 from collections import deque
@@ -56,7 +57,8 @@ class LatencyTracker:
         self._records: deque[dict[str, Any]] = deque(maxlen=max_records)
         self._latencies = np.zeros(max_records, dtype=np.float64)
         self._lat_next = 0
-        self.total_seen = 0
+        self.total_seen = 0  # also the rx_seq of the newest record
+        self.negative = 0
         self.rejected = 0
         self.last_error: str | None = None
         self._started = monotonic()
@@ -80,10 +82,13 @@ class LatencyTracker:
         record = build_record(cmd, recv_ns, self.deploy_mode)
         v, w = clamp_twist(cmd.linear_x, cmd.angular_z, self.limits)
         with self._lock:
+            self.total_seen += 1
+            record["rx_seq"] = self.total_seen
+            if record["latency_ms"] < 0:
+                self.negative += 1  # kept as measured: a clock offset, never clipped
             self._records.append(record)
             self._latencies[self._lat_next] = record["latency_ms"]
             self._lat_next = (self._lat_next + 1) % self.max_records
-            self.total_seen += 1
             self._last_cmd = self._monotonic()
             self._stopped_sent = False
         return Accepted(record, v, w)
@@ -99,15 +104,32 @@ class LatencyTracker:
             return True
 
     # -- API ----------------------------------------------------------------------------
-    def latency_response(self, limit: int = DEFAULT_LIMIT) -> dict[str, Any]:
-        """The seed's ``GET /api/latency`` body, plus totals; stats cover the whole window."""
+    def latency_response(self, limit: int = DEFAULT_LIMIT, since: int | None = None) -> dict[str, Any]:
+        """The seed's ``GET /api/latency`` body, plus totals; stats cover the whole window.
+
+        Without ``since``: the ``limit`` most recent records. With ``since``: the records whose
+        ``rx_seq`` (the tracker's receive counter, 1-based, across all senders) is greater, oldest
+        first, at most ``limit``; ``more`` says whether others follow. A client passes the
+        ``last_rx_seq`` it has seen and gets only what is new.
+        """
         with self._lock:
             n = len(self._records)
             window = self._latencies[:n] if n < self.max_records else self._latencies
             stats = latency_stats(window)
-            recent = list(self._records)[-limit:] if limit > 0 else []
-            total, rejected, last_error = self.total_seen, self.rejected, self.last_error
-        return {
+            total = self.total_seen
+            first = total - n + 1  # rx_seq of the oldest record kept
+            more = False
+            if limit <= 0:
+                recent: list[dict[str, Any]] = []
+            elif since is None:
+                recent = list(itertools.islice(self._records, max(0, n - limit), n))
+            else:
+                start = min(max(since + 1, first), total + 1) - first
+                stop = min(start + limit, n)
+                recent = list(itertools.islice(self._records, start, stop))
+                more = stop < n
+            rejected, last_error, negative = self.rejected, self.last_error, self.negative
+        body: dict[str, Any] = {
             "stats": stats,
             "records": recent,
             "deploy_mode": self.deploy_mode,
@@ -116,7 +138,12 @@ class LatencyTracker:
             "dropped": total - n,
             "rejected": rejected,
             "last_error": last_error,
+            "negative": negative,
+            "last_rx_seq": total,
         }
+        if since is not None:
+            body["more"] = more
+        return body
 
     def health(self) -> dict[str, Any]:
         now = self._monotonic()
@@ -129,6 +156,7 @@ class LatencyTracker:
                 "records_count": len(self._records),
                 "total_seen": self.total_seen,
                 "rejected": self.rejected,
+                "negative": self.negative,
                 "last_error": self.last_error,
                 "seconds_since_last_command": since,
                 "deploy_mode": self.deploy_mode,

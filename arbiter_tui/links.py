@@ -12,13 +12,17 @@ import json
 import logging
 import threading
 import time
+from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
 from arbiter_backend.core import envelope
+from arbiter_backend.core.clocksync import LatencyMeter
 from arbiter_backend.core.kinematics import Pose, quaternion_to_yaw
 from arbiter_backend.simulator import DiffDriveSimulator
+
+from . import wsframe
 
 log = logging.getLogger(__name__)
 
@@ -43,6 +47,11 @@ class Telemetry:
     reports: int = 0
     sent: int = 0
     last_status: str | None = None
+    meter: LatencyMeter = field(default_factory=LatencyMeter)
+    handoff_ms: deque[float] = field(default_factory=lambda: deque(maxlen=2000))  # send() -> stamp
+
+    def note_handoff(self, ms: float) -> None:
+        self.handoff_ms.append(ms)
 
     def set_odom(self, msg: dict[str, Any]) -> None:
         try:
@@ -59,11 +68,14 @@ class Telemetry:
             self.odom_count += 1
 
     def set_report(self, msg: dict[str, Any]) -> None:
+        arrival = time.monotonic()
         try:
             record = json.loads(msg["data"])
             latency = float(record["latency_ms"])
         except (KeyError, TypeError, ValueError):
             return
+        if isinstance(record, dict):
+            self.meter.on_report(record, arrival)
         with self.lock:
             self.latency_ms = latency
             self.reports += 1
@@ -109,6 +121,27 @@ class SimLink:
         pass
 
 
+def _write_now(proto: Any, payload: bytes) -> None:
+    """Send a text frame on the reactor thread: straight into the socket when nothing is buffered
+    (so ordering is kept), otherwise through autobahn and Twisted's buffer."""
+    transport = getattr(proto, "transport", None)
+    if (
+        transport is None
+        or getattr(proto, "state", None) != getattr(proto, "STATE_OPEN", object())
+        or transport._tempDataBuffer
+        or transport.dataBuffer
+        or not hasattr(transport, "writeSomeData")
+    ):
+        proto.sendMessage(payload, isBinary=False)
+        return
+    frame = wsframe.text_frame(payload)
+    written = transport.writeSomeData(frame)
+    if not isinstance(written, int):  # an error object: the connection is going; Twisted reports it
+        return
+    if written < len(frame):
+        transport.write(frame[written:])
+
+
 class RosLink:
     """The rosbridge link: stamped commands out, /odom and /latency_report in (roslibpy, Twisted thread)."""
 
@@ -146,7 +179,9 @@ class RosLink:
         self._cmd.advertise()
         self._odom.subscribe(self.telemetry.set_odom)
         self._report.subscribe(self.telemetry.set_report)
-        self._message = roslibpy.Message
+        from twisted.internet import reactor
+
+        self._reactor: Any = reactor
         self.ros.factory.manager.run()  # start the reactor thread without blocking on the connection
 
     def _on_ready(self, proto: Any) -> None:
@@ -162,6 +197,7 @@ class RosLink:
         with self._lock:
             if self._state != "CLOSED":
                 self._state = DISCONNECTED
+        self.telemetry.meter.reset_pending(time.monotonic())  # in flight: never reported
 
     def _on_status(self, message: dict[str, Any]) -> None:
         with self.telemetry.lock:
@@ -190,8 +226,30 @@ class RosLink:
         with self._lock:
             seq = self._seq
             self._seq += 1
-        self._cmd.publish(self._message({"data": envelope.build(v, w, seq=seq)}))
         self.telemetry.sent += 1
+        self._reactor.callFromThread(self._write_command, v, w, seq, time.monotonic())
+
+    def _write_command(self, v: float, w: float, seq: int, queued_mono: float) -> None:
+        """Runs on the reactor thread: stamp, then write the frame at once, as a browser's
+        ``Date.now()`` + ``ws.send`` does. roslibpy would stamp on the caller's thread and then
+        hop threads, putting the hand-off wait (up to the GIL switch interval while the UI
+        renders) inside the measured latency; the hand-off is measured separately instead."""
+        proto = self.ros.factory._proto
+        if proto is None or not self.ros.is_connected:
+            return  # dropped while queued: counted lost by nobody, never stamped
+        mono = time.monotonic()
+        now_ns = time.time_ns()
+        text = envelope.build(v, w, seq=seq, clock_ns=lambda: now_ns)
+        frame = json.dumps(
+            {"op": "publish", "id": f"cmd:{seq}", "topic": "/stamped_cmd_vel", "msg": {"data": text}},
+            separators=(",", ":"),
+        )
+        self.telemetry.meter.on_send(seq, envelope.stamp_ms_from_ns(now_ns), mono)
+        try:
+            _write_now(proto, frame.encode("utf-8"))
+        except Exception:  # a socket closing under us: the meter counts it lost later
+            log.debug("sending a command failed", exc_info=True)
+        self.telemetry.note_handoff((mono - queued_mono) * 1000.0)
 
     def close(self) -> None:
         with self._lock:

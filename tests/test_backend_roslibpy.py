@@ -45,7 +45,16 @@ def test_stamped_commands_become_records_twists_and_motion(backend):
         assert [r["seq"] for r in records] == list(range(n))
         now = time.time()
         for r, (v, w) in zip(records, sent, strict=True):
-            assert set(r) == {"latency_ms", "linear_x", "angular_z", "timestamp", "deploy_mode", "seq"}
+            assert set(r) == {
+                "latency_ms",
+                "linear_x",
+                "angular_z",
+                "timestamp",
+                "deploy_mode",
+                "seq",
+                "rx_seq",
+            }
+            assert r["rx_seq"] == r["seq"] + 1  # the tracker's own receive counter
             assert (r["linear_x"], r["angular_z"], r["deploy_mode"]) == (v, w, "native")
             assert r["latency_ms"] == round(r["latency_ms"], 4)
             assert 0 <= r["latency_ms"] < 1000  # same host, same clock

@@ -12,8 +12,14 @@ NS_PER_MS = 1_000_000
 
 
 def latency_ms(cmd: StampedCommand, recv_ns: int) -> float:
-    """One-way latency: receive wall time minus the sender's stamp, in ms, rounded to 4 places."""
-    return round((recv_ns - cmd.stamp_ms * NS_PER_MS) / NS_PER_MS, 4)
+    """One-way latency: receive wall time minus the sender's stamp, in ms, rounded to 4 places.
+
+    Stamps carry whole microseconds (a float of ms since the epoch cannot hold more: its
+    resolution there is ~0.24 µs), so the stamp is taken back to integer µs first and the
+    difference is exact integer arithmetic.
+    """
+    stamp_ns = round(cmd.stamp_ms * 1000.0) * 1000
+    return round((recv_ns - stamp_ns) / NS_PER_MS, 4)
 
 
 def build_record(cmd: StampedCommand, recv_ns: int, deploy_mode: str) -> dict[str, Any]:

@@ -69,11 +69,21 @@ def p95(values: ArrayLike) -> float:
     For n >= 1 the index is always < n, so the seed's ``|| 0`` fallback only
     applies to the empty case (and to a p95 value that is itself 0).
     """
+    return percentile(values, 0.95)
+
+
+def percentile(values: ArrayLike, q: float) -> float:
+    """The seed's percentile rule for any ``q`` in [0, 1): ``sorted(values)[floor(n * q)]``; 0.0 when empty.
+
+    p50/p99 in the latency figures use it, so every percentile in the product is the seed's.
+    """
+    if not 0.0 <= q < 1.0:
+        raise ValueError(f"q must be in [0, 1), got {q}")
     a = _arr(values)
     n = a.size
     if n == 0:
         return 0.0
-    k = p95_index(n)
+    k = p95_index(n) if q == 0.95 else math.floor(n * q)
     return float(np.partition(a, k)[k])
 
 

@@ -1,0 +1,47 @@
+"""Shared by the benchmark scripts: a backend on free ports, percentiles by the product's rule, output."""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+import socket
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from arbiter_backend.core import stats
+
+
+def pct(values, q: float) -> float | None:
+    return round(stats.percentile(values, q), 4) if len(values) else None
+
+
+def machine() -> dict:
+    return {
+        "python": platform.python_version(),
+        "cpus": os.cpu_count(),
+        "machine": platform.machine(),
+        "date": time.strftime("%Y-%m-%d"),
+    }
+
+
+def emit(result: dict) -> None:
+    """The last line of every benchmark: one JSON object."""
+    print(json.dumps({**result, "machine": machine()}, separators=(",", ":")), flush=True)
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def sleep_until(t: float) -> None:
+    while True:
+        d = t - time.monotonic()
+        if d <= 0:
+            return
+        time.sleep(d if d > 0.002 else 0)
