@@ -61,7 +61,8 @@ def make_app(tracker: LatencyTracker) -> web.Application:
             return _error(400, str(exc))
         if limit is None:
             limit = min(DEFAULT_LIMIT, tracker.max_records)
-        return _json(tracker.latency_response(limit, since))
+        text = tracker.latency_response_text(limit, since)
+        return web.Response(text=text, content_type="application/json")
 
     async def health(request: web.Request) -> web.Response:
         return _json(tracker.health())

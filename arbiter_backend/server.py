@@ -132,7 +132,7 @@ class Backend(Servers):
         accepted = self.tracker.on_stamped(msg.get("data"), recv_ns)
         if accepted is None:
             return
-        self.bus.publish(TOPIC_REPORT, {"data": topics.report_text(accepted.record)})
+        self.bus.publish(TOPIC_REPORT, {"data": accepted.text})
         mt = self.config.measured_type
         twist = topics.measured_message(accepted.linear_x, accepted.angular_z, mt, recv_ns)
         self.bus.publish(TOPIC_MEASURED, twist)

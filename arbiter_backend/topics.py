@@ -6,7 +6,6 @@ with ``ros.convert``, so each message is defined once for both transports.
 
 from __future__ import annotations
 
-import json
 from typing import Any
 
 # Names without the leading slash resolve to /stamped_cmd_vel etc. in the root namespace and
@@ -44,8 +43,3 @@ def measured_message(v: float, w: float, measured_type: str, stamp_ns: int) -> d
         },
         "twist": twist(v, w),
     }
-
-
-def report_text(record: dict[str, Any]) -> str:
-    """The ``/latency_report`` payload: the record as JSON, as the seed publishes it."""
-    return json.dumps(record, allow_nan=False)

@@ -11,6 +11,7 @@ stop arriving.
 from __future__ import annotations
 
 import itertools
+import json
 import threading
 import time
 from collections import deque
@@ -33,6 +34,7 @@ class Accepted:
     record: dict[str, Any]
     linear_x: float  # clamped, safe to forward
     angular_z: float
+    text: str  # the record as JSON: the /latency_report payload, serialised once
 
 
 class LatencyTracker:
@@ -55,6 +57,7 @@ class LatencyTracker:
         self._monotonic = monotonic
         self._lock = threading.Lock()
         self._records: deque[dict[str, Any]] = deque(maxlen=max_records)
+        self._texts: deque[str] = deque(maxlen=max_records)  # each record's JSON, for the API
         self._latencies = np.zeros(max_records, dtype=np.float64)
         self._lat_next = 0
         self.total_seen = 0  # also the rx_seq of the newest record
@@ -86,12 +89,14 @@ class LatencyTracker:
             record["rx_seq"] = self.total_seen
             if record["latency_ms"] < 0:
                 self.negative += 1  # kept as measured: a clock offset, never clipped
+            text = json.dumps(record, allow_nan=False, separators=(",", ":"))
             self._records.append(record)
+            self._texts.append(text)
             self._latencies[self._lat_next] = record["latency_ms"]
             self._lat_next = (self._lat_next + 1) % self.max_records
             self._last_cmd = self._monotonic()
             self._stopped_sent = False
-        return Accepted(record, v, w)
+        return Accepted(record, v, w, text)
 
     def watchdog_due(self) -> bool:
         """True exactly once after ``cmd_timeout`` without a valid command (send one zero twist)."""
@@ -104,14 +109,8 @@ class LatencyTracker:
             return True
 
     # -- API ----------------------------------------------------------------------------
-    def latency_response(self, limit: int = DEFAULT_LIMIT, since: int | None = None) -> dict[str, Any]:
-        """The seed's ``GET /api/latency`` body, plus totals; stats cover the whole window.
-
-        Without ``since``: the ``limit`` most recent records. With ``since``: the records whose
-        ``rx_seq`` (the tracker's receive counter, 1-based, across all senders) is greater, oldest
-        first, at most ``limit``; ``more`` says whether others follow. A client passes the
-        ``last_rx_seq`` it has seen and gets only what is new.
-        """
+    def _snapshot(self, limit: int, since: int | None) -> tuple[dict[str, Any], list[str]]:
+        """Everything but the records, and the records' JSON texts to include."""
         with self._lock:
             n = len(self._records)
             window = self._latencies[:n] if n < self.max_records else self._latencies
@@ -120,18 +119,17 @@ class LatencyTracker:
             first = total - n + 1  # rx_seq of the oldest record kept
             more = False
             if limit <= 0:
-                recent: list[dict[str, Any]] = []
+                start = stop = n
             elif since is None:
-                recent = list(itertools.islice(self._records, max(0, n - limit), n))
+                start, stop = max(0, n - limit), n
             else:
                 start = min(max(since + 1, first), total + 1) - first
                 stop = min(start + limit, n)
-                recent = list(itertools.islice(self._records, start, stop))
                 more = stop < n
             rejected, last_error, negative = self.rejected, self.last_error, self.negative
+            texts = list(itertools.islice(self._texts, start, stop))
         body: dict[str, Any] = {
             "stats": stats,
-            "records": recent,
             "deploy_mode": self.deploy_mode,
             "total_seen": total,
             "window": n,
@@ -143,7 +141,23 @@ class LatencyTracker:
         }
         if since is not None:
             body["more"] = more
-        return body
+        return body, texts
+
+    def latency_response(self, limit: int = DEFAULT_LIMIT, since: int | None = None) -> dict[str, Any]:
+        """The seed's ``GET /api/latency`` body, plus totals; stats cover the whole window.
+
+        Without ``since``: the ``limit`` most recent records. With ``since``: the records whose
+        ``rx_seq`` (the tracker's receive counter, 1-based, across all senders) is greater, oldest
+        first, at most ``limit``; ``more`` says whether others follow. A client passes the
+        ``last_rx_seq`` it has seen and gets only what is new.
+        """
+        return json.loads(self.latency_response_text(limit, since))
+
+    def latency_response_text(self, limit: int = DEFAULT_LIMIT, since: int | None = None) -> str:
+        """``latency_response`` as JSON text; records are spliced in pre-serialised (the API's path)."""
+        body, texts = self._snapshot(limit, since)
+        head = json.dumps(body, allow_nan=False, separators=(",", ":"))
+        return '{"records":[' + ",".join(texts) + "]," + head[1:]
 
     def health(self) -> dict[str, Any]:
         now = self._monotonic()

@@ -97,6 +97,7 @@ class ArbiterApp(App[None]):
 
     def _control_tick(self) -> None:
         try:
+            self.link.telemetry.meter.expire(time.monotonic())  # unreported commands become "lost"
             self.loop.tick_control(self.clock())
         except Exception:  # a failing link must not take the console (and its stop keys) down
             log.exception("control tick failed")

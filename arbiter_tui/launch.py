@@ -60,6 +60,12 @@ def build_parser() -> argparse.ArgumentParser:
         "--key-timeout", type=positive_float, default=0.6, help="stop this long after the last key, s (0.6)"
     )
     p.add_argument(
+        "--offset-warn-ms",
+        type=positive_float,
+        default=10.0,
+        help="warn when the clock offset to the tracker exceeds this, ms (10, the seed's chrony rule)",
+    )
+    p.add_argument(
         "--log-file", help="log file for the client libraries (default: a file in the temp directory)"
     )
     return p
@@ -92,6 +98,7 @@ def run_app(argv: list[str]) -> int:
         turn=args.turn,
         repeat_rate=args.repeat_rate,
         key_timeout=args.key_timeout,
+        offset_warn_ms=args.offset_warn_ms,
     )
     from .app import make_app
     from .links import RosLink, SimLink

@@ -27,3 +27,4 @@ class Settings:
     poll_period: float = 0.5  # tracker API poll, 2 Hz
     live: bool = True  # timers and workers on; snapshot tests turn it off for still frames
     handle_signals: bool = True
+    offset_warn_ms: float = 10.0  # warn when the estimated clock offset to the tracker exceeds this

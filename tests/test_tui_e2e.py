@@ -30,7 +30,7 @@ async def test_keys_to_tracker_records_to_odometry_to_data_points(tmp_path):
     app = make_app(settings, link, tracker, store=store)
     try:
         async with app.run_test(size=(100, 30)) as pilot:
-            assert await until(pilot, lambda: link.state == CONNECTED)
+            assert await until(pilot, lambda: link.state == CONNECTED, timeout=15)
             assert await until(pilot, lambda: link.telemetry.odom_count > 0)
             store.start_collection()
             for _ in range(15):  # hold "i" with auto-repeat

@@ -47,6 +47,14 @@ def still_app(tmp_path=None, link=None, store=None, tracker_view=True, mode="emb
     link.telemetry.pose = Pose(1.25, -0.5, 0.6)
     link.telemetry.v, link.telemetry.w = 0.4, 0.2
     link.telemetry.latency_ms = 0.42
+    meter = link.telemetry.meter
+    for i in range(20):  # round trips to a tracker whose clock runs 12 ms ahead: the warning shows
+        stamp = 1_800_000_000_000.0 + 10.0 * i
+        meter.on_send(i, stamp, 50.0 + i)
+        raw = 12.0 + 0.2 + 0.01 * (i % 5)
+        meter.on_report(
+            {"seq": i, "latency_ms": raw, "timestamp": (stamp + raw) / 1000.0}, 50.0 + i + 0.0005 + i * 1e-5
+        )
     if store is None:
         store = AnalyticsStore()
         store.start_collection()

@@ -98,7 +98,7 @@ class TrackerNode(Node):
             accepted = self.tracker.on_stamped(msg.data, recv_ns)
             if accepted is None:
                 return
-            self.report_pub.publish(self._string(data=topics.report_text(accepted.record)))
+            self.report_pub.publish(self._string(data=accepted.text))
             self._forward(accepted.linear_x, accepted.angular_z, recv_ns)
         except Exception:  # a callback that raises would stop the executor, and with it the robot's stop
             log.exception("latency_tracker: command handling failed")

@@ -20,17 +20,25 @@ def fmt_ms(value: object) -> str:
     return "?"
 
 
+def fmt_signed(value: float | None) -> str:
+    return "N/A" if value is None else f"{value:+.3f} ms"
+
+
 class LatencyScreen(BaseScreen):
     DEFAULT_CSS = """
     LatencyScreen #lat-cards { height: 3; padding: 0 1; }
+    LatencyScreen #lat-client { height: 3; padding: 0 1; }
     LatencyScreen #lat-state { height: 1; padding: 0 1; }
     LatencyScreen #lat-spark { height: 5; border: round $primary; }
     LatencyScreen #lat-records { height: 1fr; }
     """
 
+    _drawn_key: object = None
+
     def compose_body(self) -> ComposeResult:
         yield Static(id="lat-state")
         yield Static(id="lat-cards")
+        yield Static(id="lat-client")
         yield Sparkline([], id="lat-spark")
         yield DataTable(id="lat-records", show_cursor=False, zebra_stripes=True)
 
@@ -69,6 +77,15 @@ class LatencyScreen(BaseScreen):
             if i == 2:
                 cards.append("\n")
         self.query_one("#lat-cards", Static).update(cards)
+        client = self.query_one("#lat-client", Static)
+        client.display = view is not None
+        client.update(self._client_side(view is None))
+        # the sparkline and table change only when a poll brought something: redrawing them at the
+        # UI rate regardless cost ~4x the CPU and terminal output of the whole screen (bench/tui.py)
+        key = None if view is None else (view.failures, len(view.records), view._last_key)
+        if key == self._drawn_key and key is not None:
+            return
+        self._drawn_key = key
         self.query_one("#lat-spark", Sparkline).data = list(view.window) if view is not None else []
         table = self.query_one("#lat-records", DataTable)
         table.clear()
@@ -81,3 +98,28 @@ class LatencyScreen(BaseScreen):
                     f"{r.get('angular_z', 0):+.2f}",
                     str(r.get("deploy_mode", "")),
                 )
+
+    def _client_side(self, simulated: bool) -> Text:
+        """This console's own view: round trip, offset (NTP method), corrected one-way, loss."""
+        out = Text()
+        if simulated:
+            return out
+        s = self.arbiter.link.telemetry.meter.summary()
+        out.append("this console", "bold")
+        if not s["n"]:
+            out.append(f" · no round trips yet · sent {s['sent']} · lost {s['lost']}")
+            return out
+        out.append(f" · rtt p50 {fmt_ms(s['rtt_p50_ms'])} p95 {fmt_ms(s['rtt_p95_ms'])}")
+        out.append(
+            f" · one-way corrected p50 {fmt_ms(s['corrected_p50_ms'])} (raw {fmt_ms(s['raw_p50_ms'])})\n"
+        )
+        off, unc = s["offset_ms"], s["offset_uncertainty_ms"]
+        out.append(f"clock offset {fmt_signed(off)} ± {fmt_ms(unc)}")
+        out.append(f" · negative {s['negative']} · lost {s['lost_in_window']} in 10 s ({s['lost']} total)")
+        warn = self.arbiter.settings.offset_warn_ms
+        if off is not None and abs(off) > warn:
+            out.append(
+                f"\nCLOCK OFFSET {off:+.1f} ms exceeds {warn:g} ms: raw one-way figures include it",
+                "bold red",
+            )
+        return out
