@@ -1,0 +1,79 @@
+#!/usr/bin/env python
+"""bench/results.jsonl (bench/run_all.sh) -> the results table in docs/BENCHMARKS.md, between markers."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+STATS_TARGETS = {1000: "< 0.1 ms", 100_000: "≥ 50x plain", 1_000_000: "< 30 ms"}
+START, END = "<!-- results:start -->", "<!-- results:end -->"
+
+
+def rows(results: list[dict]) -> list[str]:
+    out = ["| benchmark | figure | value | target |", "|---|---|---|---|"]
+    by = {r["bench"]: r for r in results}
+    if s := by.get("stats"):
+        for r in s["results"]:
+            out.append(f"| bench_stats | AnalyticsStats, n={r['n']:,} | {r['stats_ms']:.3f} ms "
+                       f"({r['speedup']:.0f}x plain Python) | {STATS_TARGETS.get(r['n'], '')} |")  # fmt: skip
+        out.append(
+            f"| bench_stats | memory per point | {s['results'][-1]['buffer_bytes_per_point']} B | ≤ 100 B |"
+        )
+    if lat := by.get("latency"):
+        out += [
+            f"| latency | one-way p50 / p95 / p99 (ms) | {lat['one_way_p50_ms']} / {lat['one_way_p95_ms']} / "
+            f"{lat['one_way_p99_ms']} | p50 ≤ 0.3, p95 ≤ 0.45 |",
+            f"| latency | one-way mean / max (ms) | {lat['one_way_mean_ms']} / {lat['one_way_max_ms']} | |",
+            f"| latency | round trip p50 / p95 (ms) | {lat['rtt_p50_ms']} / {lat['rtt_p95_ms']} | |",
+            f"| latency | TCP loopback floor p50 / p95 (ms) | {lat['floor_p50_ms']} / "
+            f"{lat['floor_p95_ms']} | |",
+            f"| latency | p50 / floor p50 | {lat['p50_over_floor']}x | |",
+            f"| latency | lost / negative | {lat['lost']} / {lat['negative']} | 0 |",
+        ]
+    if t := by.get("throughput"):
+        out += [
+            f"| throughput | max zero-loss rate, 1 client ({t['duration_s']} s trials) | "
+            f"{t['one_client']['max_zero_loss_rate']:,}/s | ≥ 20,000/s |",
+            f"| throughput | max zero-loss rate, 10 clients | "
+            f"{t['ten_clients']['max_zero_loss_rate']:,}/s | |",
+        ]
+    if a := by.get("api"):
+        out.append(f"| api | GET /api/latency p50 / p99, {a['records']:,} records, {a['pollers']} pollers "
+                   f"at {a['rate_hz']} Hz | {a['p50_ms']} / {a['p99_ms']} ms | p99 ≤ 5 ms |")  # fmt: skip
+    if u := by.get("tui"):
+        c, lt = u["control_teleop"], u["latency_screen"]
+        out += [
+            f"| tui | first frame | {u['first_frame_s']} s | ≤ 1.0 s |",
+            f"| tui | control + teleop: CPU, output | {c['cpu_percent_of_core']}% of a core, "
+            f"{c['kb_per_s']} KB/s | ≤ 5%, ≤ 20 KB/s |",
+            f"| tui | latency screen: CPU, output | {lt['cpu_percent_of_core']}% of a core, "
+            f"{lt['kb_per_s']} KB/s | ≤ 5%, ≤ 20 KB/s |",
+        ]
+    m = next((r.get("machine") for r in results if r.get("machine")), None)
+    if m:
+        out.append("")
+        out.append(f"Machine: {m['cpus']} CPUs, {m['machine']}, Python {m['python']}; run on {m['date']}.")
+    return out
+
+
+def main() -> int:
+    src = ROOT / "bench" / "results.jsonl"
+    results = [json.loads(line) for line in src.read_text().splitlines() if line.strip()]
+    doc = ROOT / "docs" / "BENCHMARKS.md"
+    text = doc.read_text()
+    block = "\n".join([START, *rows(results), END])
+    if START in text:
+        head, rest = text.split(START, 1)
+        text = head + block + rest.split(END, 1)[1]
+    else:
+        text += "\n" + block + "\n"
+    doc.write_text(text)
+    print(block)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
