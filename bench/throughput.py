@@ -72,13 +72,18 @@ async def trial(bridge: int, api: str, clients: int, rate: float, duration: floa
             "achieved": round(achieved)}  # fmt: skip
 
 
+def is_clean(r: dict) -> bool:
+    """Zero loss, nothing rejected, and the sender actually reached the rate asked for."""
+    return r["lost"] == 0 and r["rejected"] == 0 and r["achieved"] >= 0.97 * r["rate"]
+
+
 async def search(bridge: int, api: str, clients: int, start: float, duration: float, limit: float) -> dict:
     good, bad, trials = 0.0, None, []
     rate = start
     while rate <= limit:
         r = await trial(bridge, api, clients, rate, duration)
         trials.append(r)
-        clean = r["lost"] == 0 and r["rejected"] == 0 and r["achieved"] >= 0.97 * rate
+        clean = is_clean(r)
         print(json.dumps({"clients": clients, **r, "clean": clean}), flush=True)
         if not clean:
             bad = rate
@@ -90,7 +95,7 @@ async def search(bridge: int, api: str, clients: int, start: float, duration: fl
             mid = (good + bad) / 2
             r = await trial(bridge, api, clients, mid, duration)
             trials.append(r)
-            clean = r["lost"] == 0 and r["rejected"] == 0 and r["achieved"] >= 0.97 * mid
+            clean = is_clean(r)
             print(json.dumps({"clients": clients, **r, "clean": clean}), flush=True)
             good, bad = (mid, bad) if clean else (good, mid)
     return {"max_zero_loss_rate": round(good), "first_lossy_rate": None if bad is None else round(bad)}
