@@ -10,7 +10,7 @@ import signal
 import sys
 from typing import TYPE_CHECKING, Any
 
-from .cliargs import count, port, positive_float
+from .cliargs import count, non_negative_float, port, positive_float
 from .core.kinematics import Limits
 from .server import Backend, BackendConfig
 from .topics import MEASURED_TYPES
@@ -49,6 +49,26 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--max-linear", type=positive_float, default=1.0, help="linear limit m/s (default: 1.0)")
     p.add_argument(
         "--max-angular", type=positive_float, default=2.0, help="angular limit rad/s (default: 2.0)"
+    )
+    p.add_argument(
+        "--max-linear-accel",
+        type=positive_float,
+        default=2.0,
+        help="speed-up limit m/s² for forwarded commands; slowing down is never limited (default: 2.0)",
+    )
+    p.add_argument(
+        "--max-angular-accel",
+        type=positive_float,
+        default=6.0,
+        help="speed-up limit rad/s² for forwarded commands (default: 6.0)",
+    )
+    p.add_argument(
+        "--max-command-age",
+        type=non_negative_float,
+        default=300.0,
+        metavar="MS",
+        help="drop (count, never forward) commands older than this on arrival, judged with the sender's "
+        "clock-offset estimate when it sends one; 0 turns it off (default: 300)",
     )
     p.add_argument(
         "--transport",
@@ -157,7 +177,13 @@ def main(argv: list[str] | None = None) -> int:
         bridge=not args.no_bridge,
         max_records=args.max_records,
         cmd_timeout=args.cmd_timeout,
-        limits=Limits(max_linear=args.max_linear, max_angular=args.max_angular),
+        max_command_age_ms=args.max_command_age,
+        limits=Limits(
+            max_linear=args.max_linear,
+            max_angular=args.max_angular,
+            max_linear_accel=args.max_linear_accel,
+            max_angular_accel=args.max_angular_accel,
+        ),
         measured_type=args.measured_type,
         transport=args.transport,
     )

@@ -21,7 +21,7 @@ from . import api, bridge, topics
 from .bus import TopicBus
 from .core.kinematics import DEFAULT_LIMITS, Limits
 from .simulator import RATE_HZ, DiffDriveSimulator
-from .tracker import LatencyTracker
+from .tracker import DEFAULT_MAX_COMMAND_AGE_MS, LatencyTracker
 
 log = logging.getLogger(__name__)
 
@@ -41,6 +41,7 @@ class BackendConfig:
     bridge: bool = True
     max_records: int = 10_000
     cmd_timeout: float = 0.5
+    max_command_age_ms: float = DEFAULT_MAX_COMMAND_AGE_MS  # 0: off
     limits: Limits = field(default_factory=lambda: DEFAULT_LIMITS)
     measured_type: str = "twist"  # a key of topics.MEASURED_TYPES
     transport: str = "embedded"  # or "ros"
@@ -51,6 +52,7 @@ class BackendConfig:
             max_records=self.max_records,
             cmd_timeout=self.cmd_timeout,
             limits=self.limits,
+            max_command_age_ms=self.max_command_age_ms,
         )
 
     def make_simulator(self) -> DiffDriveSimulator:
@@ -133,9 +135,10 @@ class Backend(Servers):
         if accepted is None:
             return
         self.bus.publish(TOPIC_REPORT, {"data": accepted.text})
-        mt = self.config.measured_type
-        twist = topics.measured_message(accepted.linear_x, accepted.angular_z, mt, recv_ns)
-        self.bus.publish(TOPIC_MEASURED, twist)
+        if accepted.forward is not None:
+            v, w = accepted.forward
+            twist = topics.measured_message(v, w, self.config.measured_type, recv_ns)
+            self.bus.publish(TOPIC_MEASURED, twist)
 
     async def _watchdog(self) -> None:
         period = min(0.05, self.config.cmd_timeout / 4)

@@ -6,6 +6,16 @@ wall-clock receive time; it answers with the record to publish on
 Malformed envelopes are counted and their last error kept; they are never
 raised and never forwarded. The watchdog asks for one zero twist when commands
 stop arriving.
+
+Safety rules, applied to what is forwarded (the record keeps what was asked):
+
+* a command older than ``max_command_age_ms`` on arrival (judged with the sender's
+  clock-offset estimate when the envelope carries one) is *stale*: recorded and
+  reported (it is a latency measurement, and its report lets the sender estimate
+  its clock offset), counted, never forwarded; if the robot was moving it gets one
+  zero instead;
+* velocities are clamped to the limits, and speeding up is limited to the
+  acceleration limits (slowing down never is).
 """
 
 from __future__ import annotations
@@ -22,19 +32,24 @@ from typing import Any
 import numpy as np
 
 from .core import envelope
-from .core.kinematics import DEFAULT_LIMITS, Limits, clamp_twist
-from .core.record import build_record, latency_stats
+from .core.kinematics import DEFAULT_LIMITS, Limits, clamp_twist, limit_speedup
+from .core.record import build_record, command_age_ms, latency_stats
 
 NODE_NAME = "latency_tracker"
 DEFAULT_LIMIT = 100
+DEFAULT_MAX_COMMAND_AGE_MS = 300.0
+MAX_ACCEL_DT_S = 0.1  # a speed-up step never assumes more than one 10 Hz period has passed
 
 
 @dataclass(frozen=True)
 class Accepted:
     record: dict[str, Any]
-    linear_x: float  # clamped, safe to forward
-    angular_z: float
+    forward: tuple[float, float] | None  # the twist to publish on /cmd_vel_measured; None: nothing
     text: str  # the record as JSON: the /latency_report payload, serialised once
+
+    @property
+    def stale(self) -> bool:
+        return bool(self.record.get("stale"))
 
 
 class LatencyTracker:
@@ -44,15 +59,19 @@ class LatencyTracker:
         max_records: int = 10_000,
         cmd_timeout: float = 0.5,
         limits: Limits = DEFAULT_LIMITS,
+        max_command_age_ms: float = DEFAULT_MAX_COMMAND_AGE_MS,
         clock_ns: Callable[[], int] = time.time_ns,
         monotonic: Callable[[], float] = time.monotonic,
     ) -> None:
         if max_records < 1:
             raise ValueError("max_records must be at least 1")
+        if not max_command_age_ms >= 0:
+            raise ValueError("max_command_age_ms must be 0 (off) or positive")
         self.deploy_mode = deploy_mode
         self.max_records = max_records
         self.cmd_timeout = cmd_timeout
         self.limits = limits
+        self.max_command_age_ms = max_command_age_ms
         self._clock_ns = clock_ns
         self._monotonic = monotonic
         self._lock = threading.Lock()
@@ -63,10 +82,14 @@ class LatencyTracker:
         self.total_seen = 0  # also the rx_seq of the newest record
         self.negative = 0
         self.rejected = 0
+        self.stale = 0
         self.last_error: str | None = None
+        self.last_stale_age_ms: float | None = None
         self._started = monotonic()
         self._last_cmd: float | None = None
         self._stopped_sent = True  # nothing to stop before the first command
+        self._fwd = (0.0, 0.0)  # the last twist forwarded
+        self._fwd_at: float | None = None
 
     # -- input ------------------------------------------------------------------------
     def on_stamped(self, text: Any, recv_ns: int | None = None) -> Accepted | None:
@@ -83,7 +106,11 @@ class LatencyTracker:
                 self.last_error = f"{exc.kind}: {exc}"
             return None
         record = build_record(cmd, recv_ns, self.deploy_mode)
-        v, w = clamp_twist(cmd.linear_x, cmd.angular_z, self.limits)
+        age = command_age_ms(cmd, record["latency_ms"])
+        stale = 0 < self.max_command_age_ms < age
+        if stale:
+            record["stale"] = True
+        now = self._monotonic()
         with self._lock:
             self.total_seen += 1
             record["rx_seq"] = self.total_seen
@@ -94,18 +121,44 @@ class LatencyTracker:
             self._texts.append(text)
             self._latencies[self._lat_next] = record["latency_ms"]
             self._lat_next = (self._lat_next + 1) % self.max_records
-            self._last_cmd = self._monotonic()
-            self._stopped_sent = False
-        return Accepted(record, v, w, text)
+            if stale:
+                self.stale += 1
+                self.last_stale_age_ms = round(age, 3)
+                forward = self._stop_if_moving(now)
+            else:
+                forward = self._next_twist(cmd.linear_x, cmd.angular_z, now)
+                self._last_cmd = now
+                self._stopped_sent = False
+        return Accepted(record, forward, text)
+
+    def _next_twist(self, v: float, w: float, now: float) -> tuple[float, float]:
+        """Clamp to the limits, then rate-limit speeding up (lock held)."""
+        v, w = clamp_twist(v, w, self.limits)
+        dt = MAX_ACCEL_DT_S if self._fwd_at is None else min(max(now - self._fwd_at, 0.0), MAX_ACCEL_DT_S)
+        pv, pw = self._fwd
+        out = (
+            limit_speedup(pv, v, self.limits.max_linear_accel, dt),
+            limit_speedup(pw, w, self.limits.max_angular_accel, dt),
+        )
+        self._fwd, self._fwd_at = out, now
+        return out
+
+    def _stop_if_moving(self, now: float) -> tuple[float, float] | None:
+        if self._fwd == (0.0, 0.0):
+            return None
+        self._fwd, self._fwd_at = (0.0, 0.0), now
+        return (0.0, 0.0)
 
     def watchdog_due(self) -> bool:
         """True exactly once after ``cmd_timeout`` without a valid command (send one zero twist)."""
         with self._lock:
             if self._stopped_sent or self._last_cmd is None:
                 return False
-            if self._monotonic() - self._last_cmd < self.cmd_timeout:
+            now = self._monotonic()
+            if now - self._last_cmd < self.cmd_timeout:
                 return False
             self._stopped_sent = True
+            self._fwd, self._fwd_at = (0.0, 0.0), now
             return True
 
     # -- API ----------------------------------------------------------------------------
@@ -126,7 +179,7 @@ class LatencyTracker:
                 start = min(max(since + 1, first), total + 1) - first
                 stop = min(start + limit, n)
                 more = stop < n
-            rejected, last_error, negative = self.rejected, self.last_error, self.negative
+            rejected, last_error, negative, stale = self.rejected, self.last_error, self.negative, self.stale
             texts = list(itertools.islice(self._texts, start, stop))
         body: dict[str, Any] = {
             "stats": stats,
@@ -137,6 +190,8 @@ class LatencyTracker:
             "rejected": rejected,
             "last_error": last_error,
             "negative": negative,
+            "stale": stale,
+            "max_command_age_ms": self.max_command_age_ms,
             "last_rx_seq": total,
         }
         if since is not None:
@@ -171,6 +226,9 @@ class LatencyTracker:
                 "total_seen": self.total_seen,
                 "rejected": self.rejected,
                 "negative": self.negative,
+                "stale": self.stale,
+                "last_stale_age_ms": self.last_stale_age_ms,
+                "max_command_age_ms": self.max_command_age_ms,
                 "last_error": self.last_error,
                 "seconds_since_last_command": since,
                 "deploy_mode": self.deploy_mode,

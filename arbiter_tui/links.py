@@ -237,9 +237,11 @@ class RosLink:
         proto = self.ros.factory._proto
         if proto is None or not self.ros.is_connected:
             return  # dropped while queued: counted lost by nobody, never stamped
+        est = self.telemetry.meter.offset()  # lets the tracker judge the command's age across clocks
         mono = time.monotonic()
         now_ns = time.time_ns()
-        text = envelope.build(v, w, seq=seq, clock_ns=lambda: now_ns)
+        offset = None if est is None else est.offset_ms
+        text = envelope.build(v, w, seq=seq, clock_ns=lambda: now_ns, offset_ms=offset)
         frame = json.dumps(
             {"op": "publish", "id": f"cmd:{seq}", "topic": "/stamped_cmd_vel", "msg": {"data": text}},
             separators=(",", ":"),

@@ -1,5 +1,6 @@
 """End to end: `arbiter-backend` as a subprocess, driven by the real roslibpy client over real sockets."""
 
+import itertools
 import json
 import math
 import time
@@ -61,10 +62,16 @@ def test_stamped_commands_become_records_twists_and_motion(backend):
             assert now - 30 < r["timestamp"] <= now
         assert [r["seq"] for r in reports[:n]] == list(range(n))
 
-        # the same N twists reached the robot side, in order, then exactly one watchdog zero
+        # N twists reached the robot side, in order, then exactly one watchdog zero. Speeding up
+        # from rest is rate-limited (2 m/s², at most one 0.1 s step each), so the first linear
+        # values ramp up; once caught up, each is the command sent.
         assert wait_for(lambda: len(twists) >= n + 1, timeout=3)
         got = [(t["linear"]["x"], t["angular"]["z"]) for t in twists[:n]]
-        assert got == sent
+        assert got[0][0] == 0.2  # 0 + 2 m/s² x 0.1 s
+        steps = [b[0] - a[0] for a, b in itertools.pairwise(got)]
+        assert all(0 <= s <= 0.2 + 1e-9 for s in steps)
+        assert [g[0] <= v for g, (v, _) in zip(got, sent, strict=True)] == [True] * n
+        assert got[10:] == sent[10:] and [g[1] for g in got] == [w for _, w in sent]
         time.sleep(0.8)
         tail = twists[n:]
         assert len(tail) == 1 and tail[0]["linear"]["x"] == 0.0 and tail[0]["angular"]["z"] == 0.0
@@ -126,9 +133,17 @@ def test_out_of_limit_velocities_are_clamped_before_the_robot(backend):
         pub = roslibpy.Topic(ros, "/stamped_cmd_vel", "std_msgs/String")
         pub.advertise()
         time.sleep(0.2)
-        pub.publish(roslibpy.Message({"data": envelope.build(50.0, -80.0, seq=1)}))
-        assert wait_for(lambda: len(twists) >= 1)
-        assert (twists[0]["linear"]["x"], twists[0]["angular"]["z"]) == (1.0, -2.0)
+        for i in range(40):
+            pub.publish(roslibpy.Message({"data": envelope.build(50.0, -80.0, seq=i)}))
+            time.sleep(0.02)
+        assert wait_for(lambda: len(twists) >= 40)
+        got = [(t["linear"]["x"], t["angular"]["z"]) for t in twists]
+        # never beyond the limits; speeding up at most 2 m/s² and 6 rad/s² (one 0.1 s step at most)
+        assert all(0 < v <= 1.0 and -2.0 <= w < 0 for v, w in got)
+        assert got[0] == (0.2, -0.6) or got[0] == (0.2, -0.6000000000000001)
+        for (v0, w0), (v1, w1) in itertools.pairwise(got):
+            assert 0 <= v1 - v0 <= 0.2 + 1e-9 and 0 <= w0 - w1 <= 0.6 + 1e-9
+        assert got[-1] == (1.0, -2.0)  # reached the limits, in well under the 0.8 s sent
         rec = get_json(f"{backend.api}/api/latency")["records"][-1]
         assert (rec["linear_x"], rec["angular_z"]) == (50.0, -80.0)  # the record keeps what was commanded
     finally:
@@ -197,11 +212,11 @@ def test_measured_type_twist_stamped_in_the_embedded_transport():
         pub = roslibpy.Topic(ros, "/stamped_cmd_vel", "std_msgs/String")
         pub.advertise()
         time.sleep(0.2)
-        pub.publish(roslibpy.Message({"data": envelope.build(0.25, 0.5, seq=1)}))
+        pub.publish(roslibpy.Message({"data": envelope.build(0.15, 0.5, seq=1)}))
         assert wait_for(lambda: len(got) >= 1)
         rec = get_json(f"{backend.api}/api/latency")["records"][0]
         msg = got[0]
-        assert msg["twist"]["linear"]["x"] == 0.25 and msg["twist"]["angular"]["z"] == 0.5
+        assert msg["twist"]["linear"]["x"] == 0.15 and msg["twist"]["angular"]["z"] == 0.5
         stamp = msg["header"]["stamp"]["sec"] + msg["header"]["stamp"]["nanosec"] * 1e-9
         assert abs(stamp - rec["timestamp"]) < 0.5 and msg["header"]["frame_id"] == "base_link"
         assert wait_for(lambda: len(got) >= 2, timeout=2)  # the watchdog zero is stamped too
@@ -209,3 +224,35 @@ def test_measured_type_twist_stamped_in_the_embedded_transport():
     finally:
         ros.close()
         backend.stop()
+
+
+def test_stale_commands_are_reported_but_never_reach_the_robot(backend):
+    ros = connect(backend.bridge_port)
+    try:
+        twists, reports = [], []
+        roslibpy.Topic(ros, "/cmd_vel_measured", "geometry_msgs/Twist").subscribe(twists.append)
+        roslibpy.Topic(ros, "/latency_report", "std_msgs/String").subscribe(
+            lambda m: reports.append(json.loads(m["data"]))
+        )
+        pub = roslibpy.Topic(ros, "/stamped_cmd_vel", "std_msgs/String")
+        pub.advertise()
+        time.sleep(0.2)
+        second_ago = lambda: time.time_ns() - 1_000_000_000  # noqa: E731
+        pub.publish(roslibpy.Message({"data": envelope.build(0.1, 0.0, seq=1)}))
+        pub.publish(roslibpy.Message({"data": envelope.build(0.5, 0.5, seq=2, clock_ns=second_ago)}))
+        # the same age is fine when the sender knows its clock is a second behind the tracker's
+        ok = envelope.build(0.1, 0.0, seq=3, clock_ns=second_ago, offset_ms=1000.0)
+        pub.publish(roslibpy.Message({"data": ok}))
+        assert wait_for(lambda: len(reports) >= 3)
+        assert [r.get("stale", False) for r in reports] == [False, True, False]
+        assert wait_for(lambda: len(twists) >= 3)
+        time.sleep(0.1)
+        # fresh, then a stop instead of the stale command, then fresh again, speeding up from rest
+        got = [(t["linear"]["x"], t["angular"]["z"]) for t in twists[:3]]
+        assert got[:2] == [(0.1, 0.0), (0.0, 0.0)]
+        assert 0 < got[2][0] <= 0.1 and got[2][1] == 0.0
+        health = get_json(f"{backend.api}/api/health")
+        assert health["stale"] == 1 and health["max_command_age_ms"] == 300.0
+        assert 1000.0 <= health["last_stale_age_ms"] < 1500.0
+    finally:
+        ros.close()

@@ -51,7 +51,16 @@ def wait_matched(publisher, timeout=10.0):
 
 
 def test_rclpy_commands_records_twists_odometry_and_watchdog(peer):
-    backend = ros_backend("--ros-args", "-p", "deploy_mode:=ros_test")
+    # speed-up limits as parameters: high enough that every command is forwarded as sent
+    backend = ros_backend(
+        "--ros-args",
+        "-p",
+        "deploy_mode:=ros_test",
+        "-p",
+        "max_linear_accel:=1000.0",
+        "-p",
+        "max_angular_accel:=1000.0",
+    )
     try:
         twists = peer.collect(Twist, "/cmd_vel_measured", lambda m: (m.linear.x, m.angular.z))
         odom = peer.collect(Odometry, "/odom", lambda m: m.pose.pose.position.x)
@@ -107,15 +116,15 @@ def test_twist_stamped_carries_the_receive_time(peer):
         got = peer.collect(TwistStamped, "/cmd_vel_measured")
         pub = peer.node.create_publisher(String, "/stamped_cmd_vel", 10)
         wait_matched(pub)
-        pub.publish(String(data=envelope.build(0.3, -0.2, seq=7)))
+        pub.publish(String(data=envelope.build(0.15, -0.2, seq=7)))
         assert wait_for(lambda: len(got) >= 1, 5)
         msg = got[0]
-        assert (msg.twist.linear.x, msg.twist.angular.z) == (0.3, -0.2)
+        assert (msg.twist.linear.x, msg.twist.angular.z) == (0.15, -0.2)
         assert msg.header.frame_id == "base_link"
         rec = get_json(f"{backend.api}/api/latency")["records"][0]
         stamp = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
         # the tracker's receive time: after the send stamp by the recorded latency (ms), within 1 ms
-        send_s = json.loads(envelope.build(0.3, -0.2, seq=7))["header"]["stamp"] / 1000.0
+        send_s = json.loads(envelope.build(0.15, -0.2, seq=7))["header"]["stamp"] / 1000.0
         assert send_s - 5.0 < stamp < send_s + 5.0
         assert abs(stamp - rec["timestamp"]) < 0.5
     finally:

@@ -2,11 +2,13 @@
 
 Wire form (the seed's, extended with an optional sequence number)::
 
-    {"header": {"stamp": 1712345678901.234, "seq": 7},
+    {"header": {"stamp": 1712345678901.234, "seq": 7, "offset_ms": -3.2},
      "twist": {"linear": {"x": 0.5}, "angular": {"z": 0.0}}}
 
 ``stamp`` is wall-clock milliseconds since the epoch. We send a float with
 microsecond resolution; the seed sends integer milliseconds and both parse.
+``offset_ms`` is optional: the sender's estimate of the receiver's clock minus
+its own (from round trips), which the tracker uses to judge a command's age.
 Parsing takes untrusted text and either returns a :class:`StampedCommand` or
 raises :class:`EnvelopeError` with a ``kind`` naming the class of problem. It
 never raises anything else.
@@ -22,6 +24,7 @@ from dataclasses import dataclass
 from typing import Any
 
 MAX_ENVELOPE_BYTES = 64 * 1024
+MAX_OFFSET_MS = 86_400_000.0  # a clock a day off is not an offset estimate
 
 
 class EnvelopeError(ValueError):
@@ -40,6 +43,7 @@ class StampedCommand:
     linear_x: float
     angular_z: float
     seq: int | None = None
+    offset_ms: float | None = None  # the sender's estimate of (receiver clock - sender clock)
 
 
 def stamp_ms_from_ns(ns: int) -> float:
@@ -52,6 +56,7 @@ def build(
     angular_z: float,
     seq: int | None = None,
     clock_ns: Callable[[], int] = time.time_ns,
+    offset_ms: float | None = None,
 ) -> str:
     """Serialise a stamped command; the stamp is taken from ``clock_ns`` at call time."""
     if not (math.isfinite(linear_x) and math.isfinite(angular_z)):
@@ -59,6 +64,8 @@ def build(
     header: dict[str, Any] = {"stamp": stamp_ms_from_ns(clock_ns())}
     if seq is not None:
         header["seq"] = int(seq)
+    if offset_ms is not None and math.isfinite(offset_ms) and abs(offset_ms) <= MAX_OFFSET_MS:
+        header["offset_ms"] = round(float(offset_ms), 3)
     return json.dumps(
         {"header": header, "twist": {"linear": {"x": float(linear_x)}, "angular": {"z": float(angular_z)}}},
         separators=(",", ":"),
@@ -127,4 +134,9 @@ def parse(text: str | bytes) -> StampedCommand:
         if isinstance(raw, bool) or not isinstance(raw, int):
             raise EnvelopeError("bad_type", f"header.seq must be an integer, got {type(raw).__name__}")
         seq = raw
-    return StampedCommand(stamp_ms=stamp, linear_x=linear, angular_z=angular, seq=seq)
+    offset: float | None = None
+    if "offset_ms" in header:
+        offset = _number(header["offset_ms"], "header.offset_ms")
+        if abs(offset) > MAX_OFFSET_MS:
+            raise EnvelopeError("bad_type", f"header.offset_ms must be within ±{MAX_OFFSET_MS:.0f}")
+    return StampedCommand(stamp_ms=stamp, linear_x=linear, angular_z=angular, seq=seq, offset_ms=offset)

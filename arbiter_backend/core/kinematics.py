@@ -53,6 +53,24 @@ def _approach(current: float, target: float, max_delta: float) -> float:
     return max(target, current - max_delta)
 
 
+def limit_speedup(current: float, target: float, max_accel: float, dt: float) -> float:
+    """The next commanded velocity on the way from ``current`` to ``target``.
+
+    Speeding up (away from zero) is limited to ``max_accel * dt``; slowing down, towards
+    or through zero, is never delayed: the part down to zero happens at once and only the
+    part beyond zero in the other direction is rate-limited. A non-finite target is a stop.
+    """
+    if not math.isfinite(target):
+        return 0.0
+    if not math.isfinite(current):
+        current = 0.0
+    if current * target < 0:  # reversing: stop at once, then speed up from rest
+        current = 0.0
+    if abs(target) <= abs(current):
+        return target
+    return _approach(current, target, max(0.0, max_accel * dt))
+
+
 def step(
     state: RobotState, cmd_v: float, cmd_w: float, dt: float, limits: Limits = DEFAULT_LIMITS
 ) -> RobotState:

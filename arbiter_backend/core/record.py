@@ -22,6 +22,12 @@ def latency_ms(cmd: StampedCommand, recv_ns: int) -> float:
     return round((recv_ns - stamp_ns) / NS_PER_MS, 4)
 
 
+def command_age_ms(cmd: StampedCommand, latency: float) -> float:
+    """How old a command is on arrival: its one-way latency, corrected by the sender's clock-offset
+    estimate when the envelope carries one (``offset_ms`` = receiver clock minus sender clock)."""
+    return latency - (cmd.offset_ms or 0.0)
+
+
 def build_record(cmd: StampedCommand, recv_ns: int, deploy_mode: str) -> dict[str, Any]:
     """The seed's record: latency_ms, linear_x, angular_z, timestamp (receive epoch s), deploy_mode.
 

@@ -47,12 +47,16 @@ def _measured(value: str) -> str:
 def _limits_params(node: Node, config: BackendConfig) -> tuple[Limits, float, str]:
     max_linear = node.declare_parameter("max_linear", float(config.limits.max_linear)).value
     max_angular = node.declare_parameter("max_angular", float(config.limits.max_angular)).value
+    lin_acc = node.declare_parameter("max_linear_accel", float(config.limits.max_linear_accel)).value
+    ang_acc = node.declare_parameter("max_angular_accel", float(config.limits.max_angular_accel)).value
     cmd_timeout = node.declare_parameter("cmd_timeout", float(config.cmd_timeout)).value
     measured_type = node.declare_parameter("measured_type", config.measured_type).value
     limits = dataclasses.replace(
         config.limits,
         max_linear=_positive("max_linear", max_linear),
         max_angular=_positive("max_angular", max_angular),
+        max_linear_accel=_positive("max_linear_accel", lin_acc),
+        max_angular_accel=_positive("max_angular_accel", ang_acc),
     )
     return limits, _positive("cmd_timeout", cmd_timeout), _measured(measured_type)
 
@@ -69,6 +73,9 @@ class TrackerNode(Node):
         if not 0 <= api_port <= 65535:
             raise ParameterError(f"parameter api_port must be 0..65535, got {api_port}")
         host = self.declare_parameter("host", config.host).value
+        max_age = float(self.declare_parameter("max_command_age_ms", float(config.max_command_age_ms)).value)
+        if not max_age >= 0:
+            raise ParameterError(f"parameter max_command_age_ms must be 0 (off) or positive, got {max_age}")
         self.config = dataclasses.replace(
             config,
             limits=limits,
@@ -78,6 +85,7 @@ class TrackerNode(Node):
             max_records=max_records,
             api_port=api_port,
             host=str(host),
+            max_command_age_ms=max_age,
         )
         self.tracker = self.config.make_tracker()
         qos = default_qos()
@@ -99,7 +107,8 @@ class TrackerNode(Node):
             if accepted is None:
                 return
             self.report_pub.publish(self._string(data=accepted.text))
-            self._forward(accepted.linear_x, accepted.angular_z, recv_ns)
+            if accepted.forward is not None:
+                self._forward(*accepted.forward, recv_ns)
         except Exception:  # a callback that raises would stop the executor, and with it the robot's stop
             log.exception("latency_tracker: command handling failed")
 
