@@ -6,6 +6,10 @@ unsubscribe, call_service for the rosapi basics (/rosapi/topics,
 server, every bad frame is answered with a ``status`` frame naming the problem
 (and the request's ``id``), and the connection stays open.
 
+A client that goes silent is pinged after ``HEARTBEAT_S`` and dropped when no
+pong comes back within half that, so a dead link frees its subscriptions and
+advertisements within about three seconds.
+
 Each client has a bounded outgoing queue drained by its own writer task: a
 slow client loses its oldest frames (counted), never blocks the bus or the
 other clients. Per-client state is dropped when the socket closes.
@@ -34,6 +38,7 @@ log = logging.getLogger(__name__)
 MAX_FRAME_BYTES = 1024 * 1024  # answered with a status error above this
 TRANSPORT_MAX_FRAME = 16 * 1024 * 1024  # aiohttp closes the socket (1009) above this
 CLIENT_QUEUE = 1000
+HEARTBEAT_S = 2.0  # ping a silent client after this long; no pong within half of it drops the client
 LEVELS = ("info", "warning", "error", "none")
 
 
@@ -107,8 +112,10 @@ class RosbridgeEndpoint:
         max_frame: int = MAX_FRAME_BYTES,
         client_queue: int = CLIENT_QUEUE,
         services: dict[str, Callable[[Any], dict[str, Any]]] | None = None,
+        heartbeat: float | None = HEARTBEAT_S,
     ) -> None:
         self.bus = bus
+        self.heartbeat = heartbeat
         self.max_frame = max_frame
         self.client_queue = client_queue
         self.clients: set[Client] = set()
@@ -132,7 +139,7 @@ class RosbridgeEndpoint:
 
     # -- connection lifecycle ------------------------------------------------------------
     async def handle(self, request: web.Request) -> web.WebSocketResponse:
-        ws = web.WebSocketResponse(max_msg_size=TRANSPORT_MAX_FRAME, heartbeat=None)
+        ws = web.WebSocketResponse(max_msg_size=TRANSPORT_MAX_FRAME, heartbeat=self.heartbeat)
         await ws.prepare(request)
         client = Client(ws, self.client_queue)
         self.clients.add(client)

@@ -99,8 +99,11 @@ class ControlLoop:
         if self.link.send(v, w):
             self.command = (v, w)
         else:
+            # The link is down: forget the held key and any autonomous run, so that nothing
+            # moves after a reconnect until the user presses a key again.
             self.unsent += 1
             self.command = (0.0, 0.0)
+            self.stop()
         return (v, w)
 
     def sample(self) -> DataPoint | None:

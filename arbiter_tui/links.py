@@ -32,6 +32,8 @@ RECONNECTING = "RECONNECTING"
 DISCONNECTED = "DISCONNECTED"
 SIMULATED = "SIMULATED"
 MAX_RECONNECT_DELAY_S = 2.0
+PING_INTERVAL_S = 1.0  # WebSocket keep-alive: a ping every second...
+PING_TIMEOUT_S = 2.0  # ...and a link with no pong for this long is dropped (then reconnected)
 
 
 @dataclass
@@ -160,6 +162,8 @@ class RosLink:
         self._ever_connected = False
         self.ros = roslibpy.Ros(host, port)
         factory = self.ros.factory
+        # A silently dead link (cable out, Wi-Fi gone, NAT timeout) sends no FIN: only pings find it.
+        factory.setProtocolOptions(autoPingInterval=PING_INTERVAL_S, autoPingTimeout=PING_TIMEOUT_S)
         original_started = factory.startedConnecting
 
         def started(connector: Any) -> None:
