@@ -7,6 +7,7 @@ from typing import Any
 
 from aiohttp import web
 
+from . import auth
 from .tracker import DEFAULT_LIMIT, LatencyTracker
 
 
@@ -40,7 +41,19 @@ async def json_errors(request: web.Request, handler: Any) -> web.StreamResponse:
         return _error(exc.status, exc.reason)
 
 
-def make_app(tracker: LatencyTracker) -> web.Application:
+def bearer_required(token: str) -> Any:
+    @web.middleware
+    async def check(request: web.Request, handler: Any) -> web.StreamResponse:
+        if not auth.token_matches(auth.bearer(request.headers.get("Authorization")), token):
+            resp = _error(401, "missing or wrong bearer token (Authorization: Bearer TOKEN)")
+            resp.headers["WWW-Authenticate"] = 'Bearer realm="arbiter"'
+            return resp
+        return await handler(request)
+
+    return check
+
+
+def make_app(tracker: LatencyTracker, token: str | None = None) -> web.Application:
     def _int(request: web.Request, name: str, lo: int, hi: int) -> int | None:
         raw = request.query.get(name)
         if raw is None:
@@ -67,7 +80,8 @@ def make_app(tracker: LatencyTracker) -> web.Application:
     async def health(request: web.Request) -> web.Response:
         return _json(tracker.health())
 
-    app = web.Application(middlewares=[json_errors])
+    middlewares = [json_errors] if token is None else [json_errors, bearer_required(token)]
+    app = web.Application(middlewares=middlewares)
     app.router.add_get("/api/latency", latency)
     app.router.add_get("/api/health", health)
     return app

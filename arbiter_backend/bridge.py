@@ -30,6 +30,7 @@ from typing import Any
 
 from aiohttp import WSMsgType, web
 
+from . import auth
 from .bus import Bus
 from .msgtypes import MessageError, normalize_type
 
@@ -87,6 +88,8 @@ class Client:
         self.subs: dict[str, _Sub] = {}
         self.level = "error"
         self.closed = False
+        self.authenticated = True
+        self.kick: tuple[int, str] | None = None  # close with (code, reason) once the queue is sent
 
     def send(self, frame: str) -> None:
         if self.closed:
@@ -113,9 +116,12 @@ class RosbridgeEndpoint:
         client_queue: int = CLIENT_QUEUE,
         services: dict[str, Callable[[Any], dict[str, Any]]] | None = None,
         heartbeat: float | None = HEARTBEAT_S,
+        token: str | None = None,
     ) -> None:
         self.bus = bus
         self.heartbeat = heartbeat
+        self.token = token
+        self.refused = 0  # connections refused for a missing or wrong token
         self.max_frame = max_frame
         self.client_queue = client_queue
         self.clients: set[Client] = set()
@@ -135,18 +141,36 @@ class RosbridgeEndpoint:
             "unsubscribe": self._unsubscribe,
             "call_service": self._call_service,
             "set_level": self._set_level,
+            "auth": lambda client, frame: None,  # authenticated already, or no token required
         }
 
     # -- connection lifecycle ------------------------------------------------------------
-    async def handle(self, request: web.Request) -> web.WebSocketResponse:
+    async def handle(self, request: web.Request) -> web.StreamResponse:
+        authenticated = self.token is None
+        if not authenticated:
+            assert self.token is not None
+            given = request.query.get("token") or auth.bearer(request.headers.get("Authorization"))
+            if given is not None:
+                if not auth.token_matches(given, self.token):
+                    self.refused += 1
+                    log.warning("refused a WebSocket client from %s: wrong token", request.remote)
+                    return web.json_response({"error": "wrong token", "status": 401}, status=401)
+                authenticated = True
         ws = web.WebSocketResponse(max_msg_size=TRANSPORT_MAX_FRAME, heartbeat=self.heartbeat)
         await ws.prepare(request)
         client = Client(ws, self.client_queue)
+        client.authenticated = authenticated
         self.clients.add(client)
-        writer = asyncio.get_running_loop().create_task(self._writer(client))
+        loop = asyncio.get_running_loop()
+        writer = loop.create_task(self._writer(client))
+        deadline = None
+        if not authenticated:
+            deadline = loop.call_later(auth.AUTH_DEADLINE_S, self._auth_timeout, client)
         log.info("client %d connected from %s", client.id, request.remote)
         try:
             async for msg in ws:
+                if client.kick is not None:
+                    continue  # being closed: nothing more is read into the robot
                 if msg.type == WSMsgType.TEXT:
                     self.handle_frame(client, msg.data)
                 elif msg.type == WSMsgType.BINARY:
@@ -160,6 +184,8 @@ class RosbridgeEndpoint:
                     log.info("client %d socket error: %s", client.id, ws.exception())
                     break
         finally:
+            if deadline is not None:
+                deadline.cancel()
             self._drop_client(client)
             writer.cancel()
             with contextlib.suppress(asyncio.CancelledError):
@@ -176,10 +202,41 @@ class RosbridgeEndpoint:
                 while client.out:
                     frame = client.out.popleft()
                     await ws.send_str(frame)
+                if client.kick is not None:
+                    code, reason = client.kick
+                    await ws.close(code=code, message=reason.encode("utf-8")[:120])
+                    return
         except (ConnectionResetError, RuntimeError, asyncio.CancelledError):
             pass
         except Exception:
             log.exception("writer for client %d failed", client.id)
+
+    def _refuse(self, client: Client, reason: str) -> None:
+        """Answer with an error, then close (1008, policy violation) once the answer is sent."""
+        self.refused += 1
+        self._error(client, reason)
+        client.kick = (1008, reason)
+        client.wakeup.set()
+
+    def _auth_timeout(self, client: Client) -> None:
+        if not client.authenticated and client.kick is None and not client.closed:
+            self._refuse(client, f"authentication required within {auth.AUTH_DEADLINE_S:.0f} s")
+
+    def _authenticate(self, client: Client, text: str) -> None:
+        """The first frame of a client that brought no token in its handshake must be ``auth``."""
+        try:
+            frame = json.loads(text, parse_constant=_reject_constant) if len(text) <= 4096 else None
+        except (ValueError, RecursionError):
+            frame = None
+        if not isinstance(frame, dict) or frame.get("op") != "auth":
+            self._refuse(client, 'authentication required: send {"op": "auth", "mac": TOKEN} first')
+            return
+        assert self.token is not None
+        given = frame.get("mac", frame.get("token"))
+        if not auth.token_matches(given, self.token):
+            self._refuse(client, "authentication failed: wrong token")
+            return
+        client.authenticated = True
 
     def _drop_client(self, client: Client) -> None:
         client.closed = True
@@ -205,6 +262,9 @@ class RosbridgeEndpoint:
         client.status("error", msg, req_id)
 
     def handle_frame(self, client: Client, text: str) -> None:
+        if not client.authenticated:
+            self._authenticate(client, text)
+            return
         if len(text) > self.max_frame:
             self._error(client, f"frame of {len(text)} bytes exceeds the {self.max_frame}-byte limit")
             return

@@ -8,8 +8,10 @@ import errno
 import logging
 import signal
 import sys
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from . import auth
 from .cliargs import count, non_negative_float, port, positive_float
 from .core.kinematics import Limits
 from .server import Backend, BackendConfig
@@ -25,7 +27,23 @@ def build_parser() -> argparse.ArgumentParser:
         description="Latency tracker (HTTP API), differential-drive robot simulator and rosbridge WebSocket "
         "endpoint, in one process with no ROS install. Stops on SIGINT/SIGTERM.",
     )
-    p.add_argument("--host", default="127.0.0.1", help="address to bind (default: 127.0.0.1, loopback only)")
+    p.add_argument(
+        "--host",
+        default="127.0.0.1",
+        help="address to bind (default: 127.0.0.1, loopback only; others need --allow-remote and a token)",
+    )
+    p.add_argument(
+        "--allow-remote",
+        action="store_true",
+        help="allow --host to be a non-loopback address; clients must then present the token "
+        f"(${auth.TOKEN_ENV} or --token-file). An SSH tunnel is the better choice",
+    )
+    p.add_argument(
+        "--token-file",
+        type=Path,
+        help=f"file whose first line is the shared token (default: ${auth.TOKEN_ENV}); when a token is set "
+        "every client must present it: rosbridge 'auth' op, ?token= or Authorization: Bearer",
+    )
     p.add_argument("--bridge-port", type=port, default=9090, help="rosbridge WebSocket port (default: 9090)")
     p.add_argument("--api-port", type=port, default=8085, help="tracker HTTP API port (default: 8085)")
     p.add_argument(
@@ -131,6 +149,10 @@ async def _run(config: BackendConfig, ros_args: list[str]) -> int:
         return 2
     try:
         await backend.start()
+    except auth.AuthConfigError as exc:
+        await backend.stop()
+        print(f"arbiter-backend: {exc}", file=sys.stderr)
+        return 2
     except OSError as exc:
         await backend.stop()
         if exc.errno in (errno.EADDRINUSE, errno.EACCES, errno.EADDRNOTAVAIL):
@@ -168,8 +190,15 @@ def main(argv: list[str] | None = None) -> int:
         )
     else:
         logging.basicConfig(level=logging.WARNING, format="arbiter-backend: %(levelname)s %(message)s")
+    try:
+        token = auth.load_token(args.token_file)
+    except auth.AuthConfigError as exc:
+        print(f"arbiter-backend: {exc}", file=sys.stderr)
+        return 2
     config = BackendConfig(
         host=args.host,
+        allow_remote=args.allow_remote,
+        token=token,
         bridge_port=args.bridge_port,
         api_port=args.api_port,
         deploy_mode=args.deploy_mode,

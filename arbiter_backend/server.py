@@ -17,7 +17,7 @@ from typing import Any
 
 from aiohttp import web
 
-from . import api, bridge, topics
+from . import api, auth, bridge, topics
 from .bus import TopicBus
 from .core.kinematics import DEFAULT_LIMITS, Limits
 from .simulator import RATE_HZ, DiffDriveSimulator
@@ -45,6 +45,8 @@ class BackendConfig:
     limits: Limits = field(default_factory=lambda: DEFAULT_LIMITS)
     measured_type: str = "twist"  # a key of topics.MEASURED_TYPES
     transport: str = "embedded"  # or "ros"
+    token: str | None = None  # required from every client when set (see auth.py)
+    allow_remote: bool = False  # without it only loopback addresses may be bound
 
     def make_tracker(self) -> LatencyTracker:
         return LatencyTracker(
@@ -80,10 +82,12 @@ class Servers:
         return int(server.sockets[0].getsockname()[1])  # type: ignore[union-attr]
 
     async def start_servers(self, endpoint: bridge.RosbridgeEndpoint | None, tracker: LatencyTracker) -> None:
+        # Here, not in the CLI: in ROS mode a parameter may have changed the host.
+        auth.check_exposure(self.config.host, self.config.allow_remote, self.config.token)
         try:
             if endpoint is not None:
                 self.bridge_port = await self._serve(bridge.make_app(endpoint), self.config.bridge_port)
-            self.api_port = await self._serve(api.make_app(tracker), self.config.api_port)
+            self.api_port = await self._serve(api.make_app(tracker, self.config.token), self.config.api_port)
         except BaseException:
             await self.stop_servers(endpoint)
             raise
@@ -103,6 +107,7 @@ class Servers:
         parts.append(f"deploy_mode={self.config.deploy_mode}")
         parts.append(f"sim={'on' if self.sim_enabled else 'off'}")
         parts.append(f"transport={self.config.transport}")
+        parts.append(f"auth={'token' if self.config.token else 'none'}")
         return "arbiter-backend listening: " + " ".join(parts)
 
 
@@ -115,7 +120,7 @@ class Backend(Servers):
         self.tracker = config.make_tracker()
         self.simulator = config.make_simulator() if config.sim else None
         self.sim_enabled = self.simulator is not None
-        self.endpoint = bridge.RosbridgeEndpoint(self.bus)
+        self.endpoint = bridge.RosbridgeEndpoint(self.bus, token=config.token)
         self._tasks: list[asyncio.Task[None]] = []
         for topic, type_name in (
             (TOPIC_STAMPED, topics.TYPE_STRING),

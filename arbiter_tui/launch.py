@@ -10,6 +10,7 @@ import tempfile
 from pathlib import Path
 from urllib.parse import urlparse
 
+from arbiter_backend.auth import AuthConfigError, load_token
 from arbiter_backend.cliargs import count, port, positive_float
 
 from .settings import CONNECT, EMBEDDED, SIM, Settings
@@ -66,6 +67,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="warn when the clock offset to the tracker exceeds this, ms (10, the seed's chrony rule)",
     )
     p.add_argument(
+        "--token-file",
+        type=Path,
+        help="--connect: file whose first line is the backend's token (default: $ARBITER_TOKEN), sent as "
+        "an Authorization: Bearer header to the rosbridge endpoint and the tracker API",
+    )
+    p.add_argument(
         "--log-file", help="log file for the client libraries (default: a file in the temp directory)"
     )
     return p
@@ -89,6 +96,13 @@ def run_app(argv: list[str]) -> int:
         print(f"arbiter-tui: --export-dir {args.export_dir} is not a directory", file=sys.stderr)
         return 2
     mode = CONNECT if args.connect else SIM if args.sim else EMBEDDED
+    token = None
+    if mode == CONNECT:
+        try:
+            token = load_token(args.token_file)
+        except AuthConfigError as exc:
+            print(f"arbiter-tui: {exc}", file=sys.stderr)
+            return 2
     settings = Settings(
         mode=mode,
         export_dir=args.export_dir,
@@ -132,8 +146,8 @@ def run_app(argv: list[str]) -> int:
                 tracker_url = args.tracker
                 settings.rosbridge_url = args.rosbridge
             settings.tracker_url = tracker_url
-            link = RosLink(host, port)
-            tracker = TrackerClient(tracker_url)
+            link = RosLink(host, port, token=token)
+            tracker = TrackerClient(tracker_url, token=token)
         app = make_app(settings, link, tracker)
         if backend is not None:
             app.sub_title = (

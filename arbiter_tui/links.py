@@ -147,7 +147,7 @@ def _write_now(proto: Any, payload: bytes) -> None:
 class RosLink:
     """The rosbridge link: stamped commands out, /odom and /latency_report in (roslibpy, Twisted thread)."""
 
-    def __init__(self, host: str, port: int, odom_throttle_ms: int = 50) -> None:
+    def __init__(self, host: str, port: int, odom_throttle_ms: int = 50, token: str | None = None) -> None:
         import roslibpy
         from roslibpy.comm import select_factory
 
@@ -160,7 +160,10 @@ class RosLink:
         self._seq = 0
         self._zero_first = False
         self._ever_connected = False
-        self.ros = roslibpy.Ros(host, port)
+        # The token goes in the handshake's Authorization header: sent on every reconnect, before any
+        # frame, and never part of a URL that could be logged.
+        headers = None if token is None else {"Authorization": f"Bearer {token}"}
+        self.ros = roslibpy.Ros(host, port, headers=headers)
         factory = self.ros.factory
         # A silently dead link (cable out, Wi-Fi gone, NAT timeout) sends no FIN: only pings find it.
         factory.setProtocolOptions(autoPingInterval=PING_INTERVAL_S, autoPingTimeout=PING_TIMEOUT_S)

@@ -58,11 +58,14 @@ class LatencyView:
 
 
 class TrackerClient:
-    def __init__(self, base_url: str, timeout: float = 1.0, limit: int = 50) -> None:
+    def __init__(
+        self, base_url: str, timeout: float = 1.0, limit: int = 50, token: str | None = None
+    ) -> None:
         self.base_url = base_url.rstrip("/")
         self.limit = limit
         self.view = LatencyView()
-        self._client = httpx.AsyncClient(timeout=timeout)
+        headers = {} if token is None else {"Authorization": f"Bearer {token}"}
+        self._client = httpx.AsyncClient(timeout=timeout, headers=headers)
 
     async def poll(self) -> LatencyView:
         self.view.polls += 1

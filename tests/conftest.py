@@ -33,14 +33,14 @@ class BackendProc:
         return self.proc.returncode
 
 
-def start_backend(*args: str, timeout: float = 15.0) -> BackendProc:
+def start_backend(*args: str, timeout: float = 15.0, env: dict[str, str] | None = None) -> BackendProc:
     cmd = [sys.executable, "-m", "arbiter_backend.cli", "--bridge-port", "0", "--api-port", "0", *args]
     proc = subprocess.Popen(
         cmd,
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
-        env={**os.environ, "PYTHONUNBUFFERED": "1"},
+        env={**os.environ, "PYTHONUNBUFFERED": "1", **(env or {})},
     )
     deadline = time.monotonic() + timeout
     line = ""
