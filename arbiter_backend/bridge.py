@@ -22,6 +22,7 @@ import contextlib
 import itertools
 import json
 import logging
+import re
 import time
 from collections import deque
 from collections.abc import Callable
@@ -41,6 +42,9 @@ TRANSPORT_MAX_FRAME = 16 * 1024 * 1024  # aiohttp closes the socket (1009) above
 CLIENT_QUEUE = 1000
 HEARTBEAT_S = 2.0  # ping a silent client after this long; no pong within half of it drops the client
 LEVELS = ("info", "warning", "error", "none")
+TOPIC_NAME = re.compile(r"(?:/[A-Za-z_][A-Za-z0-9_]*)+", re.ASCII)  # a fully qualified ROS 2 name
+MAX_THROTTLE_MS = 3_600_000
+MAX_QUEUE_LENGTH = 1_000_000
 
 
 class BadFrame(ValueError):
@@ -316,7 +320,14 @@ class RosbridgeEndpoint:
         topic = RosbridgeEndpoint._field(frame, "topic", str)
         if not topic or len(topic) > 256:
             raise BadFrame("topic must be a non-empty string of at most 256 characters")
-        return topic if topic.startswith("/") else "/" + topic
+        topic = topic if topic.startswith("/") else "/" + topic
+        if not TOPIC_NAME.fullmatch(topic):
+            shown = json.dumps(topic[:60])
+            raise BadFrame(
+                f"invalid topic name {shown}: tokens of letters, digits and _ separated by /, "
+                "none starting with a digit"
+            )
+        return topic
 
     def _advertise(self, client: Client, frame: dict[str, Any]) -> None:
         topic = self._topic(frame)
@@ -344,8 +355,10 @@ class RosbridgeEndpoint:
         type_name = self._field(frame, "type", str, required=False)
         throttle = self._field(frame, "throttle_rate", int, required=False) or 0
         queue_length = self._field(frame, "queue_length", int, required=False) or 0
-        if throttle < 0 or queue_length < 0:
-            raise BadFrame("throttle_rate and queue_length must not be negative")
+        if not 0 <= throttle <= MAX_THROTTLE_MS:
+            raise BadFrame(f"throttle_rate must be 0..{MAX_THROTTLE_MS} ms")
+        if not 0 <= queue_length <= MAX_QUEUE_LENGTH:
+            raise BadFrame(f"queue_length must be 0..{MAX_QUEUE_LENGTH}")
         queue_length = min(queue_length, self.client_queue)
         if type_name is not None:
             self.bus.declare(topic, type_name)

@@ -179,6 +179,26 @@ def _event_loop_runner() -> Any:
     return uvloop.run
 
 
+class _BadRequestFilter(logging.Filter):
+    """aiohttp logs every malformed request from a client as an ERROR with a traceback; it has
+    already answered 400. One short line is enough, so garbage cannot flood the log."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        exc = record.exc_info[1] if record.exc_info else None
+        from aiohttp.http_exceptions import HttpProcessingError
+
+        if isinstance(exc, HttpProcessingError):
+            record.levelno, record.levelname = logging.INFO, "INFO"
+            record.msg, record.args, record.exc_info, record.exc_text = (
+                "bad request answered with %s: %s",
+                (exc.code, str(exc.message).splitlines()[0][:120] if exc.message else ""),
+                None,
+                None,
+            )
+            return logging.getLogger().isEnabledFor(logging.INFO)
+        return True
+
+
 def main(argv: list[str] | None = None) -> int:
     ours, ros_args = split_ros_args(sys.argv[1:] if argv is None else list(argv))
     args = build_parser().parse_args(ours)
@@ -190,6 +210,7 @@ def main(argv: list[str] | None = None) -> int:
         )
     else:
         logging.basicConfig(level=logging.WARNING, format="arbiter-backend: %(levelname)s %(message)s")
+    logging.getLogger("aiohttp.server").addFilter(_BadRequestFilter())
     try:
         token = auth.load_token(args.token_file)
     except auth.AuthConfigError as exc:

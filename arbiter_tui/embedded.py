@@ -12,6 +12,7 @@ import socket
 import subprocess
 import sys
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 LISTEN_RE = re.compile(r"rosbridge=ws://([\d.]+):(\d+) api=http://[\d.]+:(\d+)")
@@ -51,6 +52,7 @@ class EmbeddedBackend:
         log_file: str | None = None,
         timeout: float = 15.0,
         transport: str = "embedded",
+        extra_args: Sequence[str] = (),
     ) -> EmbeddedBackend:
         bp = bridge_port if bridge_port == 0 or port_free(bridge_port) else 0
         ap = api_port if api_port == 0 or port_free(api_port) else 0
@@ -59,6 +61,7 @@ class EmbeddedBackend:
             cmd += ["--transport", transport]
         if log_file:
             cmd += ["--log-file", log_file]
+        cmd += list(extra_args)
         proc = subprocess.Popen(
             cmd,
             stdin=subprocess.DEVNULL,

@@ -69,7 +69,25 @@ BAD_FRAMES = [
     ('{"op": "advertise", "id": "b2", "topic": "/x", "type": "not a type"}', "b2", "invalid message type"),
     ('{"op": "subscribe", "id": "b3", "topic": "/unknown/topic"}', "b3", "type unknown"),
     ('{"op": "subscribe", "id": "b4", "topic": "/odom", "throttle_rate": "fast"}', "b4", "wrong type"),
-    ('{"op": "subscribe", "id": "b5", "topic": "/odom", "queue_length": -3}', "b5", "negative"),
+    ('{"op": "subscribe", "id": "b5", "topic": "/odom", "queue_length": -3}', "b5", "queue_length must be"),
+    (
+        '{"op": "subscribe", "id": "c1", "topic": "/odom", "throttle_rate": 99999999999}',
+        "c1",
+        "throttle_rate",
+    ),
+    (
+        '{"op": "subscribe", "id": "c2", "topic": "/odom bar", "type": "nav_msgs/Odometry"}',
+        "c2",
+        "invalid topic",
+    ),
+    ('{"op": "advertise", "id": "c3", "topic": "/a//b", "type": "std_msgs/String"}', "c3", "invalid topic"),
+    ('{"op": "advertise", "id": "c4", "topic": "/1st", "type": "std_msgs/String"}', "c4", "invalid topic"),
+    ('{"op": "publish", "id": "c5", "topic": "/odom/", "msg": {}}', "c5", "invalid topic"),
+    (
+        '{"op": "subscribe", "id": "c6", "topic": "/\u00f8dom", "type": "std_msgs/String"}',
+        "c6",
+        "invalid topic",
+    ),
     (
         '{"op": "publish", "id": "b6", "topic": "/cmd_vel_measured", "msg": {"linear": {"x": NaN}}}',
         None,
