@@ -18,7 +18,7 @@ from arbiter_backend.core.analytics import STORE, AnalyticsStore
 from arbiter_backend.files import ExportError, export_store
 
 from .control_loop import ControlLoop
-from .links import Link, SimLink
+from .links import DISCONNECTED, RECONNECTING, Link, SimLink
 from .screens.analytics import AnalyticsScreen
 from .screens.control import ControlScreen
 from .screens.help import HelpScreen
@@ -205,8 +205,14 @@ class ArbiterApp(App[None]):
             return None
         return self.tracker.view
 
+    def link_down(self) -> bool:
+        """The rosbridge link was lost (or never came up): nothing the console sends goes out."""
+        return self.link.state in (DISCONNECTED, RECONNECTING)
+
     def status_text(self) -> str:
         link_state = self.link.state
+        if link_state == RECONNECTING:
+            link_state = "DISCONNECTED (reconnecting)"
         collecting = f"REC {len(self.store)}" if self.store.is_collecting else f"idle {len(self.store)}"
         tracker = ""
         if self.tracker is not None:

@@ -100,10 +100,12 @@ class ControlLoop:
             self.command = (v, w)
         else:
             # The link is down: forget the held key and any autonomous run, so that nothing
-            # moves after a reconnect until the user presses a key again.
+            # moves after a reconnect until the user presses a key again. (A refused zero is
+            # just dropped: the link sends a zero before the first command after a reconnect.)
             self.unsent += 1
             self.command = (0.0, 0.0)
-            self.stop()
+            if (v, w) != (0.0, 0.0):
+                self.stop()
         return (v, w)
 
     def sample(self) -> DataPoint | None:

@@ -148,8 +148,9 @@ class RosLink:
     """The rosbridge link: stamped commands out, /odom and /latency_report in (roslibpy, Twisted thread)."""
 
     def __init__(self, host: str, port: int, odom_throttle_ms: int = 50, token: str | None = None) -> None:
-        import roslibpy
         from roslibpy.comm import select_factory
+        from twisted.internet import reactor
+        from twisted.internet.threads import blockingCallFromThread
 
         factory_cls = select_factory()
         factory_cls.set_max_delay(MAX_RECONNECT_DELAY_S)  # roslibpy's default is an hour
@@ -160,6 +161,19 @@ class RosLink:
         self._seq = 0
         self._zero_first = False
         self._ever_connected = False
+        self._reactor: Any = reactor
+        # Build on the reactor thread when it already runs (a second link in one process): the
+        # connection attempt is queued behind this call, so the ping options and the event hooks
+        # are in place before the first connection is made. Otherwise the reactor starts below.
+        if reactor.running:
+            blockingCallFromThread(reactor, self._build, host, port, token, odom_throttle_ms)
+        else:
+            self._build(host, port, token, odom_throttle_ms)
+        self.ros.factory.manager.run()  # start the reactor thread without blocking on the connection
+
+    def _build(self, host: str, port: int, token: str | None, odom_throttle_ms: int) -> None:
+        import roslibpy
+
         # The token goes in the handshake's Authorization header: sent on every reconnect, before any
         # frame, and never part of a URL that could be logged.
         headers = None if token is None else {"Authorization": f"Bearer {token}"}
@@ -176,6 +190,15 @@ class RosLink:
             original_started(connector)
 
         factory.startedConnecting = started
+        original_failed = factory.clientConnectionFailed
+
+        def failed(connector: Any, reason: Any) -> None:  # refused or unreachable: no "close" event
+            with self._lock:
+                if self._state != "CLOSED":
+                    self._state = DISCONNECTED
+            original_failed(connector, reason)
+
+        factory.clientConnectionFailed = failed
         factory.on("ready", self._on_ready)
         self.ros.on("close", self._on_close)
         self._cmd = roslibpy.Topic(self.ros, "/stamped_cmd_vel", "std_msgs/String", queue_size=1)
@@ -186,10 +209,6 @@ class RosLink:
         self._cmd.advertise()
         self._odom.subscribe(self.telemetry.set_odom)
         self._report.subscribe(self.telemetry.set_report)
-        from twisted.internet import reactor
-
-        self._reactor: Any = reactor
-        self.ros.factory.manager.run()  # start the reactor thread without blocking on the connection
 
     def _on_ready(self, proto: Any) -> None:
         # roslibpy has no handler for rosbridge "status" frames; ours records the message.

@@ -102,4 +102,5 @@ class MapView(Static):
 class StatusLine(Static):
     DEFAULT_CSS = """
     StatusLine { dock: top; height: 1; background: $panel; color: $text; padding: 0 1; }
+    StatusLine.alarm { background: $error; text-style: bold; }
     """

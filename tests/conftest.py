@@ -9,7 +9,7 @@ from dataclasses import dataclass
 import httpx
 import pytest
 
-LISTEN_RE = re.compile(r"rosbridge=ws://[\d.]+:(\d+) api=http://[\d.]+:(\d+)")
+LISTEN_RE = re.compile(r"listening: (?:rosbridge=ws://[\d.]+:(\d+) )?api=http://[\d.]+:(\d+)")
 
 
 @dataclass
@@ -48,7 +48,7 @@ def start_backend(*args: str, timeout: float = 15.0, env: dict[str, str] | None 
         line = proc.stdout.readline()
         m = LISTEN_RE.search(line)
         if m:
-            return BackendProc(proc, int(m.group(1)), int(m.group(2)))
+            return BackendProc(proc, int(m.group(1) or 0), int(m.group(2)))
         if proc.poll() is not None:
             break
     proc.kill()

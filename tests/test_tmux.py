@@ -52,3 +52,79 @@ def test_drive_and_quit_in_a_real_terminal(tmp_path, mode):
         assert done.read_text().strip() == "0"
     finally:
         tmux("kill-session", "-t", session)
+
+
+def _tui_pid(session: str) -> int:
+    shell = tmux("display-message", "-p", "-t", session, "#{pane_pid}").strip()
+    deadline = time.monotonic() + 5
+    while time.monotonic() < deadline:
+        out = subprocess.run(["pgrep", "-P", shell], capture_output=True, text=True).stdout.split()
+        if out:
+            return int(out[0])
+        time.sleep(0.1)
+    raise AssertionError("arbiter-tui process not found")
+
+
+def _alive(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/status") as fh:
+            return "State:\tZ" not in fh.read()
+    except FileNotFoundError:
+        return False
+
+
+@pytest.mark.parametrize("how", ["sighup", "kill-session"])
+def test_hangup_stops_the_robot_exits_and_restores_the_terminal(tmp_path, backend, how):
+    """SIGHUP, as when the SSH session dies: a zero goes out, the process exits, the terminal is
+    left as it was. kill-session is the harsher version: SIGHUP and the terminal gone at once."""
+    from .conftest import get_json
+
+    session = f"arbiter-{uuid.uuid4().hex[:8]}"
+    exe = Path(sys.executable).with_name("arbiter-tui")
+    done = tmp_path / "exit"
+    args = (
+        f"--connect --rosbridge ws://127.0.0.1:{backend.bridge_port} --tracker {backend.api} "
+        f"--key-timeout 10 --export-dir {tmp_path}"
+    )
+    tmux(
+        "new-session",
+        "-d",
+        "-s",
+        session,
+        "-x",
+        "100",
+        "-y",
+        "30",
+        f"{exe} {args}; echo $? > {done}; sleep 30",
+    )
+    try:
+        screen_until(session, "CONNECTED")
+        pid = _tui_pid(session)
+        for _ in range(4):
+            tmux("send-keys", "-t", session, "i")
+            time.sleep(0.1)
+        screen_until(session, "(teleop)")
+        records = get_json(f"{backend.api}/api/latency")["records"]
+        assert records and records[-1]["linear_x"] == 0.5  # driving, and the key "held" for 10 s
+        if how == "sighup":
+            subprocess.run(["kill", "-HUP", str(pid)], check=True)
+        else:
+            tmux("kill-session", "-t", session)
+        deadline = time.monotonic() + 5
+        while _alive(pid) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert not _alive(pid), "arbiter-tui still running after the hangup"
+        last = get_json(f"{backend.api}/api/latency")["records"][-1]
+        assert (last["linear_x"], last["angular_z"]) == (0.0, 0.0)  # the best-effort zero went out
+        if how == "sighup":
+            deadline = time.monotonic() + 5
+            while not done.exists() and time.monotonic() < deadline:
+                time.sleep(0.05)
+            assert done.read_text().strip() == "0"
+            # the terminal is back to normal: main screen, cursor shown, no mouse reporting
+            state = tmux(
+                "display-message", "-p", "-t", session, "#{alternate_on} #{cursor_flag} #{mouse_any_flag}"
+            )
+            assert state.split() == ["0", "1", "0"], state
+    finally:
+        tmux("kill-session", "-t", session)

@@ -67,4 +67,6 @@ class BaseScreen(Screen[None]):
 
     def refresh_view(self) -> None:
         """Redraw from the shared state (called by the app at its fixed UI rate)."""
-        self.query_one("#status", StatusLine).update(self.arbiter.status_text())
+        status = self.query_one("#status", StatusLine)
+        status.update(self.arbiter.status_text())
+        status.set_class(self.arbiter.link_down(), "alarm")

@@ -21,6 +21,11 @@ KEY_HELP = """[b]Move[/b]   u i o
 [b]Auto[/b]   a algorithm  n mission  g go"""
 
 
+LINK_DOWN = (
+    "LINK DOWN: nothing is sent; the robot\nstops on its own timeout. Press a key\nonce the link is back.\n"
+)
+
+
 class ControlScreen(BaseScreen):
     DEFAULT_CSS = """
     ControlScreen #panel { width: 40; border: round $secondary; padding: 0 1; }
@@ -72,6 +77,8 @@ class ControlScreen(BaseScreen):
         v, w = loop.command
         state = "driving" if loop.running else ("teleop" if loop.teleop.moving else "stopped")
         t = Text()
+        if app.link_down():
+            t.append(LINK_DOWN, "bold red")
         t.append("Command  ", "bold")
         t.append(f"v {v:+.2f} m/s  ω {w:+.2f} rad/s\n")
         t.append("Max      ", "bold")

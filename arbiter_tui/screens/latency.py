@@ -106,6 +106,13 @@ class LatencyScreen(BaseScreen):
             return out
         s = self.arbiter.link.telemetry.meter.summary()
         out.append("this console", "bold")
+        if self.arbiter.link_down():
+            out.append(
+                f" · ROSBRIDGE LINK {self.arbiter.link.state}: no commands, no round trips"
+                f" · sent {s['sent']} · lost {s['lost']}",
+                "bold red",
+            )
+            return out
         if not s["n"]:
             out.append(f" · no round trips yet · sent {s['sent']} · lost {s['lost']}")
             return out
