@@ -52,6 +52,26 @@ def rows(results: list[dict]) -> list[str]:
             f"| tui | latency screen: CPU, output | {lt['cpu_percent_of_core']}% of a core, "
             f"{lt['kb_per_s']} KB/s | ≤ 5%, ≤ 20 KB/s |",
         ]
+    if f := by.get("fuzz"):
+        http = sum(v for k, v in f["by_kind"].items() if k.startswith("http_"))
+        env = sum(v for k, v in f["by_kind"].items() if k.startswith("envelope_"))
+        out += [
+            f"| fuzz | malformed cases (frames / envelopes / HTTP), seed {f['seed']} | {f['cases']:,} "
+            f"({f['cases'] - http - env:,} / {env:,} / {http:,}) in {f['seconds']} s | ≥ 10,000 |",
+            f"| fuzz | failures (unanswered, uncounted, 5xx, twist past limits) | {len(f['failures'])} | 0 |",
+            f"| fuzz | valid 100 Hz stream alongside: recorded / sent | {f['valid_recorded']:,} / "
+            f"{f['valid_sent']:,} | all |",
+        ]
+    if k := by.get("soak"):
+        c, b = k["processes"]["console"], k["processes"]["backend"]
+        out += [
+            f"| soak | {k['duration_s'] / 60:g} min at {k['rate_hz']:g} Hz: lost / unreported of sent | "
+            f"{k['lost']} / {k['unreported']} of {k['sent']:,} | 0 |",
+            f"| soak | RSS console: start → end (growth) | {c['rss_start_mb']} → {c['rss_end_mb']} MB "
+            f"({c['growth_mb']:+} MB) | ≤ 5 MB/h |",
+            f"| soak | RSS backend: start → end (growth) | {b['rss_start_mb']} → {b['rss_end_mb']} MB "
+            f"({b['growth_mb']:+} MB) | ≤ 5 MB/h |",
+        ]
     m = next((r.get("machine") for r in results if r.get("machine")), None)
     if m:
         out.append("")

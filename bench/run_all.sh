@@ -7,9 +7,11 @@ cd "$(dirname "$0")/.."
 PY=${PYTHON:-.venv/bin/python}
 out=bench/results.jsonl
 : > "$out"
-if [ -n "${SHORT:-}" ]; then d=3; s=15; else d=10; s=60; fi
+if [ -n "${SHORT:-}" ]; then d=3; s=15; soak=300; else d=10; s=60; soak=3600; fi
 "$PY" bench/bench_stats.py | tail -1 >> "$out"
 "$PY" bench/latency.py --count 2000 --rate 100 | tail -1 >> "$out"
 "$PY" bench/throughput.py --duration "$d" | tail -1 >> "$out"
 "$PY" bench/api.py --duration 30 | tail -1 >> "$out"
 "$PY" bench/tui.py --seconds "$s" | tail -1 >> "$out"
+"$PY" bench/fuzz.py --count 10000 --seed 1 | tail -1 >> "$out"
+"$PY" bench/soak.py --duration "$soak" | tail -1 >> "$out"
