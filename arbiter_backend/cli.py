@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from . import auth
-from .cliargs import count, non_negative_float, port, positive_float
+from .cliargs import OneLineParser, count, non_negative_float, port, positive_float
 from .core.kinematics import Limits
 from .server import Backend, BackendConfig
 from .topics import MEASURED_TYPES
@@ -22,7 +22,7 @@ if TYPE_CHECKING:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
+    p = OneLineParser(
         prog="arbiter-backend",
         description="Latency tracker (HTTP API), differential-drive robot simulator and rosbridge WebSocket "
         "endpoint, in one process with no ROS install. Stops on SIGINT/SIGTERM.",

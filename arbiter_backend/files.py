@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import stat
 import tempfile
 import time
 from collections.abc import Callable
@@ -86,7 +87,12 @@ def load_points(path: Path) -> list[DataPoint]:
     """Read a CSV or JSON export (chosen by content, not by name)."""
     path = Path(path)
     try:
-        size = path.stat().st_size
+        st = path.stat()
+        if stat.S_ISDIR(st.st_mode):
+            raise IsADirectoryError(str(path))
+        if not stat.S_ISREG(st.st_mode):  # a FIFO or a device would block or never end
+            raise ExportFormatError(f"{path} is not a regular file")
+        size = st.st_size
         if size > MAX_IMPORT_BYTES:
             raise ExportFormatError(f"file is {size} bytes, larger than {MAX_IMPORT_BYTES}")
         raw = path.read_bytes()

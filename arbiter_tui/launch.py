@@ -11,13 +11,13 @@ from pathlib import Path
 from urllib.parse import urlparse
 
 from arbiter_backend.auth import AuthConfigError, load_token
-from arbiter_backend.cliargs import count, port, positive_float
+from arbiter_backend.cliargs import OneLineParser, count, port, positive_float
 
 from .settings import CONNECT, EMBEDDED, SIM, Settings
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
+    p = OneLineParser(
         prog="arbiter-tui",
         description="Teleop console and analytics/latency monitor for ROS 2 robots. With no mode flag it "
         "starts the bundled backend (rosbridge endpoint, latency tracker, simulated robot) on 127.0.0.1 and "

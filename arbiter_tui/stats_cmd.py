@@ -7,6 +7,7 @@ import json
 import sys
 from pathlib import Path
 
+from arbiter_backend.cliargs import OneLineParser
 from arbiter_backend.core.analytics import STATS_FIELDS, stats_of_points
 from arbiter_backend.core.exports import ExportFormatError
 from arbiter_backend.files import load_points
@@ -25,7 +26,7 @@ UNITS = {
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
+    p = OneLineParser(
         prog="arbiter-tui stats",
         description="Print the nine AnalyticsStats of an arbiter analytics export (CSV or JSON).",
     )

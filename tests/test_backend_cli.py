@@ -54,11 +54,19 @@ def test_flags_reach_the_tracker_and_bad_values_are_rejected():
         ["--cmd-timeout", "-1"],
         ["--max-records", "x"],
         ["--cmd-timeout", "nan"],
+        ["--max-command-age", "-5"],
+        ["--max-linear-accel", "0"],
+        ["--max-angular", "inf"],
+        ["--measured-type", "pose"],
+        ["--ros-args", "-p", "x:=1"],  # ROS arguments without --transport ros
+        ["--unknown-flag"],
     ):
         r = subprocess.run(
             [sys.executable, "-m", "arbiter_backend.cli", *bad], capture_output=True, text=True, timeout=20
         )
         assert r.returncode == 2 and "Traceback" not in r.stderr, bad
+        lines = r.stderr.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith("arbiter-backend: "), (bad, r.stderr)
 
 
 def test_help_mentions_every_flag():
@@ -74,6 +82,11 @@ def test_help_mentions_every_flag():
         "--no-bridge",
         "--max-records",
         "--cmd-timeout",
+        "--max-command-age",
+        "--max-linear-accel",
+        "--max-angular-accel",
+        "--allow-remote",
+        "--token-file",
         "--log-file",
     ):
         assert flag in r.stdout

@@ -1,6 +1,7 @@
 """``arbiter-tui stats FILE`` as a user runs it: a real subprocess on real files."""
 
 import json
+import os
 import subprocess
 import sys
 
@@ -10,6 +11,8 @@ from arbiter_backend.core.analytics import STATS_FIELDS, stats_of_points
 from arbiter_backend.core.exports import to_csv, to_json
 
 from .helpers import random_points
+
+HEADER = b"timestamp,x,y,theta,linearVel,angularVel,distanceError,headingError,algorithm,latencyMs\n"
 
 
 def run(*args):
@@ -47,7 +50,22 @@ def test_stats_table_lists_nine_lines(tmp_path):
 
 @pytest.mark.parametrize(
     "content",
-    [b"", b"\x00\xff\xfe binary", b"hello,world\n1,2\n", b'{"dataPoints": [1]}', b"{oops"],
+    [
+        b"",
+        b"\x00\xff\xfe binary",
+        b"hello,world\n1,2\n",
+        b'{"dataPoints": [1]}',
+        b"{oops",
+        HEADER + b"1,nan,0,0,0,0,0,0,manual,\n",
+        HEADER + b"1,1e999,0,0,0,0,0,0,manual,\n",
+        HEADER + b"1,0,0\n",
+        HEADER + b"1,0,0,0,0,0,0,0,manual,,extra\n",
+        b'{"dataPoints": [{"timestamp": "x"}]}',
+        b'{"dataPoints": [{"timestamp": 1, "x": NaN}]}',
+        b'{"a":' * 100_000,
+        b"[1, 2]",
+    ],
+    ids=lambda content: repr(content[:24]),
 )
 def test_bad_files_get_one_line_errors(tmp_path, content):
     f = tmp_path / "bad"
@@ -59,8 +77,10 @@ def test_bad_files_get_one_line_errors(tmp_path, content):
     assert r.stderr.startswith("arbiter-tui stats: ")
 
 
-def test_missing_file_and_directory(tmp_path):
-    for target in (tmp_path / "missing.csv", tmp_path):
+def test_missing_file_directory_and_fifo(tmp_path):
+    fifo = tmp_path / "fifo.csv"
+    os.mkfifo(fifo)  # reading it would block forever
+    for target in (tmp_path / "missing.csv", tmp_path, fifo):
         r = run(target)
         assert r.returncode == 1
         assert "Traceback" not in r.stderr and len(r.stderr.strip().splitlines()) == 1
@@ -75,6 +95,15 @@ def test_missing_file_and_directory(tmp_path):
         ["--bridge-port", "70000"],
         ["--export-dir", "/definitely/missing"],
         ["--connect", "--rosbridge", "http://x"],
+        ["--connect", "--token-file", "/definitely/missing"],
+        ["--offset-warn-ms", "inf"],
+        ["--key-timeout", "0"],
+        ["--collection-rate", "1e999"],
+        ["--transport", "carrier-pigeon"],
+        ["--connect", "--sim"],
+        ["--bogus"],
+        ["stats"],
+        ["stats", "a.csv", "b.csv"],
     ],
 )
 def test_bad_command_line_values_are_one_line_errors(args):
@@ -83,4 +112,5 @@ def test_bad_command_line_values_are_one_line_errors(args):
     )
     assert r.returncode == 2
     assert "Traceback" not in r.stderr
-    assert r.stderr.strip().splitlines()[-1].startswith("arbiter-tui")
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("arbiter-tui"), r.stderr
