@@ -45,3 +45,15 @@ def sleep_until(t: float) -> None:
         if d <= 0:
             return
         time.sleep(d if d > 0.002 else 0)
+
+
+def rss_kb(pid: int) -> int | None:
+    """Resident memory of a process (VmRSS, KiB); None once it is gone."""
+    try:
+        with open(f"/proc/{pid}/status") as fh:
+            for line in fh:
+                if line.startswith("VmRSS:"):
+                    return int(line.split()[1])
+    except OSError:
+        return None
+    return None

@@ -46,7 +46,7 @@ from typing import Any
 
 import aiohttp
 import httpx
-from _common import emit
+from _common import emit, rss_kb
 
 from arbiter_backend.core import envelope
 from arbiter_tui.embedded import EmbeddedBackend
@@ -551,17 +551,6 @@ async def run(bridge_port: int, api: str, count: int, seed: int, huge: int) -> d
         "failures": report.failures,
         "ok": not report.failures,
     }
-
-
-def rss_kb(pid: int) -> int | None:
-    try:
-        with open(f"/proc/{pid}/status") as fh:
-            for line in fh:
-                if line.startswith("VmRSS:"):
-                    return int(line.split()[1])
-    except OSError:
-        return None
-    return None
 
 
 def main() -> int:

@@ -30,7 +30,7 @@ import threading
 import time
 
 import httpx
-from _common import emit, sleep_until
+from _common import emit, rss_kb, sleep_until
 
 from arbiter_backend.core.analytics import AnalyticsStore
 from arbiter_tui.control_loop import ControlLoop
@@ -44,11 +44,10 @@ MAX_GROWTH_MB = 5.0
 
 
 def rss_mb(pid: int) -> float:
-    with open(f"/proc/{pid}/status") as fh:
-        for line in fh:
-            if line.startswith("VmRSS:"):
-                return int(line.split()[1]) / 1024.0
-    raise RuntimeError("no VmRSS")
+    kb = rss_kb(pid)
+    if kb is None:
+        raise RuntimeError(f"process {pid} is gone")
+    return kb / 1024.0
 
 
 def slope_per_hour(samples: list[tuple[float, float]]) -> float:
