@@ -5,7 +5,9 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
+import os
 import signal
+import threading
 import time
 from collections.abc import Callable, Iterable
 
@@ -28,6 +30,7 @@ from .teleop import Teleop
 from .tracker_client import LatencyView, TrackerClient
 
 log = logging.getLogger(__name__)
+EXIT_DEADLINE_S = 2.0  # after SIGHUP/SIGTERM the process is gone by then, whatever the terminal does
 
 
 class ArbiterApp(App[None]):
@@ -85,6 +88,12 @@ class ArbiterApp(App[None]):
 
     def _on_signal(self, sig: int) -> None:
         self.stop_robot(f"signal {signal.Signals(sig).name}")
+        # After a hang-up the terminal may be gone: Textual's writer thread then dies on EIO and its
+        # shutdown can block forever on a full queue. The zero is already on its way (the link writes
+        # it on its own thread); if the orderly exit has not finished in time, leave without it.
+        watchdog = threading.Timer(EXIT_DEADLINE_S, os._exit, args=(0,))
+        watchdog.daemon = True
+        watchdog.start()
         self.exit()
 
     async def _poll_forever(self) -> None:
