@@ -10,7 +10,7 @@ import roslibpy
 
 from arbiter_backend.core import envelope
 
-from .conftest import get_json, wait_for
+from .conftest import get_json, start_backend, wait_for
 
 
 def connect(port: int) -> roslibpy.Ros:
@@ -19,7 +19,10 @@ def connect(port: int) -> roslibpy.Ros:
     return ros
 
 
-def test_stamped_commands_become_records_twists_and_motion(backend):
+def test_stamped_commands_become_records_twists_and_motion():
+    # speed-up limits out of the way: this test follows each command to the robot unchanged
+    # (the limits have their own tests below, in real time)
+    backend = start_backend("--max-linear-accel", "1000", "--max-angular-accel", "1000")
     driver = connect(backend.bridge_port)
     observer = connect(backend.bridge_port)
     try:
@@ -62,16 +65,10 @@ def test_stamped_commands_become_records_twists_and_motion(backend):
             assert now - 30 < r["timestamp"] <= now
         assert [r["seq"] for r in reports[:n]] == list(range(n))
 
-        # N twists reached the robot side, in order, then exactly one watchdog zero. Speeding up
-        # from rest is rate-limited (2 m/s², at most one 0.1 s step each), so the first linear
-        # values ramp up; once caught up, each is the command sent.
+        # the same N twists reached the robot side, in order, then exactly one watchdog zero
         assert wait_for(lambda: len(twists) >= n + 1, timeout=3)
         got = [(t["linear"]["x"], t["angular"]["z"]) for t in twists[:n]]
-        assert got[0][0] == 0.2  # 0 + 2 m/s² x 0.1 s
-        steps = [b[0] - a[0] for a, b in itertools.pairwise(got)]
-        assert all(0 <= s <= 0.2 + 1e-9 for s in steps)
-        assert [g[0] <= v for g, (v, _) in zip(got, sent, strict=True)] == [True] * n
-        assert got[10:] == sent[10:] and [g[1] for g in got] == [w for _, w in sent]
+        assert got == sent
         time.sleep(0.8)
         tail = twists[n:]
         assert len(tail) == 1 and tail[0]["linear"]["x"] == 0.0 and tail[0]["angular"]["z"] == 0.0
@@ -94,6 +91,7 @@ def test_stamped_commands_become_records_twists_and_motion(backend):
     finally:
         driver.close()
         observer.close()
+        backend.stop()
 
 
 def test_bad_envelopes_are_counted_not_forwarded_and_valid_traffic_flows(backend):
