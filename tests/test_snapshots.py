@@ -2,7 +2,9 @@
 
 import pytest
 
-from .tui_helpers import still_app
+from arbiter_tui.links import RECONNECTING
+
+from .tui_helpers import RecordingLink, still_app
 
 SIZES = [(100, 30), (80, 24)]
 
@@ -19,6 +21,14 @@ def test_latency_screen_when_tracker_unreachable(snap_compare):
     app = still_app(tracker_view=False)
     app.tracker.view.fail("ConnectError")
     assert snap_compare(app, terminal_size=(100, 30), press=["3"])
+
+
+@pytest.mark.parametrize("keys", [[], ["3"]], ids=["control", "latency"])
+def test_link_down_is_shown_on_each_screen(snap_compare, keys):
+    """The rosbridge link lost: red status line, a banner on the control screen, the latency
+    screen says this console's figures have stopped (the tracker's are still shown)."""
+    app = still_app(link=RecordingLink(state=RECONNECTING))
+    assert snap_compare(app, terminal_size=(100, 30), press=keys)
 
 
 def test_client_side_simulation_shows_latency_na(snap_compare):

@@ -21,8 +21,8 @@ KEY_HELP = """[b]Move[/b]   u i o
 [b]Auto[/b]   a algorithm  n mission  g go"""
 
 
-LINK_DOWN = (
-    "LINK DOWN: nothing is sent; the robot\nstops on its own timeout. Press a key\nonce the link is back.\n"
+LINK_DOWN = (  # fits the 36 columns inside the panel
+    "LINK DOWN: nothing is sent.\nThe robot stops on its own timeout.\nPress a key once the link is back.\n"
 )
 
 
