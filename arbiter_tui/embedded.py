@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import logging
 import os
 import re
 import select
@@ -11,11 +12,13 @@ import signal
 import socket
 import subprocess
 import sys
+import threading
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 LISTEN_RE = re.compile(r"rosbridge=ws://([\d.]+):(\d+) api=http://[\d.]+:(\d+)")
+log = logging.getLogger(__name__)
 
 
 class EmbeddedError(RuntimeError):
@@ -38,11 +41,43 @@ def _die_with_parent() -> None:  # pragma: no cover - runs in the child
     os.setpgrp()  # and a terminal's Ctrl-C reaches only the TUI, which stops the robot first
 
 
+def _spawn(cmd: list[str], timeout: float) -> tuple[subprocess.Popen[str], int, int]:
+    """Start the backend and wait for its "listening" line: (process, bridge port, API port)."""
+    proc = subprocess.Popen(
+        cmd,
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=_die_with_parent if sys.platform.startswith("linux") else None,
+    )
+    assert proc.stdout is not None
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        ready, _, _ = select.select([proc.stdout], [], [], 0.2)
+        if ready:
+            line = proc.stdout.readline()
+            m = LISTEN_RE.search(line)
+            if m:
+                return proc, int(m.group(2)), int(m.group(3))
+        if proc.poll() is not None:
+            err = proc.stderr.read().strip() if proc.stderr else ""
+            raise EmbeddedError(
+                f"the bundled backend exited: {err.splitlines()[-1] if err else proc.returncode}"
+            )
+    proc.kill()
+    raise EmbeddedError(f"the bundled backend did not start within {timeout:.0f} s")
+
+
 @dataclass
 class EmbeddedBackend:
     proc: subprocess.Popen[str]
     bridge_port: int
     api_port: int
+    cmd: list[str] = field(default_factory=list)  # how it was started, ports left to fill in
+    restarts: int = 0
+    _stopping: threading.Event = field(default_factory=threading.Event, repr=False)
+    _watcher: threading.Thread | None = field(default=None, repr=False)
 
     @classmethod
     def start(
@@ -56,38 +91,44 @@ class EmbeddedBackend:
     ) -> EmbeddedBackend:
         bp = bridge_port if bridge_port == 0 or port_free(bridge_port) else 0
         ap = api_port if api_port == 0 or port_free(api_port) else 0
-        cmd = [sys.executable, "-m", "arbiter_backend.cli", "--bridge-port", str(bp), "--api-port", str(ap)]
+        cmd = [sys.executable, "-m", "arbiter_backend.cli"]
         if transport != "embedded":
             cmd += ["--transport", transport]
         if log_file:
             cmd += ["--log-file", log_file]
         cmd += list(extra_args)
-        proc = subprocess.Popen(
-            cmd,
-            stdin=subprocess.DEVNULL,
-            stdout=subprocess.PIPE,
-            stderr=subprocess.PIPE,
-            text=True,
-            preexec_fn=_die_with_parent if sys.platform.startswith("linux") else None,
+        proc, bp, ap = _spawn([*cmd, "--bridge-port", str(bp), "--api-port", str(ap)], timeout)
+        return cls(proc, bp, ap, cmd)
+
+    def supervise(self, interval: float = 0.5) -> None:
+        """Restart the backend on the same ports whenever it exits unexpectedly (a crash, an OOM
+        kill, someone's ``kill``): the console's link then reconnects by itself."""
+        self._watcher = threading.Thread(
+            target=self._watch, args=(interval,), name="backend-watch", daemon=True
         )
-        assert proc.stdout is not None
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
-            ready, _, _ = select.select([proc.stdout], [], [], 0.2)
-            if ready:
-                line = proc.stdout.readline()
-                m = LISTEN_RE.search(line)
-                if m:
-                    return cls(proc, int(m.group(2)), int(m.group(3)))
-            if proc.poll() is not None:
-                err = proc.stderr.read().strip() if proc.stderr else ""
-                raise EmbeddedError(
-                    f"the bundled backend exited: {err.splitlines()[-1] if err else proc.returncode}"
-                )
-        proc.kill()
-        raise EmbeddedError(f"the bundled backend did not start within {timeout:.0f} s")
+        self._watcher.start()
+
+    def _watch(self, interval: float) -> None:
+        while not self._stopping.wait(interval):
+            if self.proc.poll() is None:
+                continue
+            log.warning("the bundled backend exited (%s); restarting it", self.proc.returncode)
+            try:
+                ports = ["--bridge-port", str(self.bridge_port), "--api-port", str(self.api_port)]
+                proc, _, _ = _spawn([*self.cmd, *ports], 15.0)
+            except EmbeddedError as exc:  # e.g. someone else took a port meanwhile: try again next round
+                log.warning("restarting the bundled backend failed: %s", exc)
+                continue
+            if self._stopping.is_set():
+                proc.terminate()
+                return
+            self.proc = proc
+            self.restarts += 1
 
     def stop(self, timeout: float = 5.0) -> None:
+        self._stopping.set()
+        if self._watcher is not None:
+            self._watcher.join(timeout=20)
         if self.proc.poll() is None:
             self.proc.send_signal(signal.SIGTERM)
             try:

@@ -134,6 +134,7 @@ def run_app(argv: list[str]) -> int:
                 except EmbeddedError as exc:
                     print(f"arbiter-tui: {exc}", file=sys.stderr)
                     return 1
+                backend.supervise()
                 host, port = "127.0.0.1", backend.bridge_port
                 tracker_url = f"http://127.0.0.1:{backend.api_port}"
                 settings.rosbridge_url = f"ws://{host}:{port}"

@@ -141,6 +141,13 @@ def main() -> int:
                     start_rss.setdefault(name, mb)
                     series[name].append((elapsed - warmup, mb))
                 next_rss += 5.0
+                if len(series["backend"]) % 60 == 1:  # a progress line every 5 min, on stderr
+                    rss = {n: round(v[-1][1], 2) for n, v in series.items()}
+                    print(
+                        f"soak: {elapsed - warmup:.0f} s, sent {link.telemetry.sent - sent0}, rss MB {rss}",
+                        file=sys.stderr,
+                        flush=True,
+                    )
             tick += 1
             sleep_until(t0 + tick * period)
         teleop.stop()

@@ -128,3 +128,44 @@ def test_hangup_stops_the_robot_exits_and_restores_the_terminal(tmp_path, backen
             assert state.split() == ["0", "1", "0"], state
     finally:
         tmux("kill-session", "-t", session)
+
+
+def test_a_crashed_embedded_backend_is_restarted_and_the_console_carries_on(tmp_path):
+    session = f"arbiter-{uuid.uuid4().hex[:8]}"
+    exe = Path(sys.executable).with_name("arbiter-tui")
+    done = tmp_path / "exit"
+    args = f"--bridge-port 0 --api-port 0 --export-dir {tmp_path}"
+    tmux(
+        "new-session",
+        "-d",
+        "-s",
+        session,
+        "-x",
+        "100",
+        "-y",
+        "30",
+        f"{exe} {args}; echo $? > {done}; sleep 30",
+    )
+    try:
+        screen_until(session, "CONNECTED")
+        tui = _tui_pid(session)
+        child = subprocess.run(["pgrep", "-P", str(tui)], capture_output=True, text=True).stdout.split()
+        assert len(child) == 1
+        subprocess.run(["kill", "-9", child[0]], check=True)  # the backend dies under the console
+        screen_until(session, "DISCONNECTED", timeout=3)
+        screen = screen_until(session, " CONNECTED", timeout=10)  # restarted on the same ports
+        assert "DISCONNECTED" not in screen.splitlines()[0]
+        new = subprocess.run(["pgrep", "-P", str(tui)], capture_output=True, text=True).stdout.split()
+        assert len(new) == 1 and new != child
+        for _ in range(6):
+            tmux("send-keys", "-t", session, "i")
+            time.sleep(0.08)
+        screen_until(session, "(teleop)")
+        tmux("send-keys", "-t", session, "C-c")
+        deadline = time.monotonic() + 10
+        while not done.exists() and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert done.read_text().strip() == "0"
+        assert not _alive(int(new[0]))  # and the restarted backend went with it
+    finally:
+        tmux("kill-session", "-t", session)
