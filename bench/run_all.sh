@@ -13,5 +13,6 @@ if [ -n "${SHORT:-}" ]; then d=3; s=15; soak=300; else d=10; s=60; soak=3600; fi
 "$PY" bench/throughput.py --duration "$d" | tail -1 >> "$out"
 "$PY" bench/api.py --duration 30 | tail -1 >> "$out"
 "$PY" bench/tui.py --seconds "$s" | tail -1 >> "$out"
+"$PY" bench/recovery.py --trials 5 | tail -1 >> "$out"
 "$PY" bench/fuzz.py --count 10000 --seed 1 | tail -1 >> "$out"
 "$PY" bench/soak.py --duration "$soak" | tail -1 >> "$out"
