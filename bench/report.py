@@ -73,6 +73,7 @@ def rows(results: list[dict]) -> list[str]:
             f"({b['growth_mb']:+} MB) | ≤ 5 MB/h |",
         ]
     if rc := by.get("recovery"):
+
         def fig(key: str) -> str:
             return f"{rc[key]['median_s']} / {rc[key]['max_s']} s"
 
@@ -81,7 +82,8 @@ def rows(results: list[dict]) -> list[str]:
             f"{fig('killed_to_disconnected')} | ≤ 1 s |",
             f"| recovery | backend back → CONNECTED | {fig('returned_to_connected')} | ≤ 3 s |",
             f"| recovery | CONNECTED → /odom flowing again | {fig('connected_to_odom')} | |",
-            f"| recovery | silent link (no FIN) → noticed by the keep-alive | {fig('silent_to_noticed')} | a few s |",
+            f"| recovery | silent link (no FIN) → noticed by the keep-alive | "
+            f"{fig('silent_to_noticed')} | a few s |",
         ]
     m = next((r.get("machine") for r in results if r.get("machine")), None)
     if m:
