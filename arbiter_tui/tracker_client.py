@@ -24,6 +24,9 @@ class LatencyView:
     window: deque[float] = field(default_factory=lambda: deque(maxlen=WINDOW))
     polls: int = 0
     failures: int = 0
+    stale: int = 0  # commands the tracker dropped as too old (never forwarded)
+    rejected: int = 0  # malformed envelopes
+    max_command_age_ms: float | None = None
     _last_key: Any = None
 
     def apply(self, body: Any) -> None:
@@ -35,6 +38,13 @@ class LatencyView:
         self.stats = body["stats"]
         self.records = [r for r in records if isinstance(r, dict)]
         self.deploy_mode = str(body.get("deploy_mode", "?"))
+        # our tracker's extras; a seed tracker has none of them
+        self.stale = _count(body.get("stale"))
+        self.rejected = _count(body.get("rejected"))
+        age = body.get("max_command_age_ms")
+        self.max_command_age_ms = (
+            float(age) if isinstance(age, (int, float)) and not isinstance(age, bool) else None
+        )
         # add only records newer than the last one seen to the rolling window
         new = self.records
         if self._last_key is not None:
@@ -55,6 +65,10 @@ class LatencyView:
         self.reachable = False
         self.error = error
         self.failures += 1
+
+
+def _count(value: Any) -> int:
+    return value if isinstance(value, int) and not isinstance(value, bool) and value >= 0 else 0
 
 
 class TrackerClient:

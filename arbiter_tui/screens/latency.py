@@ -64,6 +64,11 @@ class LatencyScreen(BaseScreen):
         else:
             state.append("tracker reachable", "bold green")
             state.append(f" · deploy mode {view.deploy_mode} · {len(view.window)} samples in window")
+            if view.stale:  # the robot ignores these: the operator must know why it does not move
+                limit = "" if view.max_command_age_ms is None else f" > {view.max_command_age_ms:g} ms"
+                state.append(f" · {view.stale} STALE{limit}, not forwarded", "bold red")
+            if view.rejected:
+                state.append(f" · {view.rejected} rejected", "bold yellow")
         self.query_one("#lat-state", Static).update(state)
         stats = view.stats if view is not None else {}
         cards = Text()
