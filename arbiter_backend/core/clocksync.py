@@ -60,6 +60,7 @@ class LatencyMeter:
         self._lock = threading.Lock()
         self._pending: dict[int, tuple[float, float]] = {}  # seq -> (send monotonic s, stamp ms)
         self._offsets: deque[tuple[float, float]] = deque(maxlen=offset_window)  # (offset, rtt)
+        self._best: tuple[float, float] | None = None  # the lowest-RTT entry of _offsets
         self._samples: deque[Sample] = deque(maxlen=history)
         self._lost_at: deque[float] = deque()
         self.lost_after_s = lost_after_s
@@ -98,8 +99,8 @@ class LatencyMeter:
             send_mono, _ = sent
             rtt = (arrival_mono - send_mono) * 1000.0
             self._offsets.append((raw - rtt / 2.0, rtt))
-            offset = min(self._offsets, key=lambda o: o[1])[0]
-            sample = Sample(seq, raw, rtt, raw - offset)
+            self._best = min(self._offsets, key=lambda o: o[1])  # once per report, read per command
+            sample = Sample(seq, raw, rtt, raw - self._best[0])
             self._samples.append(sample)
             self.matched += 1
             if raw < 0:
@@ -135,9 +136,9 @@ class LatencyMeter:
     # -- reading --------------------------------------------------------------------------------
     def offset(self) -> OffsetEstimate | None:
         with self._lock:
-            if not self._offsets:
+            if self._best is None:
                 return None
-            off, rtt = min(self._offsets, key=lambda o: o[1])
+            off, rtt = self._best
             return OffsetEstimate(off, rtt / 2.0, rtt, len(self._offsets))
 
     def samples(self) -> list[Sample]:
