@@ -1,6 +1,7 @@
 import os
 import re
 import signal
+import socket
 import subprocess
 import sys
 import time
@@ -73,3 +74,10 @@ def wait_for(predicate, timeout: float = 5.0, interval: float = 0.02):
 
 def get_json(url: str) -> dict:
     return httpx.get(url, timeout=5).json()
+
+
+def free_port() -> int:
+    """A loopback port nothing listens on (for "the server is down" cases)."""
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]

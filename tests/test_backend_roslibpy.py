@@ -19,6 +19,21 @@ def connect(port: int) -> roslibpy.Ros:
     return ros
 
 
+def command_publisher(ros: roslibpy.Ros, settle: float = 0.2) -> roslibpy.Topic:
+    """/stamped_cmd_vel advertised, after a pause so the first publish is not raced."""
+    pub = roslibpy.Topic(ros, "/stamped_cmd_vel", "std_msgs/String")
+    pub.advertise()
+    time.sleep(settle)
+    return pub
+
+
+def measured_twists(ros: roslibpy.Ros) -> list:
+    """Every Twist on /cmd_vel_measured, appended as it arrives."""
+    twists: list = []
+    roslibpy.Topic(ros, "/cmd_vel_measured", "geometry_msgs/Twist").subscribe(twists.append)
+    return twists
+
+
 def test_stamped_commands_become_records_twists_and_motion():
     # speed-up limits out of the way: this test follows each command to the robot unchanged
     # (the limits have their own tests below, in real time)
@@ -97,11 +112,8 @@ def test_stamped_commands_become_records_twists_and_motion():
 def test_bad_envelopes_are_counted_not_forwarded_and_valid_traffic_flows(backend):
     ros = connect(backend.bridge_port)
     try:
-        twists = []
-        roslibpy.Topic(ros, "/cmd_vel_measured", "geometry_msgs/Twist").subscribe(twists.append)
-        pub = roslibpy.Topic(ros, "/stamped_cmd_vel", "std_msgs/String")
-        pub.advertise()
-        time.sleep(0.2)
+        twists = measured_twists(ros)
+        pub = command_publisher(ros)
         bad = [
             "not json",
             "[]",
@@ -126,11 +138,8 @@ def test_bad_envelopes_are_counted_not_forwarded_and_valid_traffic_flows(backend
 def test_out_of_limit_velocities_are_clamped_before_the_robot(backend):
     ros = connect(backend.bridge_port)
     try:
-        twists = []
-        roslibpy.Topic(ros, "/cmd_vel_measured", "geometry_msgs/Twist").subscribe(twists.append)
-        pub = roslibpy.Topic(ros, "/stamped_cmd_vel", "std_msgs/String")
-        pub.advertise()
-        time.sleep(0.2)
+        twists = measured_twists(ros)
+        pub = command_publisher(ros)
         for i in range(40):
             pub.publish(roslibpy.Message({"data": envelope.build(50.0, -80.0, seq=i)}))
             time.sleep(0.02)
@@ -185,9 +194,7 @@ def test_api_shapes_limits_and_errors(backend):
 def test_limit_returns_the_most_recent_records(backend):
     ros = connect(backend.bridge_port)
     try:
-        pub = roslibpy.Topic(ros, "/stamped_cmd_vel", "std_msgs/String")
-        pub.advertise()
-        time.sleep(0.1)
+        pub = command_publisher(ros, settle=0.1)
         for i in range(12):
             pub.publish(roslibpy.Message({"data": envelope.build(0.0, 0.0, seq=i)}))
         assert wait_for(lambda: get_json(f"{backend.api}/api/health")["records_count"] == 12)
@@ -207,9 +214,7 @@ def test_measured_type_twist_stamped_in_the_embedded_transport():
     try:
         got = []
         roslibpy.Topic(ros, "/cmd_vel_measured", "geometry_msgs/TwistStamped").subscribe(got.append)
-        pub = roslibpy.Topic(ros, "/stamped_cmd_vel", "std_msgs/String")
-        pub.advertise()
-        time.sleep(0.2)
+        pub = command_publisher(ros)
         pub.publish(roslibpy.Message({"data": envelope.build(0.15, 0.5, seq=1)}))
         assert wait_for(lambda: len(got) >= 1)
         rec = get_json(f"{backend.api}/api/latency")["records"][0]
@@ -227,14 +232,11 @@ def test_measured_type_twist_stamped_in_the_embedded_transport():
 def test_stale_commands_are_reported_but_never_reach_the_robot(backend):
     ros = connect(backend.bridge_port)
     try:
-        twists, reports = [], []
-        roslibpy.Topic(ros, "/cmd_vel_measured", "geometry_msgs/Twist").subscribe(twists.append)
+        twists, reports = measured_twists(ros), []
         roslibpy.Topic(ros, "/latency_report", "std_msgs/String").subscribe(
             lambda m: reports.append(json.loads(m["data"]))
         )
-        pub = roslibpy.Topic(ros, "/stamped_cmd_vel", "std_msgs/String")
-        pub.advertise()
-        time.sleep(0.2)
+        pub = command_publisher(ros)
         second_ago = lambda: time.time_ns() - 1_000_000_000  # noqa: E731
         pub.publish(roslibpy.Message({"data": envelope.build(0.1, 0.0, seq=1)}))
         pub.publish(roslibpy.Message({"data": envelope.build(0.5, 0.5, seq=2, clock_ns=second_ago)}))

@@ -15,25 +15,9 @@ from arbiter_tui.settings import Settings
 from arbiter_tui.tracker_client import TrackerClient
 from arbiter_tui.widgets import StatusLine
 
-from .conftest import get_json, start_backend
+from .conftest import free_port, get_json, start_backend
 from .helpers import make_point
-
-
-async def until(pilot, predicate, timeout=8.0, step=0.02):
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if predicate():
-            return True
-        await pilot.pause(step)
-    return predicate()
-
-
-def free_port() -> int:
-    import socket
-
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
+from .tui_helpers import RecordingLink, until
 
 
 def text_of(app, selector: str) -> str:
@@ -164,8 +148,6 @@ def filled_store(n: int = 500) -> AnalyticsStore:
 
 
 async def test_export_to_a_directory_that_cannot_be_written(tmp_path):
-    from .tui_helpers import RecordingLink
-
     store = filled_store()
     before = store.points()
     settings = Settings(handle_signals=False, live=False, export_dir="/proc/self", mode="sim")

@@ -27,14 +27,28 @@ def screen_until(session: str, text: str, timeout: float = 10.0) -> str:
     raise AssertionError(f"{text!r} not on screen:\n{out}")
 
 
-@pytest.mark.parametrize("mode", [["--sim"], []], ids=["sim", "embedded"])
-def test_drive_and_quit_in_a_real_terminal(tmp_path, mode):
+def launch_tui(tmp_path: Path, args: str, linger: bool = False) -> tuple[str, Path]:
+    """``arbiter-tui ARGS`` in a new 100x30 tmux session; its exit status goes to the returned file.
+    ``linger`` keeps the pane open afterwards (to read the terminal's state, or the TUI's pid)."""
     session = f"arbiter-{uuid.uuid4().hex[:8]}"
     exe = Path(sys.executable).with_name("arbiter-tui")
     done = tmp_path / "exit"
-    args = " ".join([*mode, "--bridge-port", "0", "--api-port", "0", "--export-dir", str(tmp_path)])
-    cmd = f"{exe} {args}; echo $? > {done}"
+    cmd = f"{exe} {args}; echo $? > {done}" + ("; sleep 30" if linger else "")
     tmux("new-session", "-d", "-s", session, "-x", "100", "-y", "30", cmd)
+    return session, done
+
+
+def exit_status(done: Path, timeout: float = 10.0) -> str:
+    deadline = time.monotonic() + timeout
+    while not done.exists() and time.monotonic() < deadline:
+        time.sleep(0.05)
+    return done.read_text().strip()
+
+
+@pytest.mark.parametrize("mode", [["--sim"], []], ids=["sim", "embedded"])
+def test_drive_and_quit_in_a_real_terminal(tmp_path, mode):
+    args = " ".join([*mode, "--bridge-port", "0", "--api-port", "0", "--export-dir", str(tmp_path)])
+    session, done = launch_tui(tmp_path, args)
     try:
         screen_until(session, "SIMULATED" if mode else "CONNECTED")
         for _ in range(8):
@@ -46,10 +60,7 @@ def test_drive_and_quit_in_a_real_terminal(tmp_path, mode):
         tmux("send-keys", "-t", session, "2")
         screen_until(session, "r start/stop")
         tmux("send-keys", "-t", session, "C-c")
-        deadline = time.monotonic() + 10
-        while not done.exists() and time.monotonic() < deadline:
-            time.sleep(0.1)
-        assert done.read_text().strip() == "0"
+        assert exit_status(done) == "0"
     finally:
         tmux("kill-session", "-t", session)
 
@@ -79,24 +90,11 @@ def test_hangup_stops_the_robot_exits_and_restores_the_terminal(tmp_path, backen
     left as it was. kill-session is the harsher version: SIGHUP and the terminal gone at once."""
     from .conftest import get_json
 
-    session = f"arbiter-{uuid.uuid4().hex[:8]}"
-    exe = Path(sys.executable).with_name("arbiter-tui")
-    done = tmp_path / "exit"
     args = (
         f"--connect --rosbridge ws://127.0.0.1:{backend.bridge_port} --tracker {backend.api} "
         f"--key-timeout 10 --export-dir {tmp_path}"
     )
-    tmux(
-        "new-session",
-        "-d",
-        "-s",
-        session,
-        "-x",
-        "100",
-        "-y",
-        "30",
-        f"{exe} {args}; echo $? > {done}; sleep 30",
-    )
+    session, done = launch_tui(tmp_path, args, linger=True)
     try:
         screen_until(session, "CONNECTED")
         pid = _tui_pid(session)
@@ -117,10 +115,7 @@ def test_hangup_stops_the_robot_exits_and_restores_the_terminal(tmp_path, backen
         last = get_json(f"{backend.api}/api/latency")["records"][-1]
         assert (last["linear_x"], last["angular_z"]) == (0.0, 0.0)  # the best-effort zero went out
         if how == "sighup":
-            deadline = time.monotonic() + 5
-            while not done.exists() and time.monotonic() < deadline:
-                time.sleep(0.05)
-            assert done.read_text().strip() == "0"
+            assert exit_status(done, timeout=5) == "0"
             # the terminal is back to normal: main screen, cursor shown, no mouse reporting
             state = tmux(
                 "display-message", "-p", "-t", session, "#{alternate_on} #{cursor_flag} #{mouse_any_flag}"
@@ -131,21 +126,8 @@ def test_hangup_stops_the_robot_exits_and_restores_the_terminal(tmp_path, backen
 
 
 def test_a_crashed_embedded_backend_is_restarted_and_the_console_carries_on(tmp_path):
-    session = f"arbiter-{uuid.uuid4().hex[:8]}"
-    exe = Path(sys.executable).with_name("arbiter-tui")
-    done = tmp_path / "exit"
     args = f"--bridge-port 0 --api-port 0 --export-dir {tmp_path}"
-    tmux(
-        "new-session",
-        "-d",
-        "-s",
-        session,
-        "-x",
-        "100",
-        "-y",
-        "30",
-        f"{exe} {args}; echo $? > {done}; sleep 30",
-    )
+    session, done = launch_tui(tmp_path, args, linger=True)
     try:
         screen_until(session, "CONNECTED")
         tui = _tui_pid(session)
@@ -162,10 +144,7 @@ def test_a_crashed_embedded_backend_is_restarted_and_the_console_carries_on(tmp_
             time.sleep(0.08)
         screen_until(session, "(teleop)")
         tmux("send-keys", "-t", session, "C-c")
-        deadline = time.monotonic() + 10
-        while not done.exists() and time.monotonic() < deadline:
-            time.sleep(0.1)
-        assert done.read_text().strip() == "0"
+        assert exit_status(done) == "0"
         assert not _alive(int(new[0]))  # and the restarted backend went with it
     finally:
         tmux("kill-session", "-t", session)

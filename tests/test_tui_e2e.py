@@ -10,15 +10,7 @@ from arbiter_tui.settings import Settings
 from arbiter_tui.tracker_client import TrackerClient
 
 from .conftest import get_json, start_backend
-
-
-async def until(pilot, predicate, timeout=8.0):
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if predicate():
-            return True
-        await pilot.pause(0.05)
-    return predicate()
+from .tui_helpers import until
 
 
 async def test_keys_to_tracker_records_to_odometry_to_data_points(tmp_path):

@@ -2,7 +2,6 @@
 
 import asyncio
 import json
-import socket
 import time
 
 import aiohttp
@@ -12,14 +11,8 @@ import pytest
 from arbiter_backend.core import envelope
 from arbiter_tui.tracker_client import TrackerClient
 
-from .conftest import start_backend
+from .conftest import free_port, start_backend
 from .tui_helpers import still_app
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 async def test_unreachable_then_recovered_then_down_again():

@@ -1,5 +1,7 @@
 """Test doubles at the link boundary and a deterministic app builder for snapshot and Pilot tests."""
 
+import time
+
 from arbiter_backend.core.analytics import AnalyticsStore
 from arbiter_backend.core.kinematics import Pose
 from arbiter_tui.app import make_app
@@ -95,3 +97,13 @@ def still_app(tmp_path=None, link=None, store=None, tracker_view=True, mode="emb
     for _ in range(30):
         app.loop.trail.append((0.05 * _, 0.01 * _ * _ / 10))
     return app
+
+
+async def until(pilot, predicate, timeout: float = 8.0, step: float = 0.02) -> bool:
+    """Let the app run until ``predicate()`` holds (True) or ``timeout`` passes (its last value)."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if predicate():
+            return True
+        await pilot.pause(step)
+    return predicate()
