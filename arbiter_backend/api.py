@@ -7,7 +7,8 @@ from typing import Any
 
 from aiohttp import web
 
-from . import auth
+from arbiter_core import auth
+
 from .tracker import DEFAULT_LIMIT, LatencyTracker
 
 

@@ -31,9 +31,10 @@ from typing import Any
 
 from aiohttp import WSMsgType, web
 
-from . import auth
+from arbiter_core import auth
+from arbiter_core.msgtypes import MessageError, normalize_type
+
 from .bus import Bus
-from .msgtypes import MessageError, normalize_type
 
 log = logging.getLogger(__name__)
 

@@ -12,7 +12,7 @@ import logging
 from collections.abc import Callable
 from typing import Any, Protocol
 
-from .msgtypes import MessageError, check_message, normalize_type
+from arbiter_core.msgtypes import MessageError, check_message, normalize_type
 
 log = logging.getLogger(__name__)
 

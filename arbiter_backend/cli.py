@@ -11,11 +11,12 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from . import auth
-from .cliargs import OneLineParser, count, non_negative_float, port, positive_float
-from .core.kinematics import Limits
+from arbiter_core import auth
+from arbiter_core.cliargs import OneLineParser, count, non_negative_float, port, positive_float
+from arbiter_core.kinematics import Limits
+from arbiter_core.topics import MEASURED_TYPES
+
 from .server import Backend, BackendConfig
-from .topics import MEASURED_TYPES
 
 if TYPE_CHECKING:
     from .ros.backend import RosBackend as RosBackendT

@@ -17,10 +17,13 @@ from typing import Any
 
 from aiohttp import web
 
-from . import api, auth, bridge, topics
+from arbiter_core import auth, topics
+from arbiter_core.kinematics import DEFAULT_LIMITS, Limits
+from arbiter_core.listening import format_listening
+from arbiter_core.simulator import RATE_HZ, DiffDriveSimulator
+
+from . import api, bridge
 from .bus import TopicBus
-from .core.kinematics import DEFAULT_LIMITS, Limits
-from .simulator import RATE_HZ, DiffDriveSimulator
 from .tracker import DEFAULT_MAX_COMMAND_AGE_MS, LatencyTracker
 
 log = logging.getLogger(__name__)
@@ -100,15 +103,16 @@ class Servers:
         self._runners.clear()
 
     def describe(self) -> str:
-        parts = []
-        if self.bridge_port is not None:
-            parts.append(f"rosbridge=ws://{self.config.host}:{self.bridge_port}")
-        parts.append(f"api=http://{self.config.host}:{self.api_port}")
-        parts.append(f"deploy_mode={self.config.deploy_mode}")
-        parts.append(f"sim={'on' if self.sim_enabled else 'off'}")
-        parts.append(f"transport={self.config.transport}")
-        parts.append(f"auth={'token' if self.config.token else 'none'}")
-        return "arbiter-backend listening: " + " ".join(parts)
+        """The "listening" line (``arbiter_core.listening``) that tells a parent process the ports."""
+        return format_listening(
+            self.config.host,
+            self.bridge_port,
+            self.api_port,
+            deploy_mode=self.config.deploy_mode,
+            sim="on" if self.sim_enabled else "off",
+            transport=self.config.transport,
+            auth="token" if self.config.token else "none",
+        )
 
 
 class Backend(Servers):

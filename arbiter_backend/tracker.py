@@ -31,9 +31,9 @@ from typing import Any
 
 import numpy as np
 
-from .core import envelope
-from .core.kinematics import DEFAULT_LIMITS, Limits, clamp_twist, limit_speedup
-from .core.record import build_record, command_age_ms, latency_stats
+from arbiter_core import envelope
+from arbiter_core.kinematics import DEFAULT_LIMITS, Limits, clamp_twist, limit_speedup
+from arbiter_core.record import LatencyRecord, build_record, command_age_ms, latency_ms, latency_stats
 
 NODE_NAME = "latency_tracker"
 DEFAULT_LIMIT = 100
@@ -43,16 +43,24 @@ MAX_ACCEL_DT_S = 0.1  # a speed-up step never assumes more than one 10 Hz period
 
 @dataclass(frozen=True)
 class Accepted:
-    record: dict[str, Any]
+    record: LatencyRecord
     forward: tuple[float, float] | None  # the twist to publish on /cmd_vel_measured; None: nothing
     text: str  # the record as JSON: the /latency_report payload, serialised once
 
     @property
     def stale(self) -> bool:
-        return bool(self.record.get("stale"))
+        return self.record.stale
 
 
 class LatencyTracker:
+    """The seed's latency tracker without its transport: takes ``/stamped_cmd_vel`` payloads, keeps
+    the last ``max_records`` records (pre-serialised) and their latencies for the stats, decides what
+    is forwarded on ``/cmd_vel_measured`` (safety rules above), and answers the HTTP API's queries.
+
+    Thread-safe: a transport's thread calls :meth:`on_stamped` and :meth:`watchdog_due` while the API
+    reads under the same lock.
+    """
+
     def __init__(
         self,
         deploy_mode: str = "native",
@@ -75,8 +83,7 @@ class LatencyTracker:
         self._clock_ns = clock_ns
         self._monotonic = monotonic
         self._lock = threading.Lock()
-        self._records: deque[dict[str, Any]] = deque(maxlen=max_records)
-        self._texts: deque[str] = deque(maxlen=max_records)  # each record's JSON, for the API
+        self._texts: deque[str] = deque(maxlen=max_records)  # each record's JSON: kept serialised for the API
         self._latencies = np.zeros(max_records, dtype=np.float64)
         self._lat_next = 0
         self.total_seen = 0  # also the rx_seq of the newest record
@@ -105,21 +112,18 @@ class LatencyTracker:
                 self.rejected += 1
                 self.last_error = f"{exc.kind}: {exc}"
             return None
-        record = build_record(cmd, recv_ns, self.deploy_mode)
-        age = command_age_ms(cmd, record["latency_ms"])
+        latency = latency_ms(cmd, recv_ns)
+        age = command_age_ms(cmd, latency)
         stale = 0 < self.max_command_age_ms < age
-        if stale:
-            record["stale"] = True
         now = self._monotonic()
         with self._lock:
             self.total_seen += 1
-            record["rx_seq"] = self.total_seen
-            if record["latency_ms"] < 0:
+            record = build_record(cmd, recv_ns, self.deploy_mode, stale=stale, rx_seq=self.total_seen)
+            if latency < 0:
                 self.negative += 1  # kept as measured: a clock offset, never clipped
-            text = json.dumps(record, allow_nan=False, separators=(",", ":"))
-            self._records.append(record)
+            text = record.to_json()
             self._texts.append(text)
-            self._latencies[self._lat_next] = record["latency_ms"]
+            self._latencies[self._lat_next] = latency
             self._lat_next = (self._lat_next + 1) % self.max_records
             if stale:
                 self.stale += 1
@@ -165,7 +169,7 @@ class LatencyTracker:
     def _snapshot(self, limit: int, since: int | None) -> tuple[dict[str, Any], list[str]]:
         """Everything but the records, and the records' JSON texts to include."""
         with self._lock:
-            n = len(self._records)
+            n = len(self._texts)
             window = self._latencies[:n] if n < self.max_records else self._latencies
             stats = latency_stats(window)
             total = self.total_seen
@@ -222,7 +226,7 @@ class LatencyTracker:
                 "status": "ok",
                 "node": NODE_NAME,
                 "uptime_s": round(now - self._started, 3),
-                "records_count": len(self._records),
+                "records_count": len(self._texts),
                 "total_seen": self.total_seen,
                 "rejected": self.rejected,
                 "negative": self.negative,

@@ -16,18 +16,18 @@ from textual.app import App, ScreenStackError, SystemCommand
 from textual.binding import Binding
 from textual.screen import Screen
 
-from arbiter_backend.core.analytics import STORE, AnalyticsStore
-from arbiter_backend.files import ExportError, export_store
-
-from .control_loop import ControlLoop
-from .links import DISCONNECTED, RECONNECTING, Link, SimLink
+from .analytics.files import ExportError, export_store
+from .analytics.store import STORE, AnalyticsStore
+from .control.loop import ControlLoop
+from .control.teleop import Teleop
+from .latency.tracker_client import LatencyView, TrackerClient
+from .link.base import DISCONNECTED, RECONNECTING, Link
+from .link.sim import SimLink
 from .screens.analytics import AnalyticsScreen
 from .screens.control import ControlScreen
 from .screens.help import HelpScreen
 from .screens.latency import LatencyScreen
 from .settings import SIM, Settings
-from .teleop import Teleop
-from .tracker_client import LatencyView, TrackerClient
 
 log = logging.getLogger(__name__)
 EXIT_DEADLINE_S = 2.0  # after SIGHUP/SIGTERM the process is gone by then, whatever the terminal does

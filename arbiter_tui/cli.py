@@ -8,7 +8,7 @@ import sys
 def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     if argv and argv[0] == "stats":
-        from .stats_cmd import run
+        from .analytics.stats_cmd import run
 
         return run(argv[1:])
     from .launch import run_app

@@ -10,8 +10,8 @@ import tempfile
 from pathlib import Path
 from urllib.parse import urlparse
 
-from arbiter_backend.auth import AuthConfigError, load_token
-from arbiter_backend.cliargs import OneLineParser, count, port, positive_float
+from arbiter_core.auth import AuthConfigError, load_token
+from arbiter_core.cliargs import OneLineParser, count, port, positive_float
 
 from .settings import CONNECT, EMBEDDED, SIM, Settings
 
@@ -115,8 +115,9 @@ def run_app(argv: list[str]) -> int:
         offset_warn_ms=args.offset_warn_ms,
     )
     from .app import make_app
-    from .links import RosLink, SimLink
-    from .tracker_client import TrackerClient
+    from .latency.tracker_client import TrackerClient
+    from .link.rosbridge import RosLink
+    from .link.sim import SimLink
 
     backend = None
     try:
@@ -125,7 +126,7 @@ def run_app(argv: list[str]) -> int:
             tracker = None
         else:
             if mode == EMBEDDED:
-                from .embedded import EmbeddedBackend, EmbeddedError
+                from .link.embedded import EmbeddedBackend, EmbeddedError
 
                 try:
                     backend = EmbeddedBackend.start(

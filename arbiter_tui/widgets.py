@@ -8,7 +8,7 @@ from collections.abc import Sequence
 from rich.text import Text
 from textual.widgets import Static
 
-from arbiter_backend.core.kinematics import Pose
+from arbiter_core.kinematics import Pose
 
 ARROWS = "→↗↑↖←↙↓↘"
 

@@ -12,7 +12,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from arbiter_backend.core import stats
+from arbiter_core import stats
 
 
 def pct(values, q: float) -> float | None:

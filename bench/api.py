@@ -22,7 +22,7 @@ import httpx
 from _common import emit, pct
 from throughput import frame
 
-from arbiter_tui.embedded import EmbeddedBackend
+from arbiter_tui.link.embedded import EmbeddedBackend
 
 
 async def fill(bridge: int, n: int) -> None:

@@ -18,7 +18,7 @@ import statistics
 import time
 import tracemalloc
 
-from arbiter_backend.core.analytics import AnalyticsStore, DataPoint
+from arbiter_tui.analytics.store import AnalyticsStore, DataPoint
 
 
 def seed_plain_stats(pts: list[DataPoint]) -> dict[str, float]:

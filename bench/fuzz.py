@@ -48,8 +48,8 @@ import aiohttp
 import httpx
 from _common import emit, rss_kb
 
-from arbiter_backend.core import envelope
-from arbiter_tui.embedded import EmbeddedBackend
+from arbiter_core import envelope
+from arbiter_tui.link.embedded import EmbeddedBackend
 
 MAX_LINEAR, MAX_ANGULAR = 1.0, 2.0  # the backend's default limits
 VALID_SEQ0 = 1_000_000_000  # the valid stream's sequence numbers, far from any fuzz case

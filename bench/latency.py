@@ -22,10 +22,11 @@ import time
 
 from _common import emit, pct, sleep_until
 
-from arbiter_backend.core import stats
-from arbiter_backend.core.clocksync import LatencyMeter
-from arbiter_tui.embedded import EmbeddedBackend
-from arbiter_tui.links import CONNECTED, RosLink
+from arbiter_core import stats
+from arbiter_tui.latency.clocksync import LatencyMeter
+from arbiter_tui.link.base import CONNECTED
+from arbiter_tui.link.embedded import EmbeddedBackend
+from arbiter_tui.link.rosbridge import RosLink
 
 
 def _tcp_receiver(port_q, result_q, count: int) -> None:

@@ -25,7 +25,8 @@ from collections.abc import Callable
 
 from _common import emit
 
-from arbiter_tui.links import CONNECTED, RosLink
+from arbiter_tui.link.base import CONNECTED
+from arbiter_tui.link.rosbridge import RosLink
 from tests.conftest import start_backend
 from tests.netfault import FaultProxy
 

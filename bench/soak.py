@@ -32,12 +32,13 @@ import time
 import httpx
 from _common import emit, rss_kb, sleep_until
 
-from arbiter_backend.core.analytics import AnalyticsStore
-from arbiter_tui.control_loop import ControlLoop
-from arbiter_tui.embedded import EmbeddedBackend
-from arbiter_tui.links import CONNECTED, RosLink
-from arbiter_tui.teleop import Teleop
-from arbiter_tui.tracker_client import TrackerClient
+from arbiter_tui.analytics.store import AnalyticsStore
+from arbiter_tui.control.loop import ControlLoop
+from arbiter_tui.control.teleop import Teleop
+from arbiter_tui.latency.tracker_client import TrackerClient
+from arbiter_tui.link.base import CONNECTED
+from arbiter_tui.link.embedded import EmbeddedBackend
+from arbiter_tui.link.rosbridge import RosLink
 
 KEYS = "iiuoijl"  # forward mostly, some curves and turns: the robot wanders and comes round
 MAX_GROWTH_MB = 5.0
@@ -112,7 +113,7 @@ def main() -> int:
         poller.start()
         store.start_collection()
         before = httpx.get(f"{api}/api/health", timeout=5).json()["total_seen"]
-        sent0 = link.telemetry.sent
+        sent0 = link.telemetry.meter.sent
         period = 1.0 / args.rate
         sample_every = max(1, round(args.rate / store.collection_rate))
         warmup = args.warmup
@@ -144,7 +145,8 @@ def main() -> int:
                 if len(series["backend"]) % 60 == 1:  # a progress line every 5 min, on stderr
                     rss = {n: round(v[-1][1], 2) for n, v in series.items()}
                     print(
-                        f"soak: {elapsed - warmup:.0f} s, sent {link.telemetry.sent - sent0}, rss MB {rss}",
+                        f"soak: {elapsed - warmup:.0f} s, sent {link.telemetry.meter.sent - sent0}, "
+                        f"rss MB {rss}",
                         file=sys.stderr,
                         flush=True,
                     )
@@ -155,7 +157,7 @@ def main() -> int:
         end_rss = {name: rss_mb(pid) for name, pid in pids.items()}
         time.sleep(2.5)  # every report back, or counted lost by the meter
         link.telemetry.meter.expire(time.monotonic())
-        sent = link.telemetry.sent - sent0
+        sent = link.telemetry.meter.sent - sent0
         recorded = httpx.get(f"{api}/api/health", timeout=5).json()["total_seen"] - before
         meter = link.telemetry.meter.summary()
     finally:

@@ -23,7 +23,7 @@ import aiohttp
 import httpx
 from _common import emit
 
-from arbiter_tui.embedded import EmbeddedBackend
+from arbiter_tui.link.embedded import EmbeddedBackend
 
 
 def frame(seq: int) -> str:

@@ -1,59 +1,10 @@
-import os
-import re
-import signal
-import socket
-import subprocess
-import sys
-import time
-from dataclasses import dataclass
+"""Fixtures shared by every layer; helpers live in ``tests/support`` and are imported from there."""
 
-import httpx
+from pathlib import Path
+
 import pytest
 
-LISTEN_RE = re.compile(r"listening: (?:rosbridge=ws://[\d.]+:(\d+) )?api=http://[\d.]+:(\d+)")
-
-
-@dataclass
-class BackendProc:
-    proc: subprocess.Popen
-    bridge_port: int
-    api_port: int
-
-    @property
-    def api(self) -> str:
-        return f"http://127.0.0.1:{self.api_port}"
-
-    def stop(self) -> int:
-        if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGTERM)
-            try:
-                self.proc.wait(10)
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait()
-        return self.proc.returncode
-
-
-def start_backend(*args: str, timeout: float = 15.0, env: dict[str, str] | None = None) -> BackendProc:
-    cmd = [sys.executable, "-m", "arbiter_backend.cli", "--bridge-port", "0", "--api-port", "0", *args]
-    proc = subprocess.Popen(
-        cmd,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        env={**os.environ, "PYTHONUNBUFFERED": "1", **(env or {})},
-    )
-    deadline = time.monotonic() + timeout
-    line = ""
-    while time.monotonic() < deadline:
-        line = proc.stdout.readline()
-        m = LISTEN_RE.search(line)
-        if m:
-            return BackendProc(proc, int(m.group(1) or 0), int(m.group(2)))
-        if proc.poll() is not None:
-            break
-    proc.kill()
-    raise RuntimeError(f"backend did not start: {line!r} {proc.stderr.read()}")
+from .support.backend import start_backend
 
 
 @pytest.fixture
@@ -63,21 +14,12 @@ def backend():
     b.stop()
 
 
-def wait_for(predicate, timeout: float = 5.0, interval: float = 0.02):
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if predicate():
-            return True
-        time.sleep(interval)
-    return predicate()
+LAYERS = ("unit", "tui", "integration")
 
 
-def get_json(url: str) -> dict:
-    return httpx.get(url, timeout=5).json()
-
-
-def free_port() -> int:
-    """A loopback port nothing listens on (for "the server is down" cases)."""
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """Mark each test with its layer, the folder it lives in, so ``-m unit`` etc. select a layer."""
+    for item in items:
+        layer = Path(str(item.path)).parent.name
+        if layer in LAYERS:
+            item.add_marker(getattr(pytest.mark, layer))

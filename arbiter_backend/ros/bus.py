@@ -23,9 +23,10 @@ from rclpy.publisher import Publisher
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.subscription import Subscription
 
+from arbiter_core.msgtypes import MessageError, normalize_type
+from arbiter_core.topics import QOS_DEPTH
+
 from ..bus import Callback, TypeClash
-from ..msgtypes import MessageError, normalize_type
-from ..topics import QOS_DEPTH
 from .convert import message_class, to_json, to_ros
 
 log = logging.getLogger(__name__)

@@ -20,7 +20,7 @@ from typing import Any
 
 from rosidl_parser import definition as rd
 
-from ..msgtypes import MessageError, normalize_type
+from arbiter_core.msgtypes import MessageError, normalize_type
 
 _FLOATS = {"float", "double", "long double"}
 _BYTES = {"octet", "uint8", "char"}

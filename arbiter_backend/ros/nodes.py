@@ -19,8 +19,10 @@ from typing import Any
 from rclpy.context import Context
 from rclpy.node import Node
 
-from .. import simulator, topics, tracker
-from ..core.kinematics import Limits
+from arbiter_core import simulator, topics
+from arbiter_core.kinematics import Limits
+
+from .. import tracker
 from ..server import BackendConfig
 from .bus import default_qos
 from .convert import message_class, to_json, to_ros

@@ -8,31 +8,19 @@ from textual.binding import Binding
 from textual.containers import Horizontal, Vertical
 from textual.widgets import DataTable, Sparkline, Static
 
-from arbiter_backend.core.analytics import STATS_FIELDS, AnalyticsStats
-
+from ..analytics.labels import STAT_LABELS, format_stat
+from ..analytics.store import STATS_FIELDS, AnalyticsStats
 from ..widgets import MapView
 from .base import BaseScreen
 
-LABELS = {
-    "sampleCount": ("samples", "{:d}"),
-    "avgLinearVel": ("avg |v|", "{:.3f} m/s"),
-    "avgAngularVel": ("avg |ω|", "{:.3f} rad/s"),
-    "maxLinearVel": ("max |v|", "{:.3f} m/s"),
-    "avgDistanceError": ("avg e_d", "{:.3f} m"),
-    "avgHeadingError": ("avg |e_θ|", "{:.3f} rad"),
-    "stdDevError": ("std e_d", "{:.3f} m"),
-    "p95Error": ("p95 e_d", "{:.3f} m"),
-    "totalPathLength": ("path", "{:.2f} m"),
-}
 COMPARE = ("sampleCount", "avgDistanceError", "stdDevError", "p95Error", "avgHeadingError", "totalPathLength")
 
 
 def stats_cards(stats: AnalyticsStats) -> Text:
     t = Text()
     for i, name in enumerate(STATS_FIELDS):
-        label, fmt = LABELS[name]
-        t.append(f"{label:>10} ", "bold")
-        t.append(f"{fmt.format(getattr(stats, name)):<16}")
+        t.append(f"{STAT_LABELS[name].short:>10} ", "bold")
+        t.append(f"{format_stat(name, getattr(stats, name)):<16}")
         if i % 3 == 2 and i < len(STATS_FIELDS) - 1:
             t.append("\n")
     return t
@@ -68,7 +56,7 @@ class AnalyticsScreen(BaseScreen):
 
     def on_mount(self) -> None:
         table = self.query_one("#compare", DataTable)
-        table.add_columns("algorithm", *(LABELS[n][0] for n in COMPARE))
+        table.add_columns("algorithm", *(STAT_LABELS[n].short for n in COMPARE))
         super().on_mount()
 
     def action_toggle_collect(self) -> None:
@@ -95,9 +83,7 @@ class AnalyticsScreen(BaseScreen):
         table = self.query_one("#compare", DataTable)
         table.clear()
         for algo, s in store.stats_by_algorithm().items():
-            row = [algo] + [
-                str(s.sampleCount) if n == "sampleCount" else f"{getattr(s, n):.3f}" for n in COMPARE[0:]
-            ]
+            row = [algo] + [format_stat(n, getattr(s, n), decimals=3, unit=False) for n in COMPARE]
             table.add_row(*row)
         xs, ys = store.column("x", last=2000), store.column("y", last=2000)
         self.query_one("#traj", MapView).show(list(zip(xs.tolist(), ys.tolist(), strict=True)), None, None)

@@ -11,14 +11,11 @@ from textual.binding import Binding
 from textual.containers import Horizontal
 from textual.widgets import Static
 
+from ..control.teleop import legend_compact
 from ..widgets import MapView
 from .base import BaseScreen
 
-KEY_HELP = """[b]Move[/b]   u i o
-         j k l     k/space stop
-         m , .     arrows too
-[b]Scale[/b]  q/z both  w/x lin  e/c ang
-[b]Auto[/b]   a algorithm  n mission  g go"""
+KEY_HELP = legend_compact()
 
 
 LINK_DOWN = (  # fits the 36 columns inside the panel

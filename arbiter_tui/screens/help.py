@@ -8,14 +8,15 @@ from textual.containers import Vertical
 from textual.screen import ModalScreen
 from textual.widgets import Static
 
-HELP = """[b]arbiter-tui[/b] — teleop console, analytics and latency monitor
+from ..control.teleop import legend_long
+
+HELP = f"""[b]arbiter-tui[/b] — teleop console, analytics and latency monitor
 
 [b]Screens[/b]   1 control   2 analytics   3 latency   ? help   ctrl+p palette
 [b]Quit[/b]      ctrl+q or ctrl+c (the robot is stopped first)
 
 [b]Control[/b] (teleop_twist_keyboard keys; hold a key to keep moving)
-  u i o / j k l / m , .   move;  arrows too;  k or space: stop
-  q/z  speed and turn x1.1 / x0.9   w/x linear only   e/c angular only
+{legend_long()}
   a algorithm (manual, go_to_goal, pure_pursuit)   n mission   g go
   The robot stops when keys stop, on leaving this screen, on focus loss.
 

@@ -87,7 +87,7 @@ class LatencyScreen(BaseScreen):
         client.update(self._client_side(view is None))
         # the sparkline and table change only when a poll brought something: redrawing them at the
         # UI rate regardless cost ~4x the CPU and terminal output of the whole screen (bench/tui.py)
-        key = None if view is None else (view.failures, len(view.records), view._last_key)
+        key = None if view is None else (view.failures, view.version)
         if key == self._drawn_key and key is not None:
             return
         self._drawn_key = key
@@ -95,13 +95,13 @@ class LatencyScreen(BaseScreen):
         table = self.query_one("#lat-records", DataTable)
         table.clear()
         if view is not None:
-            for r in reversed(view.records[-30:]):
+            for r in list(reversed(view.records))[:30]:
                 table.add_row(
-                    str(r.get("seq", "")),
-                    fmt_ms(r.get("latency_ms")),
-                    f"{r.get('linear_x', 0):+.2f}",
-                    f"{r.get('angular_z', 0):+.2f}",
-                    str(r.get("deploy_mode", "")),
+                    "" if r.seq is None else str(r.seq),
+                    fmt_ms(r.latency_ms),
+                    f"{r.linear_x:+.2f}",
+                    f"{r.angular_z:+.2f}",
+                    r.deploy_mode,
                 )
 
     def _client_side(self, simulated: bool) -> Text:

@@ -1,0 +1,389 @@
+"""The analytics store: the seed's ``useAnalyticsEngine`` as one process-wide singleton.
+
+The seed keeps its refs at module level so that data survives page
+navigation; we keep one :class:`AnalyticsStore` at module level (``STORE``)
+so that data survives screen switches. It is a circular buffer of
+:class:`DataPoint` held column-wise in numpy arrays (9 float64 columns plus a
+one-byte algorithm code: 73 bytes per point), grown on demand up to
+``max_data_points``, so statistics over a million points take milliseconds.
+
+Thread-safe: roslibpy delivers messages on the Twisted thread while the UI
+reads on its own loop. Observers are called after each change, outside the
+lock, with the name of the change.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+from collections.abc import Callable, Iterable, Iterator
+from dataclasses import asdict, dataclass, fields
+
+import numpy as np
+
+from arbiter_core import stats as S
+
+FIELDS = (
+    "timestamp",
+    "x",
+    "y",
+    "theta",
+    "linearVel",
+    "angularVel",
+    "distanceError",
+    "headingError",
+    "algorithm",
+    "latencyMs",
+)
+"""DataPoint fields in the seed's order -- also the CSV header."""
+
+NUMERIC = tuple(f for f in FIELDS if f != "algorithm")
+_COL = {name: i for i, name in enumerate(NUMERIC)}
+MAX_ALGORITHM_NAME = 64
+MAX_CAPACITY = 10_000_000
+
+
+@dataclass(frozen=True)
+class DataPoint:
+    timestamp: float  # Date.now() ms
+    x: float  # m
+    y: float  # m
+    theta: float  # rad
+    linearVel: float  # commanded m/s
+    angularVel: float  # commanded rad/s
+    distanceError: float  # m
+    headingError: float  # rad
+    algorithm: str
+    latencyMs: float | None  # None when no latency is known (client-side simulation)
+
+    def validate(self) -> None:
+        for name in NUMERIC:
+            value = getattr(self, name)
+            if name == "latencyMs" and value is None:
+                continue
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                raise ValueError(f"DataPoint.{name} must be a number, got {type(value).__name__}")
+            if not math.isfinite(value):
+                raise ValueError(f"DataPoint.{name} must be finite, got {value}")
+        if not isinstance(self.algorithm, str) or not self.algorithm:
+            raise ValueError("DataPoint.algorithm must be a non-empty string")
+        if len(self.algorithm) > MAX_ALGORITHM_NAME:
+            raise ValueError(f"DataPoint.algorithm longer than {MAX_ALGORITHM_NAME} characters")
+
+    def as_dict(self) -> dict[str, float | str | None]:
+        return asdict(self)
+
+
+@dataclass(frozen=True)
+class AnalyticsStats:
+    sampleCount: int
+    avgLinearVel: float  # mean |v|
+    avgAngularVel: float  # mean |omega|
+    maxLinearVel: float  # max |v|
+    avgDistanceError: float  # mean e_d
+    avgHeadingError: float  # mean |e_theta|
+    stdDevError: float  # population std of e_d
+    p95Error: float  # seed's p95 of e_d
+    totalPathLength: float  # sum of hypot between consecutive samples
+
+    def as_dict(self) -> dict[str, float | int]:
+        return asdict(self)
+
+
+STATS_FIELDS = tuple(f.name for f in fields(AnalyticsStats))
+EMPTY_STATS = AnalyticsStats(0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+
+
+def compute_stats(
+    x: np.ndarray,
+    y: np.ndarray,
+    v: np.ndarray,
+    w: np.ndarray,
+    e_d: np.ndarray,
+    e_th: np.ndarray,
+    path: float | None = None,
+) -> AnalyticsStats:
+    """AnalyticsStats of time-ordered columns (``path`` overrides the path length when given)."""
+    n = int(e_d.size)
+    if n == 0:
+        return EMPTY_STATS
+    abs_v = np.abs(v)
+    return AnalyticsStats(
+        sampleCount=n,
+        avgLinearVel=S.mean(abs_v),
+        avgAngularVel=S.mean(np.abs(w)),
+        maxLinearVel=S.maximum(abs_v),
+        avgDistanceError=S.mean(e_d),
+        avgHeadingError=S.mean(np.abs(e_th)),
+        stdDevError=S.pstdev(e_d),
+        p95Error=S.p95(e_d),
+        totalPathLength=S.path_length(x, y) if path is None else path,
+    )
+
+
+def stats_of_points(points: Iterable[DataPoint]) -> AnalyticsStats:
+    pts = list(points)
+
+    def col(name: str) -> np.ndarray:
+        return np.fromiter((getattr(p, name) for p in pts), dtype=np.float64, count=len(pts))
+
+    return compute_stats(
+        col("x"), col("y"), col("linearVel"), col("angularVel"), col("distanceError"), col("headingError")
+    )
+
+
+Observer = Callable[[str], None]
+
+
+class AnalyticsStore:
+    def __init__(self, max_data_points: int = 1000, collection_rate: float = 10.0) -> None:
+        self._lock = threading.RLock()
+        self._observers: list[Observer] = []
+        self._is_collecting = False
+        self._collection_rate = 10.0
+        self._max = 1
+        self._algos: list[str] = []
+        self._algo_index: dict[str, int] = {}
+        self._reset_buffers(0)
+        self._total_recorded = 0
+        self.collection_rate = collection_rate
+        self.max_data_points = max_data_points
+
+    # -- buffer management -------------------------------------------------
+    def _reset_buffers(self, alloc: int) -> None:
+        self._num = np.empty((len(NUMERIC), alloc), dtype=np.float64)
+        self._alg = np.empty(alloc, dtype=np.uint8)
+        self._size = 0
+        self._next = 0
+
+    def _wrapped(self) -> bool:
+        """True when the ring is full and its oldest point is not in slot 0."""
+        return self._size == self._max and self._next != 0
+
+    def _order(self) -> np.ndarray | slice:
+        """Indices of the stored points, oldest first."""
+        if not self._wrapped():
+            return slice(0, self._size)
+        return np.r_[self._next : self._size, 0 : self._next]
+
+    def _grow(self) -> None:
+        alloc = self._num.shape[1]
+        new = min(self._max, max(1024, alloc * 2))
+        num = np.empty((len(NUMERIC), new), dtype=np.float64)
+        alg = np.empty(new, dtype=np.uint8)
+        num[:, : self._size] = self._num[:, : self._size]
+        alg[: self._size] = self._alg[: self._size]
+        self._num, self._alg = num, alg
+
+    # -- settings ----------------------------------------------------------
+    @property
+    def is_collecting(self) -> bool:
+        return self._is_collecting
+
+    @property
+    def collection_rate(self) -> float:
+        return self._collection_rate
+
+    @collection_rate.setter
+    def collection_rate(self, hz: float) -> None:
+        if (
+            isinstance(hz, bool)
+            or not isinstance(hz, (int, float))
+            or not math.isfinite(hz)
+            or not 0 < hz <= 1000
+        ):
+            raise ValueError(f"collection_rate must be in (0, 1000] Hz, got {hz!r}")
+        self._collection_rate = float(hz)
+        self._notify("settings")
+
+    @property
+    def max_data_points(self) -> int:
+        return self._max
+
+    @max_data_points.setter
+    def max_data_points(self, n: int) -> None:
+        if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= MAX_CAPACITY:
+            raise ValueError(f"max_data_points must be an integer in [1, {MAX_CAPACITY}], got {n!r}")
+        with self._lock:
+            if n != self._max:
+                order = self._order()
+                keep_num = self._num[:, order][:, -n:] if self._size else self._num[:, :0]
+                keep_alg = self._alg[order][-n:] if self._size else self._alg[:0]
+                self._max = n
+                k = keep_num.shape[1]
+                self._reset_buffers(min(n, max(1024, k)))
+                self._num[:, :k] = keep_num
+                self._alg[:k] = keep_alg
+                self._size = k
+                self._next = k % self._num.shape[1] if k == n else k
+        self._notify("settings")
+
+    # -- observers -----------------------------------------------------------
+    def subscribe(self, observer: Observer) -> Callable[[], None]:
+        """Call ``observer(change)`` after every change; returns a function that unsubscribes."""
+        with self._lock:
+            self._observers.append(observer)
+
+        def unsubscribe() -> None:
+            with self._lock:
+                if observer in self._observers:
+                    self._observers.remove(observer)
+
+        return unsubscribe
+
+    def _notify(self, change: str) -> None:
+        with self._lock:
+            observers = list(self._observers)
+        for obs in observers:
+            obs(change)
+
+    # -- collection ----------------------------------------------------------
+    def start_collection(self) -> None:
+        self._is_collecting = True
+        self._notify("collecting")
+
+    def stop_collection(self) -> None:
+        self._is_collecting = False
+        self._notify("collecting")
+
+    def clear(self) -> None:
+        with self._lock:
+            self._reset_buffers(0)
+        self._notify("cleared")
+
+    def record(self, point: DataPoint) -> bool:
+        """Store a point if collection is on; returns whether it was stored.
+
+        Raises ValueError for a point with a missing, non-numeric or non-finite value.
+        """
+        point.validate()
+        if not self._is_collecting:
+            return False
+        with self._lock:
+            code = self._algo_index.get(point.algorithm)
+            if code is None:
+                if len(self._algos) >= 255:
+                    raise ValueError("too many distinct algorithm names (255)")
+                code = len(self._algos)
+                self._algos.append(point.algorithm)
+                self._algo_index[point.algorithm] = code
+            if self._size == self._num.shape[1] and self._size < self._max:
+                self._grow()
+            i = self._next
+            col = self._num[:, i]
+            col[0] = point.timestamp
+            col[1] = point.x
+            col[2] = point.y
+            col[3] = point.theta
+            col[4] = point.linearVel
+            col[5] = point.angularVel
+            col[6] = point.distanceError
+            col[7] = point.headingError
+            col[8] = math.nan if point.latencyMs is None else point.latencyMs
+            self._alg[i] = code
+            self._next = (i + 1) % self._num.shape[1] if self._num.shape[1] == self._max else i + 1
+            if self._size < self._num.shape[1]:
+                self._size += 1
+            self._total_recorded += 1
+        self._notify("recorded")
+        return True
+
+    # -- reading ---------------------------------------------------------------
+    def __len__(self) -> int:
+        return self._size
+
+    @property
+    def total_recorded(self) -> int:
+        """Points recorded since start, including those the ring buffer has dropped."""
+        return self._total_recorded
+
+    def column(self, name: str, last: int | None = None) -> np.ndarray:
+        """A copy of one numeric column, oldest first (optionally only the ``last`` points)."""
+        with self._lock:
+            data = self._num[_COL[name], self._order()]
+        data = np.array(data, copy=True)
+        return data[-last:] if last else data
+
+    def algorithms(self) -> list[str]:
+        """Algorithm of each stored point, oldest first."""
+        with self._lock:
+            codes = self._alg[self._order()].copy()
+            names = list(self._algos)
+        return [names[c] for c in codes]
+
+    def points(self) -> list[DataPoint]:
+        with self._lock:
+            order = self._order()
+            num = self._num[:, order].copy()
+            codes = self._alg[order].copy()
+            names = list(self._algos)
+        out = []
+        for j in range(num.shape[1]):
+            lat = float(num[8, j])
+            out.append(
+                DataPoint(
+                    float(num[0, j]),
+                    float(num[1, j]),
+                    float(num[2, j]),
+                    float(num[3, j]),
+                    float(num[4, j]),
+                    float(num[5, j]),
+                    float(num[6, j]),
+                    float(num[7, j]),
+                    names[codes[j]],
+                    None if math.isnan(lat) else lat,
+                )
+            )
+        return out
+
+    def __iter__(self) -> Iterator[DataPoint]:
+        return iter(self.points())
+
+    def stats(self) -> AnalyticsStats:
+        """AnalyticsStats over every stored point, without copying the buffer."""
+        with self._lock:
+            n = self._size
+            if n == 0:
+                return EMPTY_STATS
+            num = self._num[:, :n]
+            x, y = num[1], num[2]
+            path = S.path_length(x, y)
+            if self._wrapped():
+                # Storage order wraps: the pair (newest, oldest) is not a real step,
+                # and the pair (last slot, first slot) is.
+                h = self._next
+                path -= math.hypot(x[h] - x[h - 1], y[h] - y[h - 1])
+                path += math.hypot(x[0] - x[-1], y[0] - y[-1])
+            return compute_stats(x, y, num[4], num[5], num[6], num[7], path=max(path, 0.0))
+
+    def stats_by_algorithm(self) -> dict[str, AnalyticsStats]:
+        """AnalyticsStats per algorithm, in first-seen order; path length counts only steps
+        between two consecutive samples of the same algorithm."""
+        with self._lock:
+            order = self._order()
+            num = self._num[:, order]
+            codes = self._alg[order]
+            names = list(self._algos)
+        out: dict[str, AnalyticsStats] = {}
+        x, y = num[1], num[2]
+        steps = S.step_lengths(x, y)  # once, shared by every algorithm
+        for code in dict.fromkeys(codes.tolist()):
+            mask = codes == code
+            same = mask[1:] & mask[:-1]
+            path = float(steps[same].sum())
+            out[names[code]] = compute_stats(
+                x[mask], y[mask], num[4][mask], num[5][mask], num[6][mask], num[7][mask], path=path
+            )
+        return out
+
+    def nbytes(self) -> int:
+        """Bytes held by the buffer arrays."""
+        return int(self._num.nbytes + self._alg.nbytes)
+
+
+STORE = AnalyticsStore()
+"""The process-wide singleton every screen shares."""
+
+
+def get_store() -> AnalyticsStore:
+    return STORE

@@ -1,0 +1,165 @@
+"""Keyboard teleop as a pure state machine (teleop_twist_keyboard's key map and factors).
+
+Terminals send no key releases, so "held" means "pressed again within
+``key_timeout``": each press refreshes a deadline; while it lasts the command
+is repeated; when it passes, exactly one zero goes out.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from arbiter_core.kinematics import DEFAULT_LIMITS, Limits
+
+# key -> (x, y, th); y (holonomic) is carried for fidelity, a diff-drive robot ignores it.
+MOVE_KEYS: dict[str, tuple[int, int, int]] = {
+    "u": (1, 0, 1),
+    "i": (1, 0, 0),
+    "o": (1, 0, -1),
+    "j": (0, 0, 1),
+    "l": (0, 0, -1),
+    "m": (-1, 0, -1),
+    ",": (-1, 0, 0),
+    ".": (-1, 0, 1),
+    "U": (1, 1, 0),
+    "I": (1, 0, 0),
+    "O": (1, -1, 0),
+    "J": (0, 1, 0),
+    "L": (0, -1, 0),
+    "M": (-1, 1, 0),
+    "<": (-1, 0, 0),
+    ">": (-1, -1, 0),
+    "up": (1, 0, 0),
+    "down": (-1, 0, 0),
+    "left": (0, 0, 1),
+    "right": (0, 0, -1),
+}
+SCALE_KEYS: dict[str, tuple[float, float]] = {
+    "q": (1.1, 1.1),
+    "z": (0.9, 0.9),
+    "w": (1.1, 1.0),
+    "x": (0.9, 1.0),
+    "e": (1.0, 1.1),
+    "c": (1.0, 0.9),
+}
+STOP_KEYS = frozenset({"k", " ", "space"})
+# Where the movement keys sit on the keyboard (teleop_twist_keyboard's picture; k in the middle stops).
+GRID = (("u", "i", "o"), ("j", "k", "l"), ("m", ",", "."))
+AXIS_NAMES = {(True, True): ("both", "speed and turn"), (True, False): ("lin", "linear only"),
+              (False, True): ("ang", "angular only")}  # fmt: skip
+MODIFIER_KEYS = frozenset(
+    {"shift", "left_shift", "right_shift", "ctrl", "left_ctrl", "right_ctrl", "alt", "left_alt", "right_alt",
+     "meta", "left_meta", "right_meta", "super", "left_super", "right_super", "hyper", "caps_lock"}
+)  # fmt: skip
+
+
+@dataclass
+class Teleop:
+    speed: float = 0.5
+    turn: float = 1.0
+    key_timeout: float = 0.6
+    limits: Limits = DEFAULT_LIMITS
+    target: tuple[float, float] = (0.0, 0.0)
+    deadline: float | None = None
+    _zero_pending: bool = False
+    _axes: tuple[int, int, int] = (0, 0, 0)
+
+    def __post_init__(self) -> None:
+        self.speed = min(self.speed, self.limits.max_linear)
+        self.turn = min(self.turn, self.limits.max_angular)
+
+    @property
+    def moving(self) -> bool:
+        return self.deadline is not None
+
+    def press(self, key: str, now: float) -> str | None:
+        """Handle one key; returns "move", "scale", "stop" or None (not a teleop key)."""
+        if key in MODIFIER_KEYS:
+            return None
+        if key in MOVE_KEYS:
+            self._axes = MOVE_KEYS[key]
+            self._retarget()
+            self.deadline = now + self.key_timeout
+            self._zero_pending = False
+            return "move"
+        if key in SCALE_KEYS:
+            fs, ft = SCALE_KEYS[key]
+            self.speed = min(self.speed * fs, self.limits.max_linear)
+            self.turn = min(self.turn * ft, self.limits.max_angular)
+            if self.moving:
+                self._retarget()
+            return "scale"
+        if key in STOP_KEYS:
+            self.stop()
+            return "stop"
+        return None
+
+    def _retarget(self) -> None:
+        x, _y, th = self._axes
+        self.target = (x * self.speed, th * self.turn)
+
+    def stop(self) -> None:
+        """Stop now: the next tick sends exactly one zero."""
+        self.target = (0.0, 0.0)
+        self.deadline = None
+        self._zero_pending = True
+
+    def tick(self, now: float) -> tuple[float, float] | None:
+        """The command to send at this tick, or None when idle (nothing to send)."""
+        if self.deadline is not None:
+            if now < self.deadline:
+                return self.target
+            self.stop()
+        if self._zero_pending:
+            self._zero_pending = False
+            return (0.0, 0.0)
+        return None
+
+
+# -- the key legend, for the control screen and the help screen (one source: the tables above) ------
+def grid_rows() -> list[str]:
+    """``["u i o", "j k l", "m , ."]``"""
+    return [" ".join(row) for row in GRID]
+
+
+def scale_pairs() -> list[tuple[str, str, str, str]]:
+    """(faster key, slower key, short name, long name) per axis group, in SCALE_KEYS order."""
+    out = []
+    for up, (fs, ft) in SCALE_KEYS.items():
+        if max(fs, ft) <= 1.0:
+            continue
+        axes = (fs != 1.0, ft != 1.0)
+        down = next(
+            k for k, (ds, dt) in SCALE_KEYS.items() if (ds != 1.0, dt != 1.0) == axes and min(ds, dt) < 1.0
+        )
+        short, long = AXIS_NAMES[axes]
+        out.append((up, down, short, long))
+    return out
+
+
+def factors() -> tuple[float, float]:
+    """The scaling factors (up, down) of the keys that scale both speed and turn."""
+    up, down = scale_pairs()[0][:2]
+    return SCALE_KEYS[up][0], SCALE_KEYS[down][0]
+
+
+def legend_compact() -> str:
+    """The control screen's key panel (Rich markup)."""
+    rows = grid_rows()
+    scale = "  ".join(f"{up}/{down} {short}" for up, down, short, _ in scale_pairs())
+    return (
+        f"[b]Move[/b]   {rows[0]}\n"
+        f"         {rows[1]}     k/space stop\n"
+        f"         {rows[2]}     arrows too\n"
+        f"[b]Scale[/b]  {scale}\n"
+        "[b]Auto[/b]   a algorithm  n mission  g go"
+    )
+
+
+def legend_long() -> str:
+    """The help screen's teleop lines."""
+    up_f, down_f = factors()
+    pairs = scale_pairs()
+    first = f"{pairs[0][0]}/{pairs[0][1]}  {pairs[0][3]} x{up_f:g} / x{down_f:g}"
+    rest = "   ".join(f"{up}/{down} {long}" for up, down, _, long in pairs[1:])
+    return f"  {' / '.join(grid_rows())}   move;  arrows too;  k or space: stop\n  {first}   {rest}"

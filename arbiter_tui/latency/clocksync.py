@@ -1,0 +1,178 @@
+"""Round trip, clock offset and loss for stamped commands, measured by the sender (pure, thread-safe).
+
+For each command the sender notes its wall stamp ``t0`` (the envelope's, ms) and
+a monotonic send time. The tracker's ``/latency_report`` for it carries the raw
+one-way figure ``raw = t1 - t0`` (tracker receive wall time minus the stamp: the
+seed's number, which includes the clock offset). When the report arrives at
+monotonic time ``m3``:
+
+* round trip ``rtt = m3 - m0`` (monotonic, immune to wall-clock steps);
+* the NTP estimate, with ``t3 = t0 + rtt`` and the tracker replying at once
+  (``t2 = t1``): ``offset = ((t1 - t0) + (t2 - t3)) / 2 = raw - rtt / 2``, the
+  tracker's clock minus ours, with error at most ``rtt / 2`` (the path asymmetry
+  bound);
+* the offset in use is the sample with the lowest RTT in a recent window (the
+  least queueing, so the tightest bound), and
+  ``corrected one-way = raw - offset``.
+
+Negative raw latencies are kept and counted, never clipped. A command with no
+report after ``lost_after_s`` counts as lost, timestamped, so loss is reported
+per window and a disconnect shows as a gap.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections import deque
+from dataclasses import dataclass
+from typing import Any
+
+from arbiter_core import stats
+from arbiter_core.record import LatencyRecord
+
+MATCH_TOLERANCE_MS = 0.05  # a report matches a send when t1 - raw gives back t0 (µs stamps, float s)
+
+
+@dataclass(frozen=True)
+class OffsetEstimate:
+    offset_ms: float  # tracker clock minus ours
+    uncertainty_ms: float  # rtt / 2 of the sample used
+    rtt_ms: float
+    samples: int
+
+
+@dataclass(frozen=True)
+class Sample:
+    seq: int
+    raw_ms: float
+    rtt_ms: float
+    corrected_ms: float
+
+
+class LatencyMeter:
+    def __init__(
+        self,
+        offset_window: int = 64,
+        history: int = 2000,
+        lost_after_s: float = 2.0,
+        loss_window_s: float = 10.0,
+        max_pending: int = 100_000,
+    ) -> None:
+        self._lock = threading.Lock()
+        self._pending: dict[int, tuple[float, float]] = {}  # seq -> (send monotonic s, stamp ms)
+        self._offsets: deque[tuple[float, float]] = deque(maxlen=offset_window)  # (offset, rtt)
+        self._best: tuple[float, float] | None = None  # the lowest-RTT entry of _offsets
+        self._samples: deque[Sample] = deque(maxlen=history)
+        self._lost_at: deque[float] = deque()
+        self.lost_after_s = lost_after_s
+        self.loss_window_s = loss_window_s
+        self.max_pending = max_pending
+        self.sent = 0
+        self.matched = 0
+        self.negative = 0
+        self.lost = 0
+        self.foreign = 0  # reports of commands not ours (another console), or of expired ones
+
+    # -- events ---------------------------------------------------------------------------------
+    def on_send(self, seq: int, stamp_ms: float, send_mono: float) -> None:
+        with self._lock:
+            if len(self._pending) >= self.max_pending:  # a stuck link: the oldest count as lost
+                oldest = next(iter(self._pending))
+                del self._pending[oldest]
+                self._count_lost(send_mono)
+            self._pending[seq] = (send_mono, stamp_ms)
+            self.sent += 1
+
+    def on_report(self, record: LatencyRecord, arrival_mono: float) -> Sample | None:
+        """Match a tracker record to our send; None when it is not one of ours (or has no ``seq``,
+        as a seed tracker's records do not)."""
+        seq, raw, t1_ms = record.seq, record.latency_ms, record.timestamp * 1000.0
+        if seq is None:
+            return None
+        with self._lock:
+            sent = self._pending.get(seq)
+            if sent is None or abs((t1_ms - raw) - sent[1]) > MATCH_TOLERANCE_MS:
+                self.foreign += 1
+                return None
+            del self._pending[seq]
+            send_mono, _ = sent
+            rtt = (arrival_mono - send_mono) * 1000.0
+            self._offsets.append((raw - rtt / 2.0, rtt))
+            self._best = min(self._offsets, key=lambda o: o[1])  # once per report, read per command
+            sample = Sample(seq, raw, rtt, raw - self._best[0])
+            self._samples.append(sample)
+            self.matched += 1
+            if raw < 0:
+                self.negative += 1
+            return sample
+
+    def expire(self, now_mono: float) -> int:
+        """Count commands unreported for ``lost_after_s`` as lost; returns how many were just counted."""
+        n = 0
+        with self._lock:
+            cutoff = now_mono - self.lost_after_s
+            for seq, (sent, _) in list(self._pending.items()):
+                if sent >= cutoff:
+                    break  # insertion order is send order
+                del self._pending[seq]
+                self._count_lost(now_mono)
+                n += 1
+            while self._lost_at and self._lost_at[0] < now_mono - self.loss_window_s:
+                self._lost_at.popleft()
+        return n
+
+    def _count_lost(self, now_mono: float) -> None:
+        self.lost += 1
+        self._lost_at.append(now_mono)
+
+    def reset_pending(self, now_mono: float) -> None:
+        """The link dropped: what is in flight will never be reported; count it now."""
+        with self._lock:
+            for _ in range(len(self._pending)):
+                self._count_lost(now_mono)
+            self._pending.clear()
+
+    # -- reading --------------------------------------------------------------------------------
+    def offset(self) -> OffsetEstimate | None:
+        with self._lock:
+            if self._best is None:
+                return None
+            off, rtt = self._best
+            return OffsetEstimate(off, rtt / 2.0, rtt, len(self._offsets))
+
+    def samples(self) -> list[Sample]:
+        with self._lock:
+            return list(self._samples)
+
+    def lost_in_window(self) -> int:
+        with self._lock:
+            return len(self._lost_at)
+
+    def summary(self) -> dict[str, Any]:
+        """Figures for display and benchmarks (ms; percentiles by the seed's rule)."""
+        samples = self.samples()
+        est = self.offset()
+        raw = [s.raw_ms for s in samples]
+        rtt = [s.rtt_ms for s in samples]
+        cor = [s.corrected_ms for s in samples]
+
+        def pct(values: list[float], q: float) -> float | None:
+            return round(stats.percentile(values, q), 4) if values else None
+
+        return {
+            "n": len(samples),
+            "raw_p50_ms": pct(raw, 0.5),
+            "raw_p95_ms": pct(raw, 0.95),
+            "corrected_p50_ms": pct(cor, 0.5),
+            "corrected_p95_ms": pct(cor, 0.95),
+            "rtt_p50_ms": pct(rtt, 0.5),
+            "rtt_p95_ms": pct(rtt, 0.95),
+            "offset_ms": None if est is None else round(est.offset_ms, 4),
+            "offset_uncertainty_ms": None if est is None else round(est.uncertainty_ms, 4),
+            "sent": self.sent,
+            "matched": self.matched,
+            "negative": self.negative,
+            "lost": self.lost,
+            "lost_in_window": self.lost_in_window(),
+            "in_flight": len(self._pending),
+        }

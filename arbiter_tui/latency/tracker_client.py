@@ -1,0 +1,137 @@
+"""Polls the tracker's ``GET /api/latency`` with async httpx (the next poll starts after the last ends).
+
+Against our tracker the poller pages by ``rx_seq``: each poll asks only for what arrived since the
+last one (``?since=``), so a record is never fetched twice. A tracker without ``rx_seq`` (the
+seed's own) is polled by ``limit``, and records newer than the last timestamp seen are added.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass, field
+from typing import Any
+
+import httpx
+
+from arbiter_core.record import LatencyRecord, RecordError
+
+WINDOW = 120  # latencies kept for the sparkline
+RECENT = 50  # records kept for the table
+
+
+@dataclass
+class LatencyView:
+    """What the latency screen shows: the last good answer, or why there is none."""
+
+    reachable: bool | None = None  # None: not polled yet
+    error: str | None = None
+    stats: dict[str, Any] = field(default_factory=dict)
+    records: deque[LatencyRecord] = field(default_factory=lambda: deque(maxlen=RECENT))  # oldest first
+    deploy_mode: str = "?"
+    window: deque[float] = field(default_factory=lambda: deque(maxlen=WINDOW))
+    polls: int = 0
+    failures: int = 0
+    stale: int = 0  # commands the tracker dropped as too old (never forwarded)
+    rejected: int = 0  # malformed envelopes
+    bad_records: int = 0  # records in an answer that were not the seed's shape (skipped)
+    max_command_age_ms: float | None = None
+    last_rx_seq: int | None = None  # the newest rx_seq taken in; None: start from the newest records
+    pages_by_rx_seq: bool = False  # the tracker answers ``since`` (ours does, the seed's does not)
+    version: int = 0  # bumped whenever records or the window change
+    _last_timestamp: float | None = None  # without rx_seq: the newest record taken in
+
+    def params(self, limit: int) -> dict[str, int]:
+        """The query for the next poll."""
+        if self.pages_by_rx_seq and self.last_rx_seq is not None:
+            return {"since": self.last_rx_seq, "limit": max(limit, WINDOW)}
+        return {"limit": limit}
+
+    def apply(self, body: Any) -> None:
+        if not isinstance(body, dict) or not isinstance(body.get("stats"), dict):
+            raise ValueError("unexpected response shape")
+        raw = body.get("records")
+        if not isinstance(raw, list):
+            raise ValueError("records missing")
+        records = []
+        for obj in raw:
+            try:
+                records.append(LatencyRecord.from_obj(obj))
+            except RecordError:
+                self.bad_records += 1
+        self.stats = body["stats"]
+        self.deploy_mode = str(body.get("deploy_mode", "?"))
+        # our tracker's extras; a seed tracker has none of them
+        self.stale = _count(body.get("stale"))
+        self.rejected = _count(body.get("rejected"))
+        age = body.get("max_command_age_ms")
+        self.max_command_age_ms = (
+            float(age) if isinstance(age, (int, float)) and not isinstance(age, bool) else None
+        )
+        head = body.get("last_rx_seq")
+        if isinstance(head, int) and not isinstance(head, bool) and head >= 0:
+            new = self._take_by_rx_seq(records, head, more=body.get("more") is True)
+        else:
+            self.pages_by_rx_seq = False
+            new = [r for r in records if self._last_timestamp is None or r.timestamp > self._last_timestamp]
+            if new:
+                self._last_timestamp = new[-1].timestamp
+        if new:
+            self.records.extend(new)
+            self.window.extend(r.latency_ms for r in new)
+            self.version += 1
+        self.reachable = True
+        self.error = None
+
+    def _take_by_rx_seq(self, records: list[LatencyRecord], head: int, more: bool) -> list[LatencyRecord]:
+        self.pages_by_rx_seq = True
+        if self.last_rx_seq is not None and head < self.last_rx_seq:
+            # the tracker restarted and counts from 1 again: start over from its newest records
+            self.last_rx_seq = None
+            return []
+        seen = self.last_rx_seq or 0
+        new = [r for r in records if r.rx_seq is not None and r.rx_seq > seen]
+        if new:
+            seen = max(r.rx_seq or 0 for r in new)
+        elif self.last_rx_seq is None:
+            seen = head  # nothing to take in yet: carry on from the tracker's newest
+        if more:  # further behind than one page: what lies between would only scroll past
+            seen = max(seen, head - WINDOW)
+        self.last_rx_seq = seen
+        return new
+
+    def fail(self, error: str) -> None:
+        self.reachable = False
+        self.error = error
+        self.failures += 1
+
+
+def _count(value: Any) -> int:
+    return value if isinstance(value, int) and not isinstance(value, bool) and value >= 0 else 0
+
+
+class TrackerClient:
+    def __init__(
+        self, base_url: str, timeout: float = 1.0, limit: int = 50, token: str | None = None
+    ) -> None:
+        self.base_url = base_url.rstrip("/")
+        self.limit = limit
+        self.view = LatencyView()
+        headers = {} if token is None else {"Authorization": f"Bearer {token}"}
+        self._client = httpx.AsyncClient(timeout=timeout, headers=headers)
+
+    async def poll(self) -> LatencyView:
+        self.view.polls += 1
+        try:
+            resp = await self._client.get(f"{self.base_url}/api/latency", params=self.view.params(self.limit))
+            resp.raise_for_status()
+            self.view.apply(resp.json())
+        except httpx.HTTPStatusError as exc:
+            self.view.fail(f"HTTP {exc.response.status_code}")
+        except httpx.HTTPError as exc:
+            self.view.fail(type(exc).__name__)
+        except ValueError as exc:
+            self.view.fail(f"bad response: {exc}")
+        return self.view
+
+    async def aclose(self) -> None:
+        await self._client.aclose()

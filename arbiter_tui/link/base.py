@@ -1,0 +1,82 @@
+"""What every link shares: its states, the telemetry it writes, and the surface the control loop uses.
+
+A link exposes ``state``, ``send(v, w)``, ``telemetry`` (latest pose and latency,
+thread-safe) and ``close()``. Link callbacks may run on another thread (roslibpy's
+Twisted reactor); they only write :class:`Telemetry` under its lock, and the UI
+reads it at its own pace.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+from arbiter_core.kinematics import Pose, quaternion_to_yaw
+from arbiter_core.record import LatencyRecord, RecordError
+
+from ..latency.clocksync import LatencyMeter
+
+CONNECTING = "CONNECTING"
+CONNECTED = "CONNECTED"
+RECONNECTING = "RECONNECTING"
+DISCONNECTED = "DISCONNECTED"
+SIMULATED = "SIMULATED"
+
+
+@dataclass
+class Telemetry:
+    """Latest robot state as seen by the console: written by the link's callbacks (any thread) under
+    ``lock``; commands sent, RTT, offset and loss are the meter's."""
+
+    lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
+    pose: Pose = field(default_factory=Pose)
+    v: float = 0.0
+    w: float = 0.0
+    odom_count: int = 0
+    latency_ms: float | None = None
+    reports: int = 0
+    meter: LatencyMeter = field(default_factory=LatencyMeter)
+
+    def set_odom(self, msg: dict[str, Any]) -> None:
+        try:
+            p = msg["pose"]["pose"]
+            pose = Pose(
+                float(p["position"]["x"]), float(p["position"]["y"]), quaternion_to_yaw(p["orientation"])
+            )
+            v = float(msg["twist"]["twist"]["linear"]["x"])
+            w = float(msg["twist"]["twist"]["angular"]["z"])
+        except (KeyError, TypeError, ValueError):
+            return
+        with self.lock:
+            self.pose, self.v, self.w = pose, v, w
+            self.odom_count += 1
+
+    def set_report(self, msg: dict[str, Any]) -> None:
+        arrival = time.monotonic()
+        try:
+            record = LatencyRecord.from_json(msg["data"])
+        except (KeyError, TypeError, RecordError):
+            return
+        self.meter.on_report(record, arrival)
+        with self.lock:
+            self.latency_ms = record.latency_ms
+            self.reports += 1
+
+    def snapshot(self) -> tuple[Pose, float, float, float | None]:
+        with self.lock:
+            return self.pose, self.v, self.w, self.latency_ms
+
+
+class Link(Protocol):
+    telemetry: Telemetry
+
+    @property
+    def state(self) -> str: ...
+
+    def send(self, v: float, w: float) -> bool: ...
+
+    def close(self) -> None: ...
+
+

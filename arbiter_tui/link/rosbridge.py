@@ -1,0 +1,188 @@
+"""The rosbridge link: stamped commands out, odometry and latency reports in (roslibpy, Twisted thread)."""
+
+from __future__ import annotations
+
+import json
+import logging
+import threading
+import time
+from typing import Any
+
+from arbiter_core import envelope, topics
+
+from . import wsframe
+from .base import CONNECTED, CONNECTING, DISCONNECTED, RECONNECTING, Telemetry
+
+log = logging.getLogger(__name__)
+
+MAX_RECONNECT_DELAY_S = 2.0
+PING_INTERVAL_S = 1.0  # WebSocket keep-alive: a ping every second...
+PING_TIMEOUT_S = 2.0  # ...and a link with no pong for this long is dropped (then reconnected)
+STAMPED = topics.absolute(topics.STAMPED)
+
+
+def _write_now(proto: Any, payload: bytes) -> None:
+    """Send a text frame on the reactor thread: straight into the socket when nothing is buffered
+    (so ordering is kept), otherwise through autobahn and Twisted's buffer."""
+    transport = getattr(proto, "transport", None)
+    if (
+        transport is None
+        or getattr(proto, "state", None) != getattr(proto, "STATE_OPEN", object())
+        or transport._tempDataBuffer
+        or transport.dataBuffer
+        or not hasattr(transport, "writeSomeData")
+    ):
+        proto.sendMessage(payload, isBinary=False)
+        return
+    frame = wsframe.text_frame(payload)
+    written = transport.writeSomeData(frame)
+    if not isinstance(written, int):  # an error object: the connection is going; Twisted reports it
+        return
+    if written < len(frame):
+        transport.write(frame[written:])
+
+
+class RosLink:
+    """The rosbridge link: stamped commands out, odometry and latency reports in (roslibpy on Twisted's
+    thread; its callbacks only write :class:`Telemetry`)."""
+
+    def __init__(self, host: str, port: int, odom_throttle_ms: int = 50, token: str | None = None) -> None:
+        from roslibpy.comm import select_factory
+        from twisted.internet import reactor
+        from twisted.internet.threads import blockingCallFromThread
+
+        factory_cls = select_factory()
+        factory_cls.set_max_delay(MAX_RECONNECT_DELAY_S)  # roslibpy's default is an hour
+        factory_cls.set_initial_delay(0.3)
+        self.telemetry = Telemetry()
+        self._lock = threading.Lock()
+        self._state = CONNECTING
+        self._seq = 0
+        self._zero_first = False
+        self._ever_connected = False
+        self._reactor: Any = reactor
+        # Build on the reactor thread when it already runs (a second link in one process): the
+        # connection attempt is queued behind this call, so the ping options and the event hooks
+        # are in place before the first connection is made. Otherwise the reactor starts below.
+        if reactor.running:
+            blockingCallFromThread(reactor, self._build, host, port, token, odom_throttle_ms)
+        else:
+            self._build(host, port, token, odom_throttle_ms)
+        self.ros.factory.manager.run()  # start the reactor thread without blocking on the connection
+
+    def _build(self, host: str, port: int, token: str | None, odom_throttle_ms: int) -> None:
+        import roslibpy
+
+        # The token goes in the handshake's Authorization header: sent on every reconnect, before any
+        # frame, and never part of a URL that could be logged.
+        headers = None if token is None else {"Authorization": f"Bearer {token}"}
+        self.ros = roslibpy.Ros(host, port, headers=headers)
+        factory = self.ros.factory
+        # A silently dead link (cable out, Wi-Fi gone, NAT timeout) sends no FIN: only pings find it.
+        factory.setProtocolOptions(autoPingInterval=PING_INTERVAL_S, autoPingTimeout=PING_TIMEOUT_S)
+        original_started = factory.startedConnecting
+
+        def started(connector: Any) -> None:
+            with self._lock:
+                if self._state == DISCONNECTED:
+                    self._state = RECONNECTING
+            original_started(connector)
+
+        factory.startedConnecting = started
+        original_failed = factory.clientConnectionFailed
+
+        def failed(connector: Any, reason: Any) -> None:  # refused or unreachable: no "close" event
+            with self._lock:
+                if self._state != "CLOSED":
+                    self._state = DISCONNECTED
+            original_failed(connector, reason)
+
+        factory.clientConnectionFailed = failed
+        factory.on("ready", self._on_ready)
+        self.ros.on("close", self._on_close)
+        self._cmd = roslibpy.Topic(self.ros, STAMPED, topics.TYPE_STRING, queue_size=1)
+        self._odom = roslibpy.Topic(
+            self.ros, topics.absolute(topics.ODOM), topics.TYPE_ODOM, throttle_rate=odom_throttle_ms,
+            queue_length=1,
+        )
+        self._report = roslibpy.Topic(
+            self.ros, topics.absolute(topics.REPORT), topics.TYPE_STRING, queue_length=10
+        )
+        self._cmd.advertise()
+        self._odom.subscribe(self.telemetry.set_odom)
+        self._report.subscribe(self.telemetry.set_report)
+
+    def _on_ready(self, proto: Any) -> None:
+        # roslibpy has no handler for rosbridge "status" frames; ours records the message.
+        proto._message_handlers["status"] = self._on_status
+        with self._lock:
+            self._state = CONNECTED
+            if self._ever_connected:
+                self._zero_first = True
+            self._ever_connected = True
+
+    def _on_close(self, *args: Any) -> None:
+        with self._lock:
+            if self._state != "CLOSED":
+                self._state = DISCONNECTED
+        self.telemetry.meter.reset_pending(time.monotonic())  # in flight: never reported
+
+    def _on_status(self, message: dict[str, Any]) -> None:
+        log.warning("rosbridge status %s: %s", message.get("level", "?"), str(message.get("msg", ""))[:200])
+
+    @property
+    def state(self) -> str:
+        with self._lock:
+            if self._state == CONNECTED and not self.ros.is_connected:
+                return DISCONNECTED
+            return self._state
+
+    def send(self, v: float, w: float) -> bool:
+        """Publish one stamped command; refuses (False) while not connected, so nothing is
+        queued for a burst replay on reconnect. After a reconnect the first command is a zero."""
+        if self.state != CONNECTED:
+            return False
+        with self._lock:
+            zero_first, self._zero_first = self._zero_first, False
+        if zero_first:
+            self._publish(0.0, 0.0)
+        self._publish(v, w)
+        return True
+
+    def _publish(self, v: float, w: float) -> None:
+        with self._lock:
+            seq = self._seq
+            self._seq += 1
+        self._reactor.callFromThread(self._write_command, v, w, seq)
+
+    def _write_command(self, v: float, w: float, seq: int) -> None:
+        """Runs on the reactor thread: stamp, then write the frame at once, as a browser's
+        ``Date.now()`` + ``ws.send`` does. roslibpy would stamp on the caller's thread and then
+        hop threads, putting the hand-off wait (up to the GIL switch interval while the UI
+        renders) inside the measured latency."""
+        proto = self.ros.factory._proto
+        if proto is None or not self.ros.is_connected:
+            return  # dropped while queued: counted lost by nobody, never stamped
+        est = self.telemetry.meter.offset()  # lets the tracker judge the command's age across clocks
+        mono = time.monotonic()
+        now_ns = time.time_ns()
+        offset = None if est is None else est.offset_ms
+        text = envelope.build(v, w, seq=seq, clock_ns=lambda: now_ns, offset_ms=offset)
+        frame = json.dumps(
+            {"op": "publish", "id": f"cmd:{seq}", "topic": STAMPED, "msg": {"data": text}},
+            separators=(",", ":"),
+        )
+        self.telemetry.meter.on_send(seq, envelope.stamp_ms_from_ns(now_ns), mono)
+        try:
+            _write_now(proto, frame.encode("utf-8"))
+        except Exception:  # a socket closing under us: the meter counts it lost later
+            log.debug("sending a command failed", exc_info=True)
+
+    def close(self) -> None:
+        with self._lock:
+            self._state = "CLOSED"
+        try:
+            if self.ros.is_connected:
+                self.ros.close(timeout=2)
+        except Exception:  # closing a dead link must never take the app down
+            log.debug("closing the rosbridge link failed", exc_info=True)

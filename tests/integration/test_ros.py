@@ -1,0 +1,303 @@
+"""ROS mode end to end: `arbiter-backend --transport ros` (rclpy nodes on DDS) in its own process.
+
+Peers: an rclpy node in the test process, the real roslibpy client through our
+endpoint, and the TUI in embedded ROS mode. Skips only when rclpy cannot be
+imported; `.ci/run` sets ARBITER_REQUIRE_ROS so CI fails instead of skipping.
+"""
+
+import json
+import time
+
+import pytest
+import roslibpy
+
+from arbiter_core import envelope
+from arbiter_tui.analytics.store import AnalyticsStore
+from arbiter_tui.app import make_app
+from arbiter_tui.latency.tracker_client import TrackerClient
+from arbiter_tui.link.base import CONNECTED
+from arbiter_tui.link.embedded import EmbeddedBackend
+from arbiter_tui.link.rosbridge import RosLink
+from arbiter_tui.settings import Settings
+
+from ..support.backend import get_json, start_backend, wait_for
+from ..support.ros import (
+    DurabilityPolicy,
+    Odometry,
+    Peer,
+    PoseStamped,
+    ReliabilityPolicy,
+    String,
+    Twist,
+    TwistStamped,
+    use_test_domain,
+)
+
+ros_domain = pytest.fixture(scope="module", autouse=True)(use_test_domain)
+
+
+@pytest.fixture
+def peer():
+    p = Peer()
+    yield p
+    p.close()
+
+
+def ros_backend(*args):
+    return start_backend("--transport", "ros", *args, timeout=30)
+
+
+def wait_matched(publisher, timeout=10.0):
+    assert wait_for(lambda: publisher.get_subscription_count() > 0, timeout), "no subscriber discovered"
+
+
+def test_rclpy_commands_records_twists_odometry_and_watchdog(peer):
+    # speed-up limits as parameters: high enough that every command is forwarded as sent
+    backend = ros_backend(
+        "--ros-args",
+        "-p",
+        "deploy_mode:=ros_test",
+        "-p",
+        "max_linear_accel:=1000.0",
+        "-p",
+        "max_angular_accel:=1000.0",
+    )
+    try:
+        twists = peer.collect(Twist, "/cmd_vel_measured", lambda m: (m.linear.x, m.angular.z))
+        odom = peer.collect(Odometry, "/odom", lambda m: m.pose.pose.position.x)
+        reports = peer.collect(String, "/latency_report", lambda m: json.loads(m.data))
+        pub = peer.node.create_publisher(String, "/stamped_cmd_vel", 10)
+        wait_matched(pub)
+        assert wait_for(lambda: len(odom) > 3, 10)
+        start_x = odom[-1]
+        n = 25
+        sent = [(0.5 + 0.01 * i, 0.1 * (i % 3)) for i in range(n)]
+        for i, (v, w) in enumerate(sent):
+            pub.publish(String(data=envelope.build(v, w, seq=i)))
+            time.sleep(0.02)
+        assert wait_for(lambda: len(reports) >= n, 5)
+
+        body = get_json(f"{backend.api}/api/latency?limit=1000")
+        assert [r["seq"] for r in body["records"]] == list(range(n))
+        assert body["stats"]["count"] == n and body["deploy_mode"] == "ros_test"
+        for r, (v, w) in zip(body["records"], sent, strict=True):
+            assert (r["linear_x"], r["angular_z"]) == (v, w)
+            assert 0 <= r["latency_ms"] < 1000
+        assert [r["seq"] for r in reports] == list(range(n))
+        health = get_json(f"{backend.api}/api/health")
+        assert health["node"] == "latency_tracker" and health["records_count"] == n
+
+        # every twist reached the robot side in another process, then exactly one watchdog zero
+        assert wait_for(lambda: len(twists) >= n + 1, 3)
+        assert twists[:n] == sent
+        time.sleep(0.8)  # an absence: no second zero after the watchdog's one (timeout 0.5 s)
+        assert twists[n:] == [(0.0, 0.0)]
+        # the simulator node drove forwards and then stopped
+        assert odom[-1] - start_x > 0.2
+        x_stopped = odom[-1]
+        time.sleep(0.4)  # an absence: the stopped robot does not creep
+        assert abs(odom[-1] - x_stopped) < 1e-9
+
+        # ordinary ROS 2 nodes with the QoS of the contract: reliable and volatile (no replay)
+        names = peer.node.get_node_names()
+        assert {"latency_tracker", "arbiter_simulator", "arbiter_bridge"} <= set(names)
+        subs = peer.node.get_subscriptions_info_by_topic("/stamped_cmd_vel")
+        mine = [s for s in subs if s.node_name == "latency_tracker"]
+        assert mine and mine[0].qos_profile.durability == DurabilityPolicy.VOLATILE
+        assert mine[0].qos_profile.reliability == ReliabilityPolicy.RELIABLE
+        pubs = peer.node.get_publishers_info_by_topic("/cmd_vel_measured")
+        assert [p.topic_type for p in pubs if p.node_name == "latency_tracker"] == ["geometry_msgs/msg/Twist"]
+    finally:
+        assert backend.stop() == 0
+
+
+def test_twist_stamped_carries_the_receive_time(peer):
+    backend = ros_backend("--measured-type", "twist_stamped", "--no-sim")
+    try:
+        got = peer.collect(TwistStamped, "/cmd_vel_measured")
+        pub = peer.node.create_publisher(String, "/stamped_cmd_vel", 10)
+        wait_matched(pub)
+        pub.publish(String(data=envelope.build(0.15, -0.2, seq=7)))
+        assert wait_for(lambda: len(got) >= 1, 5)
+        msg = got[0]
+        assert (msg.twist.linear.x, msg.twist.angular.z) == (0.15, -0.2)
+        assert msg.header.frame_id == "base_link"
+        rec = get_json(f"{backend.api}/api/latency")["records"][0]
+        stamp = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
+        # the tracker's receive time: after the send stamp by the recorded latency (ms), within 1 ms
+        send_s = json.loads(envelope.build(0.15, -0.2, seq=7))["header"]["stamp"] / 1000.0
+        assert send_s - 5.0 < stamp < send_s + 5.0
+        assert abs(stamp - rec["timestamp"]) < 0.5
+    finally:
+        backend.stop()
+
+
+def test_roslibpy_through_our_endpoint_relays_any_installed_type(peer):
+    backend = ros_backend()
+    ros = roslibpy.Ros("127.0.0.1", backend.bridge_port)
+    ros.run(timeout=10)
+    try:
+        reports, odom, poses = [], [], []
+        roslibpy.Topic(ros, "/latency_report", "std_msgs/String").subscribe(
+            lambda m: reports.append(json.loads(m["data"]))
+        )
+        roslibpy.Topic(ros, "/odom", "nav_msgs/msg/Odometry").subscribe(odom.append)
+        # a type our embedded bus has no table for, published by rclpy in this process
+        roslibpy.Topic(ros, "/arbiter_test/goal", "geometry_msgs/PoseStamped").subscribe(poses.append)
+        assert wait_for(lambda: len(odom) > 2, 10)
+        goal_pub = peer.node.create_publisher(PoseStamped, "/arbiter_test/goal", 10)
+        wait_matched(goal_pub)
+        goal = PoseStamped()
+        goal.header.frame_id = "map"
+        goal.pose.position.x, goal.pose.orientation.w = 2.5, 1.0
+        goal_pub.publish(goal)
+        assert wait_for(lambda: len(poses) == 1, 5)
+        assert poses[0]["header"]["frame_id"] == "map"
+        assert poses[0]["pose"]["position"] == {"x": 2.5, "y": 0.0, "z": 0.0}
+
+        # and the other way: roslibpy -> our endpoint -> DDS -> an rclpy subscriber
+        back = peer.collect(PoseStamped, "/arbiter_test/from_ws", lambda m: m.pose.position.y)
+        out = roslibpy.Topic(ros, "/arbiter_test/from_ws", "geometry_msgs/msg/PoseStamped")
+        out.advertise()
+        assert wait_for(lambda: peer.matched("/arbiter_test/from_ws") > 0, 10)
+        out.publish(roslibpy.Message({"pose": {"position": {"y": -1.25}}}))
+        assert wait_for(lambda: back == [-1.25], 5)
+
+        # stamped commands through the relay reach the tracker node
+        cmd = roslibpy.Topic(ros, "/stamped_cmd_vel", "std_msgs/String")
+        cmd.advertise()
+        # the relay's publisher and the tracker's subscription share the backend's DDS participant:
+        # once a peer has discovered the publisher, the tracker has matched it too
+        assert wait_for(lambda: peer.node.count_publishers("/stamped_cmd_vel") > 0, 10)
+        for i in range(10):
+            cmd.publish(roslibpy.Message({"data": envelope.build(0.2, 0.0, seq=i)}))
+            time.sleep(0.02)
+        assert wait_for(lambda: len(reports) >= 10, 5)
+        assert [r["seq"] for r in reports] == list(range(10))
+
+        # the rosapi service lists the real graph
+        svc = roslibpy.Service(ros, "/rosapi/topics", "rosapi/Topics")
+        listing = svc.call(roslibpy.ServiceRequest({}), timeout=5)
+        pairs = dict(zip(listing["topics"], listing["types"], strict=True))
+        assert pairs["/odom"] == "nav_msgs/msg/Odometry"
+        assert pairs["/arbiter_test/goal"] == "geometry_msgs/msg/PoseStamped"
+    finally:
+        ros.close()
+        backend.stop()
+
+
+def test_bad_types_and_messages_get_status_errors_in_ros_mode():
+    import asyncio
+
+    import aiohttp
+
+    backend = ros_backend("--no-sim")
+
+    async def run():
+        async with aiohttp.ClientSession() as s, s.ws_connect(f"ws://127.0.0.1:{backend.bridge_port}") as ws:
+            frames = [
+                {"op": "advertise", "id": "a", "topic": "/x", "type": "no_such_pkg/Thing"},
+                {"op": "advertise", "id": "b", "topic": "/y", "type": "geometry_msgs/Twist"},
+                {"op": "publish", "id": "c", "topic": "/y", "msg": {"linear": {"x": "fast"}}},
+                {"op": "publish", "id": "d", "topic": "/y", "msg": {"linear": {"q": 1}}},
+                {"op": "subscribe", "id": "e", "topic": "/y", "type": "std_msgs/String"},
+            ]
+            for f in frames:
+                await ws.send_str(json.dumps(f))
+            errors = {}
+            for _ in frames[:1] + frames[2:]:
+                reply = json.loads((await ws.receive(timeout=5)).data)
+                assert reply["op"] == "status" and reply["level"] == "error"
+                errors[reply["id"]] = reply["msg"]
+            return errors
+
+    try:
+        errors = asyncio.run(run())
+        assert "not installed" in errors["a"]
+        assert "linear.x must be a number" in errors["c"]
+        assert "unknown field 'q'" in errors["d"]
+        assert "has type geometry_msgs/msg/Twist" in errors["e"]
+        assert get_json(f"{backend.api}/api/health")["status"] == "ok"
+    finally:
+        backend.stop()
+
+
+def test_bad_ros_parameters_are_one_line_errors():
+    import subprocess
+    import sys
+
+    for ros_args, expect in (
+        (["-p", "cmd_timeout:=-1.0"], "cmd_timeout must be positive"),
+        (["-p", "measured_type:=bogus"], "measured_type must be one of"),
+    ):
+        r = subprocess.run(
+            [
+                sys.executable,
+                "-m",
+                "arbiter_backend.cli",
+                "--transport",
+                "ros",
+                "--api-port",
+                "0",
+                "--bridge-port",
+                "0",
+                "--ros-args",
+                *ros_args,
+            ],
+            capture_output=True,
+            text=True,
+            timeout=30,
+        )
+        assert r.returncode == 2, r.stderr
+        assert expect in r.stderr and "Traceback" not in r.stderr
+    r = subprocess.run(
+        [sys.executable, "-m", "arbiter_backend.cli", "--ros-args", "-p", "x:=1"],
+        capture_output=True,
+        text=True,
+        timeout=30,
+    )
+    assert r.returncode == 2 and "--ros-args needs --transport ros" in r.stderr
+
+
+async def test_tui_in_embedded_ros_mode_drives_the_robot(tmp_path):
+    backend = EmbeddedBackend.start(0, 0, transport="ros", timeout=30)
+    link = RosLink("127.0.0.1", backend.bridge_port)
+    tracker = TrackerClient(f"http://127.0.0.1:{backend.api_port}")
+    store = AnalyticsStore()
+    settings = Settings(handle_signals=False, export_dir=tmp_path, collection_rate=20.0)
+    app = make_app(settings, link, tracker, store=store)
+    api = f"http://127.0.0.1:{backend.api_port}"
+    try:
+        async with app.run_test(size=(100, 30)) as pilot:
+
+            async def until(pred, timeout=10.0):
+                deadline = time.monotonic() + timeout
+                while time.monotonic() < deadline and not pred():
+                    await pilot.pause(0.05)
+                return pred()
+
+            assert await until(lambda: link.state == CONNECTED)
+            assert await until(lambda: link.telemetry.odom_count > 0)
+            # DDS discovery between the relay and the tracker node: stop (a zero) until one is reported
+            for _ in range(40):
+                await pilot.press("k")
+                if await until(lambda: link.telemetry.reports > 0, timeout=0.25):
+                    break
+            assert link.telemetry.reports > 0
+            store.start_collection()
+            for _ in range(15):
+                await pilot.press("i")
+                await pilot.pause(0.05)
+            assert await until(lambda: link.telemetry.pose.x > 0.1)
+            assert await until(lambda: link.telemetry.reports >= 10)
+            body = get_json(f"{api}/api/latency?limit=1000")
+            assert body["stats"]["count"] >= 10
+            assert all(r["linear_x"] in (0.5, 0.0) for r in body["records"])
+            assert await until(lambda: link.telemetry.v == 0.0, timeout=3)
+            await pilot.press("3")
+            assert await until(lambda: tracker.view.reachable and tracker.view.stats["count"] >= 10)
+            assert any(p.latencyMs is not None for p in store.points())
+            await pilot.press("ctrl+q")
+    finally:
+        link.close()
+        backend.stop()

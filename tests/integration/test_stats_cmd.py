@@ -1,0 +1,100 @@
+"""``arbiter-tui stats FILE`` as a user runs it: a real subprocess on real files."""
+
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+
+from arbiter_tui.analytics.exports import to_csv, to_json
+from arbiter_tui.analytics.store import STATS_FIELDS, stats_of_points
+
+from ..support.points import random_points
+
+HEADER = b"timestamp,x,y,theta,linearVel,angularVel,distanceError,headingError,algorithm,latencyMs\n"
+
+
+def run(*args):
+    return subprocess.run(
+        [sys.executable, "-m", "arbiter_tui.cli", "stats", *map(str, args)],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+
+
+@pytest.mark.parametrize("fmt", ["csv", "json"])
+def test_stats_json_matches_the_store(tmp_path, fmt):
+    pts = random_points(40, seed=9)
+    f = tmp_path / f"export.{fmt}"
+    f.write_text(to_csv(pts) if fmt == "csv" else to_json(pts))
+    r = run(f, "--json")
+    assert r.returncode == 0, r.stderr
+    got = json.loads(r.stdout)
+    want = stats_of_points(pts).as_dict()
+    assert list(got) == list(STATS_FIELDS)
+    for k in want:
+        assert got[k] == pytest.approx(want[k], rel=1e-12)
+
+
+def test_stats_table_lists_nine_lines(tmp_path):
+    f = tmp_path / "e.csv"
+    f.write_text(to_csv(random_points(5)))
+    r = run(f)
+    assert r.returncode == 0
+    lines = r.stdout.strip().splitlines()
+    assert [ln.split()[0] for ln in lines] == list(STATS_FIELDS)
+    assert lines[0].split()[1] == "5"
+
+
+@pytest.mark.parametrize(
+    "content",
+    [
+        b"",
+        b"\x00\xff\xfe binary",
+        b"hello,world\n1,2\n",
+        b'{"dataPoints": [1]}',
+        b"{oops",
+        HEADER + b"1,nan,0,0,0,0,0,0,manual,\n",
+        HEADER + b"1,1e999,0,0,0,0,0,0,manual,\n",
+        HEADER + b"1,0,0\n",
+        HEADER + b"1,0,0,0,0,0,0,0,manual,,extra\n",
+        b'{"dataPoints": [{"timestamp": "x"}]}',
+        b'{"dataPoints": [{"timestamp": 1, "x": NaN}]}',
+        b'{"a":' * 100_000,
+        b"[1, 2]",
+    ],
+    ids=lambda content: repr(content[:24]),
+)
+def test_bad_files_get_one_line_errors(tmp_path, content):
+    f = tmp_path / "bad"
+    f.write_bytes(content)
+    r = run(f)
+    assert r.returncode == 1
+    assert "Traceback" not in r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1
+    assert r.stderr.startswith("arbiter-tui stats: ")
+
+
+def test_missing_file_directory_and_fifo(tmp_path):
+    fifo = tmp_path / "fifo.csv"
+    os.mkfifo(fifo)  # reading it would block forever
+    for target in (tmp_path / "missing.csv", tmp_path, fifo):
+        r = run(target)
+        assert r.returncode == 1
+        assert "Traceback" not in r.stderr and len(r.stderr.strip().splitlines()) == 1
+
+
+def test_a_bad_flag_is_one_line_on_stderr_from_the_real_entry_point():
+    """The in-process cases are in tests/unit/test_cli_args.py; this one runs the installed module."""
+    r = subprocess.run(
+        [sys.executable, "-m", "arbiter_tui.cli", "--key-timeout", "0"],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert r.returncode == 2
+    assert "Traceback" not in r.stderr
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("arbiter-tui"), r.stderr

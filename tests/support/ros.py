@@ -1,0 +1,78 @@
+"""An rclpy peer for the ROS-mode tests: its own context and domain, spun in a thread.
+
+The tests run on a random ROS domain with discovery limited to this host, so
+concurrent runs on one machine never see each other's topics.
+"""
+
+import contextlib
+import os
+import random
+import threading
+
+import pytest
+
+try:
+    import rclpy
+
+    # re-exported for the tests, so that a missing ROS skips (or fails) here, in one place
+    from geometry_msgs.msg import PoseStamped, Twist, TwistStamped  # noqa: F401
+    from nav_msgs.msg import Odometry  # noqa: F401
+    from rclpy.context import Context
+    from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+    from rclpy.qos import DurabilityPolicy, ReliabilityPolicy  # noqa: F401
+    from std_msgs.msg import String  # noqa: F401
+except ImportError as exc:  # pragma: no cover - depends on the install
+    if os.environ.get("ARBITER_REQUIRE_ROS"):
+        raise RuntimeError(f"ARBITER_REQUIRE_ROS is set but rclpy is not importable: {exc}") from exc
+    pytest.skip(
+        f"rclpy not importable ({exc}): pip install -e '.[ros]' or source a ROS 2 install",
+        allow_module_level=True,
+    )
+
+DOMAIN = random.Random(os.getpid()).randint(1, 100)
+
+
+def use_test_domain():
+    """Generator for a module-scoped autouse fixture: this run's domain, discovery on this host only."""
+    saved = {k: os.environ.get(k) for k in ("ROS_DOMAIN_ID", "ROS_AUTOMATIC_DISCOVERY_RANGE")}
+    os.environ["ROS_DOMAIN_ID"] = str(DOMAIN)
+    os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    yield DOMAIN
+    for k, v in saved.items():
+        if v is None:
+            os.environ.pop(k, None)
+        else:
+            os.environ[k] = v
+
+
+class Peer:
+    def __init__(self, name: str = "arbiter_test_peer") -> None:
+        self.context = Context()
+        rclpy.init(context=self.context, domain_id=DOMAIN)
+        self.node = rclpy.create_node(name, context=self.context)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+        self.subscriptions: dict = {}
+        self.thread = threading.Thread(target=self._spin, daemon=True)
+        self.thread.start()
+
+    def _spin(self) -> None:
+        with contextlib.suppress(ExternalShutdownException):
+            self.executor.spin()
+
+    def collect(self, msg_type, topic: str, convert=lambda m: m) -> list:
+        got: list = []
+        self.subscriptions[topic] = self.node.create_subscription(
+            msg_type, topic, lambda m: got.append(convert(m)), 10
+        )
+        return got
+
+    def matched(self, topic: str) -> int:
+        """Publishers matched to the subscription ``collect`` made on ``topic`` (DDS discovery done)."""
+        return self.subscriptions[topic].get_publisher_count()
+
+    def close(self) -> None:
+        self.executor.shutdown(timeout_sec=2)
+        self.thread.join(2)
+        self.node.destroy_node()
+        self.context.try_shutdown()

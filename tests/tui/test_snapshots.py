@@ -1,0 +1,39 @@
+"""Snapshots of every screen at fixed sizes with deterministic data (no timers, no clock on screen)."""
+
+import pytest
+
+from arbiter_tui.link.base import RECONNECTING
+
+from ..support.tui import RecordingLink, still_app
+
+SIZES = [(100, 30), (80, 24)]
+
+
+@pytest.mark.parametrize("size", SIZES, ids=["100x30", "80x24"])
+@pytest.mark.parametrize(
+    "keys", [[], ["2"], ["3"], ["question_mark"]], ids=["control", "analytics", "latency", "help"]
+)
+def test_screen(snap_compare, size, keys):
+    assert snap_compare(still_app(), terminal_size=size, press=keys)
+
+
+def test_latency_screen_when_tracker_unreachable(snap_compare):
+    app = still_app(tracker_view=False)
+    app.tracker.view.fail("ConnectError")
+    assert snap_compare(app, terminal_size=(100, 30), press=["3"])
+
+
+@pytest.mark.parametrize("keys", [[], ["3"]], ids=["control", "latency"])
+def test_link_down_is_shown_on_each_screen(snap_compare, keys):
+    """The rosbridge link lost: red status line, a banner on the control screen, the latency
+    screen says this console's figures have stopped (the tracker's are still shown)."""
+    app = still_app(link=RecordingLink(state=RECONNECTING))
+    assert snap_compare(app, terminal_size=(100, 30), press=keys)
+
+
+def test_client_side_simulation_shows_latency_na(snap_compare):
+    assert snap_compare(still_app(mode="sim"), terminal_size=(100, 30), press=["3"])
+
+
+def test_terminal_too_small(snap_compare):
+    assert snap_compare(still_app(), terminal_size=(60, 20))

@@ -1,0 +1,193 @@
+import csv
+import io
+import json
+import math
+import os
+import stat
+
+import pytest
+
+from arbiter_tui.analytics.exports import (
+    CSV_HEADER,
+    MCAP_POINT_TOPIC,
+    MCAP_STATS_TOPIC,
+    ExportFormatError,
+    js_number,
+    parse_csv,
+    parse_json,
+    to_csv,
+    to_json,
+    to_mcap,
+)
+from arbiter_tui.analytics.files import ExportError, export_store, load_points, write_new_file
+from arbiter_tui.analytics.store import FIELDS, AnalyticsStore, DataPoint, stats_of_points
+
+from ..support.points import random_points
+
+
+def test_csv_header_is_exactly_the_seeds():
+    assert (
+        CSV_HEADER
+        == "timestamp,x,y,theta,linearVel,angularVel,distanceError,headingError,algorithm,latencyMs"
+    )
+    assert to_csv([]).splitlines()[0] == CSV_HEADER
+
+
+def test_js_number_formatting():
+    assert js_number(1712345678901.0) == "1712345678901"
+    assert js_number(0.1) == "0.1"
+    assert js_number(-2.5) == "-2.5"
+    assert js_number(1e-7) == "1e-7"
+    assert js_number(None) == ""
+    with pytest.raises(ValueError):
+        js_number(math.nan)
+
+
+def test_csv_round_trip_through_the_csv_module():
+    pts = random_points(50, seed=3)
+    text = to_csv(pts)
+    rows = list(csv.DictReader(io.StringIO(text)))
+    assert len(rows) == 50
+    assert list(rows[0]) == list(FIELDS)
+    for p, row in zip(pts, rows, strict=False):
+        assert float(row["x"]) == p.x
+        assert row["algorithm"] == p.algorithm
+        assert (row["latencyMs"] == "") == (p.latencyMs is None)
+    assert parse_csv(text) == pts
+
+
+def test_json_is_strict_and_round_trips():
+    pts = random_points(30, seed=4)
+    text = to_json(pts)
+    assert "NaN" not in text and "Infinity" not in text
+    doc = json.loads(text)
+    assert set(doc) == {"dataPoints", "stats"}
+    assert list(doc["dataPoints"][0]) == list(FIELDS)
+    assert doc["stats"] == stats_of_points(pts).as_dict()
+    assert parse_json(text) == pts
+
+
+def test_mcap_reads_back_with_the_mcap_reader():
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+
+    pts = random_points(20, seed=5)
+    data = to_mcap(pts)
+    reader = make_reader(io.BytesIO(data), decoder_factories=[DecoderFactory()])
+    summary = reader.get_summary()
+    assert {c.topic for c in summary.channels.values()} == {MCAP_POINT_TOPIC, MCAP_STATS_TOPIC}
+    msgs = list(reader.iter_decoded_messages())
+    points = [m for m in msgs if m.channel.topic == MCAP_POINT_TOPIC]
+    assert len(points) == 20
+    for p, (_schema, _channel, message, decoded) in zip(pts, points, strict=False):
+        assert decoded.x == p.x and decoded.distance_error == p.distanceError
+        assert decoded.algorithm == p.algorithm
+        assert decoded.has_latency == (p.latencyMs is not None)
+        assert message.log_time == int(p.timestamp * 1_000_000)
+    stats = next(d for _s, c, _m, d in msgs if c.topic == MCAP_STATS_TOPIC)
+    assert stats.sample_count == 20
+    assert stats.p95_error == stats_of_points(pts).p95Error
+
+
+def test_mcap_refuses_invalid_points_before_writing():
+    bad = DataPoint(0, 0, 0, 0, 0, 0, 0, 0, "manual", None)
+    object.__setattr__(bad, "x", math.nan)
+    with pytest.raises(ValueError):
+        to_mcap([bad])
+
+
+def test_write_new_file_never_overwrites(tmp_path):
+    a = write_new_file(tmp_path, "arbiter_analytics_1", "csv", b"one")
+    b = write_new_file(tmp_path, "arbiter_analytics_1", "csv", b"two")
+    assert a.name == "arbiter_analytics_1.csv" and b.name == "arbiter_analytics_1_1.csv"
+    assert a.read_bytes() == b"one" and b.read_bytes() == b"two"
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "arbiter_analytics_1.csv",
+        "arbiter_analytics_1_1.csv",
+    ]
+
+
+@pytest.mark.parametrize("fmt", ["csv", "json", "mcap"])
+def test_export_store_names_and_contents(tmp_path, fmt):
+    s = AnalyticsStore()
+    s.start_collection()
+    pts = random_points(10, seed=6)
+    for p in pts:
+        s.record(p)
+    path = export_store(s, fmt, tmp_path, clock_ms=lambda: 1712345678901)
+    assert path.name == f"arbiter_analytics_1712345678901.{fmt}"
+    if fmt != "mcap":
+        assert load_points(path) == pts
+    assert len(s) == 10
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root ignores directory permissions")
+def test_unwritable_directory_is_a_clear_error(tmp_path):
+    d = tmp_path / "ro"
+    d.mkdir()
+    d.chmod(stat.S_IRUSR | stat.S_IXUSR)
+    s = AnalyticsStore()
+    with pytest.raises(ExportError):
+        export_store(s, "csv", d)
+
+
+def test_missing_directory_is_a_clear_error_and_leaves_nothing(tmp_path):
+    s = AnalyticsStore()
+    with pytest.raises(ExportError, match="does not exist"):
+        export_store(s, "json", tmp_path / "nope")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_full_disk_leaves_no_partial_file(tmp_path, monkeypatch):
+    import arbiter_tui.analytics.files as files
+
+    real_fdopen = os.fdopen
+
+    class FullFile(io.RawIOBase):
+        def __init__(self, fh):
+            self.fh = fh
+
+        def write(self, b):
+            raise OSError(28, "No space left on device")
+
+        def __enter__(self):
+            return self
+
+        def __exit__(self, *a):
+            self.fh.close()
+
+    monkeypatch.setattr(files.os, "fdopen", lambda fd, mode: FullFile(real_fdopen(fd, mode)))
+    s = AnalyticsStore()
+    s.start_collection()
+    s.record(random_points(1)[0])
+    with pytest.raises(ExportError, match="No space left"):
+        export_store(s, "csv", tmp_path)
+    assert list(tmp_path.iterdir()) == []
+    assert len(s) == 1
+
+
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        ("", "empty"),
+        ("a,b,c\n1,2,3\n", "header"),
+        (CSV_HEADER + "\n1,2,3\n", "columns"),
+        (CSV_HEADER + "\n1,2,3,4,5,6,7,8,manual,zz\n", "not a number"),
+        (CSV_HEADER + "\n1,2,3,4,5,6,7,nan,manual,1\n", "not finite"),
+        ('{"dataPoints": 5}', "dataPoints"),
+        ('{"dataPoints": [{"x": 1}]}', "missing field"),
+        ('{"dataPoints": [], "stats": NaN}', "non-standard"),
+        ("{broken", "invalid JSON"),
+    ],
+)
+def test_bad_exports_are_format_errors(tmp_path, content, message):
+    f = tmp_path / "bad.txt"
+    f.write_text(content)
+    with pytest.raises(ExportFormatError, match=message):
+        load_points(f)
+
+
+def test_unwritable_directory_even_for_root():
+    s = AnalyticsStore()
+    with pytest.raises(ExportError, match="cannot write"):
+        export_store(s, "csv", "/proc")
