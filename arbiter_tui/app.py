@@ -1,4 +1,10 @@
-"""The Textual app: three modes (control, analytics, latency) over one store, one link, one poller."""
+"""The Textual app: three modes (control, analytics, latency) over one store, one link, one poller.
+
+Data reaches the screens as frozen snapshots in the app's reactive attributes (``views.py``), sampled
+at the UI rate from sources written on other threads; events are past-tense messages
+(``messages.py``). The first frame is painted at once: the link (and the embedded backend) start in a
+worker while the status line says ``STARTING``.
+"""
 
 from __future__ import annotations
 
@@ -11,9 +17,10 @@ import threading
 import time
 from collections.abc import Callable, Iterable
 
-from textual import events
-from textual.app import App, ScreenStackError, SystemCommand
+from textual import events, on, work
+from textual.app import App, SystemCommand
 from textual.binding import Binding
+from textual.reactive import var
 from textual.screen import Screen
 
 from .analytics.files import ExportError, export_store
@@ -21,30 +28,72 @@ from .analytics.store import STORE, AnalyticsStore
 from .control.loop import ControlLoop
 from .control.teleop import Teleop
 from .latency.tracker_client import LatencyView, TrackerClient
-from .link.base import DISCONNECTED, RECONNECTING, Link
+from .link.base import DISCONNECTED, RECONNECTING, STARTING, Link, PendingLink
 from .link.sim import SimLink
+from .messages import (
+    BackendFailed,
+    BackendStarted,
+    DataCleared,
+    ExportFailed,
+    ExportResult,
+    ExportWritten,
+    LatencyPolled,
+    LinkStateChanged,
+    RunFinished,
+)
 from .screens.analytics import AnalyticsScreen
 from .screens.control import ControlScreen
 from .screens.help import HelpScreen
 from .screens.latency import LatencyScreen
 from .settings import SIM, Settings
+from .views import (
+    AnalyticsView,
+    LatencySnapshot,
+    MapView,
+    RobotView,
+    StatusView,
+    analytics_view,
+    latency_snapshot,
+    map_view,
+    robot_view,
+    status_view,
+)
 
 log = logging.getLogger(__name__)
 EXIT_DEADLINE_S = 2.0  # after SIGHUP/SIGTERM the process is gone by then, whatever the terminal does
+FORMATS = ("csv", "json", "mcap")
+
+Connector = Callable[[], tuple[Link, "TrackerClient | None", Callable[[], None]]]
 
 
 class ArbiterApp(App[None]):
+    """The console: three modes (control, analytics, latency) over one link, one analytics store (the
+    seed's singleton), one control loop and one tracker poller. The link, poller, store and clock are
+    injected (:func:`make_app`), or the link is made by a ``connector`` in a worker after the first
+    frame. Every way out (quit, signal, focus loss, a terminal too small) stops the robot first; an
+    autonomous run keeps driving while another screen is shown, and space or k stop it anywhere."""
+
     TITLE = "arbiter-tui"
     MODES = {"control": ControlScreen, "analytics": AnalyticsScreen, "latency": LatencyScreen}
     DEFAULT_MODE = "control"
     BINDINGS = [
         Binding("ctrl+c", "stop_and_quit", "Quit", priority=True, show=False),
         Binding("ctrl+q", "stop_and_quit", "Quit", priority=True),
-        Binding("1", "mode('control')", "Control"),
-        Binding("2", "mode('analytics')", "Analytics"),
-        Binding("3", "mode('latency')", "Latency"),
+        # short labels: the footer fits in 80 columns on every screen (full names in ? help and ctrl+p)
+        Binding("1", "mode('control')", "Drive", tooltip="The control screen"),
+        Binding("2", "mode('analytics')", "Stats", tooltip="The analytics screen"),
+        Binding("3", "mode('latency')", "Latency", tooltip="The latency screen"),
+        Binding("space", "stop", "Stop"),
+        Binding("k", "stop", "Stop", show=False),
         Binding("question_mark", "help", "Help"),
     ]
+
+    # What the widgets show: replaced (never mutated) at the UI rate; equal values notify nobody.
+    status: var[StatusView] = var(StatusView)
+    robot: var[RobotView] = var(RobotView)
+    trajectory: var[MapView] = var(MapView)
+    analytics: var[AnalyticsView] = var(AnalyticsView)
+    latency: var[LatencySnapshot] = var(LatencySnapshot)
 
     def __init__(
         self,
@@ -53,7 +102,7 @@ class ArbiterApp(App[None]):
         tracker: TrackerClient | None = None,
         store: AnalyticsStore = STORE,
         clock: Callable[[], float] = time.monotonic,
-        on_exit: Callable[[], None] | None = None,
+        connector: Connector | None = None,
     ) -> None:
         super().__init__()
         self.settings = settings
@@ -61,30 +110,70 @@ class ArbiterApp(App[None]):
         self.tracker = tracker
         self.store = store
         self.clock = clock
-        self._on_exit = on_exit
+        self._connector = connector
+        self._cleanup: Callable[[], None] | None = None
         self.teleop = Teleop(speed=settings.speed, turn=settings.turn, key_timeout=settings.key_timeout)
         self.loop = ControlLoop(link, store, self.teleop)
-        self.export_message: str | None = None
+        self.last_export: ExportResult | None = None
         self.stop_reason: str | None = None
+        self.start_error: str | None = None
+        self.too_small = False
+        self._link_state: str | None = None
+        self._was_running = False
         store.collection_rate = settings.collection_rate
         if store.max_data_points != settings.max_points:
             store.max_data_points = settings.max_points
 
     # -- lifecycle -------------------------------------------------------------------------
     def on_mount(self) -> None:
+        self.publish_views()
         if self.settings.live:
             self.set_interval(1.0 / self.settings.repeat_rate, self._control_tick)
             self.set_interval(1.0 / self.store.collection_rate, self._sample)
-            self.set_interval(1.0 / self.settings.ui_rate, self._redraw)
+            self.set_interval(1.0 / self.settings.ui_rate, self.publish_views)
             if isinstance(self.link, SimLink):
                 self.set_interval(1.0 / 50.0, self.link.step)
-            if self.tracker is not None:
-                self.run_worker(self._poll_forever(), name="tracker-poll", group="poll", exclusive=True)
+            if self._connector is not None:
+                self._connect()
+            elif self.tracker is not None:
+                self._poll_forever()
         if self.settings.handle_signals:
             loop = asyncio.get_running_loop()
             for sig in (signal.SIGHUP, signal.SIGTERM):
                 with contextlib.suppress(NotImplementedError, RuntimeError, ValueError):
                     loop.add_signal_handler(sig, self._on_signal, sig)
+
+    @work(thread=True, exclusive=True, group="connect", exit_on_error=False)
+    def _connect(self) -> None:
+        """Start the embedded backend (when there is one) and the link, after the first frame."""
+        assert self._connector is not None
+        try:
+            link, tracker, cleanup = self._connector()
+        except Exception as exc:  # a one-line reason on screen, never a traceback
+            log.exception("starting the link failed")
+            self.post_message(BackendFailed(str(exc) or type(exc).__name__))
+            return
+        if not self.is_running:  # the user quit while it was starting
+            link.close()
+            cleanup()
+            return
+        self.post_message(BackendStarted(link, tracker, cleanup))
+
+    @on(BackendStarted)
+    def _attach(self, event: BackendStarted) -> None:
+        self.link = event.link
+        self.loop.link = event.link
+        self.tracker = event.tracker
+        self._cleanup = event.cleanup
+        if self.tracker is not None and self.settings.live:
+            self._poll_forever()
+        self.publish_views()
+
+    @on(BackendFailed)
+    def _start_failed(self, event: BackendFailed) -> None:
+        self.start_error = event.error
+        self.notify(f"could not start: {event.error}", severity="error", timeout=30)
+        self.publish_views()
 
     def _on_signal(self, sig: int) -> None:
         self.stop_robot(f"signal {signal.Signals(sig).name}")
@@ -96,13 +185,21 @@ class ArbiterApp(App[None]):
         watchdog.start()
         self.exit()
 
+    @work(exclusive=True, group="poll")
     async def _poll_forever(self) -> None:
-        assert self.tracker is not None
+        tracker = self.tracker
+        assert tracker is not None
         period = self.settings.poll_period
         while True:
             started = time.monotonic()
-            await self.tracker.poll()
+            await tracker.poll()
+            self.post_message(LatencyPolled())
             await asyncio.sleep(max(0.0, period - (time.monotonic() - started)))
+
+    @on(LatencyPolled)
+    def _polled(self) -> None:
+        self.latency = self._latency_snapshot()
+        self.status = self._status_view()
 
     def _control_tick(self) -> None:
         try:
@@ -110,6 +207,10 @@ class ArbiterApp(App[None]):
             self.loop.tick_control(self.clock())
         except Exception:  # a failing link must not take the console (and its stop keys) down
             log.exception("control tick failed")
+        running = self.loop.running
+        if self._was_running and not running and self.loop.mission.done:
+            self.post_message(RunFinished(self.loop.algorithm, self.loop.mission_name))
+        self._was_running = running
 
     def _sample(self) -> None:
         try:
@@ -117,24 +218,68 @@ class ArbiterApp(App[None]):
         except Exception:
             log.exception("sampling failed")
 
-    def _redraw(self) -> None:
-        try:
-            screen = self.screen
-        except ScreenStackError:  # mid mode-switch the new mode's stack is briefly empty: skip this frame
-            return
-        refresh = getattr(screen, "refresh_view", None)
-        if refresh is None:
-            return
-        try:
-            refresh()
-        except Exception:
-            log.exception("redraw failed")
-
     async def on_unmount(self) -> None:
         self.stop_robot("quit")
         if self.tracker is not None:
             with contextlib.suppress(Exception):
                 await self.tracker.aclose()
+
+    def close_link(self) -> None:
+        """After the app has exited: close the link and stop what the connector started."""
+        with contextlib.suppress(Exception):
+            self.link.close()
+        if self._cleanup is not None:
+            self._cleanup()
+
+    # -- views -----------------------------------------------------------------------------------
+    def publish_views(self) -> None:
+        """Sample every source into snapshots; only what the current screen shows is computed."""
+        state = self.link.state
+        if self._link_state is not None and state != self._link_state:
+            self.post_message(LinkStateChanged(self._link_state, state))
+        self._link_state = state
+        self.status = self._status_view()
+        mode = self.current_mode
+        if mode == "control":
+            self.robot = robot_view(self.link, self.loop, self.too_small)
+            self.trajectory = map_view(self.link, self.loop, self.trajectory)
+        elif mode == "analytics":
+            self.analytics = analytics_view(self.store, self.analytics)
+        elif mode == "latency":
+            self.latency = self._latency_snapshot()
+
+    def _status_view(self) -> StatusView:
+        return status_view(
+            self.link, self.target(), self.loop, self.store, self.latency_view(),
+            self.settings.mode == SIM, self.start_error,
+        )  # fmt: skip
+
+    def _latency_snapshot(self) -> LatencySnapshot:
+        return latency_snapshot(
+            self.latency_view(), self.link, self.settings.offset_warn_ms, self.settings.mode == SIM
+        )
+
+    def target(self) -> str:
+        """What the console talks to, for the status line."""
+        s = self.settings
+        if s.mode == SIM:
+            return ""  # the link state already says SIMULATED
+        if s.mode == "embedded":
+            transport = " ros" if s.transport == "ros" else ""
+            if self.link.state == STARTING:
+                return f"embedded{transport}"
+            bridge = s.rosbridge_url.rsplit(":", 1)[-1]
+            api = (s.tracker_url or "").rsplit(":", 1)[-1]
+            return f"embedded{transport} {bridge}/{api}"
+        return f"connect {s.rosbridge_url}"
+
+    @on(LinkStateChanged)
+    def _link_changed(self, event: LinkStateChanged) -> None:
+        log.info("link %s -> %s", event.old, event.new)
+
+    @on(RunFinished)
+    def _run_finished(self, event: RunFinished) -> None:
+        self.notify(f"{event.algorithm} finished the {event.mission} mission", timeout=4)
 
     # -- safety ------------------------------------------------------------------------------
     def stop_robot(self, reason: str) -> None:
@@ -143,12 +288,30 @@ class ArbiterApp(App[None]):
         self.loop.stop()
         with contextlib.suppress(Exception):
             self.loop.tick_control(self.clock())
+        self._was_running = False
+
+    def end_manual_hold(self, reason: str) -> None:
+        """A held teleop key ends now (one zero); an autonomous run is left driving."""
+        if self.teleop.moving:
+            self.stop_reason = reason
+            self.teleop.stop()
+            with contextlib.suppress(Exception):
+                self.loop.tick_control(self.clock())
+
+    def set_too_small(self, small: bool) -> None:
+        """While the terminal is too small to show the console, the robot stands still."""
+        if small and not self.too_small:
+            self.stop_robot("terminal too small")
+        self.too_small = small
+        self.publish_views()
 
     def on_app_blur(self, event: events.AppBlur) -> None:
         self.stop_robot("terminal lost focus")
 
     def teleop_key(self, key: str) -> bool:
         """A key pressed on the control screen; True if teleop used it."""
+        if self.too_small:
+            return key in self.teleop_keys()  # swallowed: nothing moves unseen
         if self.loop.running and key in ("k", " ", "space"):
             self.loop.stop()
         was_manual = self.loop.algorithm == "manual"
@@ -162,7 +325,14 @@ class ArbiterApp(App[None]):
         if result == "move":
             self.loop.running = False
             self._control_tick()  # respond to the first press at once, not at the next tick
+        self.publish_views()
         return True
+
+    @staticmethod
+    def teleop_keys() -> frozenset[str]:
+        from .control.teleop import MOVE_KEYS, SCALE_KEYS
+
+        return frozenset(MOVE_KEYS) | frozenset(SCALE_KEYS)
 
     def get_system_commands(self, screen: Screen[object]) -> Iterable[SystemCommand]:
         yield from super().get_system_commands(screen)
@@ -171,8 +341,9 @@ class ArbiterApp(App[None]):
                 f"Screen: {name}", f"Switch to the {name} screen", lambda n=name: self.action_mode(n)
             )
         yield SystemCommand("Stop the robot", "Zero velocity now", lambda: self.stop_robot("palette"))
-        yield SystemCommand("Start/stop collection", "Toggle analytics collection", self.toggle_collection)
-        for fmt in ("csv", "json", "mcap"):
+        yield SystemCommand("Start/pause collection", "Toggle analytics collection", self.toggle_collection)
+        yield SystemCommand("Clear collected data", "Asks first", self.ask_clear)
+        for fmt in FORMATS:
             yield SystemCommand(
                 f"Export {fmt.upper()}", f"Write the collected data as {fmt}", lambda f=fmt: self.export(f)
             )
@@ -186,6 +357,10 @@ class ArbiterApp(App[None]):
         if not isinstance(self.screen, HelpScreen):
             self.push_screen(HelpScreen())
 
+    def action_stop(self) -> None:
+        self.stop_robot("stop key")
+        self.publish_views()
+
     async def action_stop_and_quit(self) -> None:
         self.stop_robot("quit")
         self.exit()
@@ -195,18 +370,49 @@ class ArbiterApp(App[None]):
             self.store.stop_collection()
         else:
             self.store.start_collection()
-        self._redraw()
+        self.publish_views()
 
-    def export(self, fmt: str) -> str:
+    def ask_clear(self) -> None:
+        from .screens.confirm import ConfirmClear
+
+        n = len(self.store)
+
+        def done(confirmed: bool | None) -> None:
+            if confirmed:
+                self.store.clear()
+                self.post_message(DataCleared(n))
+
+        self.push_screen(ConfirmClear(n), done)
+
+    @on(DataCleared)
+    def _cleared(self, event: DataCleared) -> None:
+        self.notify(f"cleared {event.points} samples", timeout=3)
+        self.publish_views()
+
+    def export(self, fmt: str) -> ExportResult:
+        n = len(self.store)
         try:
             path = export_store(self.store, fmt, self.settings.export_dir)
         except (ExportError, OSError, ValueError) as exc:
-            self.export_message = f"EXPORT FAILED ({fmt}): {exc} — collected data kept"
-            self.notify(self.export_message, severity="error", timeout=6)
+            result = ExportResult(fmt, None, n, str(exc))
+            self.post_message(ExportFailed(result))
         else:
-            self.export_message = f"wrote {path} ({len(self.store)} points)"
-            self.notify(self.export_message, timeout=4)
-        return self.export_message
+            result = ExportResult(fmt, path, n)
+            self.post_message(ExportWritten(result))
+        self.last_export = result
+        return result
+
+    @on(ExportWritten)
+    def _export_written(self, event: ExportWritten) -> None:
+        r = event.result
+        self.notify(f"wrote {r.path} ({r.points} points)", timeout=4)
+
+    @on(ExportFailed)
+    def _export_failed(self, event: ExportFailed) -> None:
+        r = event.result
+        self.notify(
+            f"EXPORT FAILED ({r.fmt}): {r.error} — collected data kept", severity="error", timeout=8
+        )
 
     # -- shared views ------------------------------------------------------------------------------
     def latency_view(self) -> LatencyView | None:
@@ -219,36 +425,19 @@ class ArbiterApp(App[None]):
         return self.link.state in (DISCONNECTED, RECONNECTING)
 
     def status_text(self) -> str:
-        link_state = self.link.state
-        if link_state == RECONNECTING:
-            link_state = "DISCONNECTED (reconnecting)"
-        collecting = f"REC {len(self.store)}" if self.store.is_collecting else f"idle {len(self.store)}"
-        tracker = ""
-        if self.tracker is not None:
-            reach = self.tracker.view.reachable
-            tracker = " · api " + ("?" if reach is None else ("ok" if reach else "UNREACHABLE"))
-        ports = ""
-        if self.settings.mode == "embedded":
-            bridge = self.settings.rosbridge_url.rsplit(":", 1)[-1]
-            api = (self.settings.tracker_url or "").rsplit(":", 1)[-1]
-            ports = f" {bridge}/{api}"
-        return (
-            f"{link_state} · {self.settings.mode}{ports} · deploy {self.deploy_mode()} · "
-            f"{self.loop.algorithm} · {collecting}{tracker}"
-        )
-
-    def deploy_mode(self) -> str:
-        if self.tracker is not None and self.tracker.view.reachable:
-            return self.tracker.view.deploy_mode
-        return self.settings.deploy_mode if self.settings.mode != SIM else "sim"
+        return self._status_view().text()
 
 
 def make_app(
     settings: Settings,
-    link: Link,
+    link: Link | None = None,
     tracker: TrackerClient | None = None,
     store: AnalyticsStore = STORE,
     clock: Callable[[], float] = time.monotonic,
+    connector: Connector | None = None,
 ) -> ArbiterApp:
-    """Build the app for the CLI and for tests alike, with the links injected."""
-    return ArbiterApp(settings, link, tracker=tracker, store=store, clock=clock)
+    """Build the app for the CLI and for tests alike: with a link injected, or a ``connector`` that
+    makes one in a worker once the first frame is on screen."""
+    return ArbiterApp(
+        settings, link or PendingLink(), tracker=tracker, store=store, clock=clock, connector=connector
+    )

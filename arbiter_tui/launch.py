@@ -7,7 +7,9 @@ import logging
 import os
 import sys
 import tempfile
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 from urllib.parse import urlparse
 
 from arbiter_core.auth import AuthConfigError, load_token
@@ -105,6 +107,7 @@ def run_app(argv: list[str]) -> int:
             return 2
     settings = Settings(
         mode=mode,
+        transport=args.transport,
         export_dir=args.export_dir,
         collection_rate=args.collection_rate,
         max_points=args.max_points,
@@ -114,50 +117,55 @@ def run_app(argv: list[str]) -> int:
         key_timeout=args.key_timeout,
         offset_warn_ms=args.offset_warn_ms,
     )
+    if mode == CONNECT:
+        try:
+            _host_port(args.rosbridge, 9090)
+        except ValueError as exc:
+            print(f"arbiter-tui: {exc}", file=sys.stderr)
+            return 2
+        settings.rosbridge_url = args.rosbridge
+        settings.tracker_url = args.tracker
     from .app import make_app
+
+    if mode == SIM:
+        from .link.sim import SimLink
+
+        app = make_app(settings, SimLink())
+    else:
+        app = make_app(settings, connector=lambda: _connect(args, settings, token, log_file))
+    try:
+        app.run()
+    finally:
+        app.close_link()
+    return 0
+
+
+def _connect(
+    args: argparse.Namespace, settings: Settings, token: str | None, log_file: str
+) -> tuple[Any, Any, Callable[[], None]]:
+    """Runs in the app's worker thread once the first frame is on screen: start the embedded backend
+    (embedded mode), then the rosbridge link and the tracker poller. Raises with a one-line reason."""
     from .latency.tracker_client import TrackerClient
     from .link.rosbridge import RosLink
-    from .link.sim import SimLink
 
     backend = None
-    try:
-        if mode == SIM:
-            link = SimLink()
-            tracker = None
-        else:
-            if mode == EMBEDDED:
-                from .link.embedded import EmbeddedBackend, EmbeddedError
+    if settings.mode == EMBEDDED:
+        from .link.embedded import EmbeddedBackend
 
-                try:
-                    backend = EmbeddedBackend.start(
-                        args.bridge_port, args.api_port, log_file=log_file, transport=args.transport
-                    )
-                except EmbeddedError as exc:
-                    print(f"arbiter-tui: {exc}", file=sys.stderr)
-                    return 1
-                backend.supervise()
-                host, port = "127.0.0.1", backend.bridge_port
-                tracker_url = f"http://127.0.0.1:{backend.api_port}"
-                settings.rosbridge_url = f"ws://{host}:{port}"
-            else:
-                try:
-                    host, port = _host_port(args.rosbridge, 9090)
-                except ValueError as exc:
-                    print(f"arbiter-tui: {exc}", file=sys.stderr)
-                    return 2
-                tracker_url = args.tracker
-                settings.rosbridge_url = args.rosbridge
-            settings.tracker_url = tracker_url
-            link = RosLink(host, port, token=token)
-            tracker = TrackerClient(tracker_url, token=token)
-        app = make_app(settings, link, tracker)
-        if backend is not None:
-            app.sub_title = (
-                f"embedded backend ({args.transport}) {settings.rosbridge_url} {settings.tracker_url}"
-            )
-        app.run()
-        link.close()
-    finally:
+        backend = EmbeddedBackend.start(
+            args.bridge_port, args.api_port, log_file=log_file, transport=args.transport
+        )
+        backend.supervise()
+        host, port = "127.0.0.1", backend.bridge_port
+        settings.rosbridge_url = f"ws://{host}:{port}"
+        settings.tracker_url = f"http://127.0.0.1:{backend.api_port}"
+    else:
+        host, port = _host_port(args.rosbridge, 9090)
+    try:
+        link = RosLink(host, port, token=token)
+        tracker = TrackerClient(settings.tracker_url or "", token=token)
+    except BaseException:
         if backend is not None:
             backend.stop()
-    return 0
+        raise
+    return link, tracker, (backend.stop if backend is not None else lambda: None)

@@ -13,6 +13,7 @@ SIM = "sim"
 @dataclass
 class Settings:
     mode: str = EMBEDDED
+    transport: str = "embedded"  # the embedded backend's transport: embedded (in-process bus) or ros
     rosbridge_url: str = "ws://127.0.0.1:9090"
     tracker_url: str | None = "http://127.0.0.1:8085"
     deploy_mode: str = "native"

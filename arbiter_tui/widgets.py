@@ -1,16 +1,101 @@
-"""Small widgets: the status line and the trajectory map (text rendering, equal aspect)."""
+"""Widgets that show one snapshot each (``views.py``): a reactive ``view``, rendered only when it changed.
+
+Each widget names the app attribute it shows (``SOURCE``) and watches it; Textual compares the new
+snapshot with the old and calls nothing when they are equal, so a widget whose data did not change
+does no work. ``renders`` counts render calls (tests check that equal data costs nothing).
+"""
 
 from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import Any, ClassVar
 
 from rich.text import Text
-from textual.widgets import Static
+from textual.reactive import reactive
+from textual.widget import Widget
 
-from arbiter_core.kinematics import Pose
+from .analytics.labels import STAT_LABELS, format_stat
+from .analytics.store import STATS_FIELDS
+from .control.teleop import legend_compact
+from .views import AnalyticsView, LatencySnapshot, MapView, RobotView, StatusView
 
 ARROWS = "→↗↑↖←↙↓↘"
+LINK_DOWN = (  # fits the 36 columns inside the panel
+    "LINK DOWN: nothing is sent.\nThe robot stops on its own timeout.\nPress a key once the link is back.\n"
+)
+KEY_HELP = legend_compact()
+
+
+class Bound(Widget):
+    """A widget that shows the app attribute named ``SOURCE`` (a frozen snapshot)."""
+
+    SOURCE: ClassVar[str] = ""
+    renders = 0
+
+    def on_mount(self) -> None:
+        self.watch(self.app, self.SOURCE, self._receive, init=True)
+
+    def _receive(self, value: Any) -> None:
+        self.view = value  # type: ignore[attr-defined]  # a reactive on each subclass
+
+    def render(self) -> Text:
+        self.renders += 1
+        return self.draw()
+
+    def draw(self) -> Text:
+        raise NotImplementedError
+
+
+class StatusLine(Bound):
+    SOURCE = "status"
+    DEFAULT_CSS = """
+    StatusLine { dock: top; height: 1; background: $panel; color: $text; padding: 0 1; }
+    StatusLine.alarm { background: $error; text-style: bold; }
+    """
+    view: reactive[StatusView] = reactive(StatusView)
+
+    def watch_view(self, view: StatusView) -> None:
+        self.set_class(view.alarm, "alarm")
+
+    def draw(self) -> Text:
+        return Text(self.view.text(), no_wrap=True, overflow="ellipsis")
+
+
+class RobotPanel(Bound):
+    SOURCE = "robot"
+    view: reactive[RobotView] = reactive(RobotView)
+
+    def draw(self) -> Text:
+        r = self.view
+        t = Text()
+        if r.link_down:
+            t.append(LINK_DOWN, "bold red")
+        elif r.starting:
+            t.append("Starting: connecting to the robot…\n", "bold yellow")
+        if r.too_small:
+            t.append("Terminal too small: robot stopped.\n", "bold red")
+        t.append("Command  ", "bold")
+        t.append(f"v {r.v_cmd:+.2f} m/s  ω {r.w_cmd:+.2f} rad/s\n")
+        t.append("Max      ", "bold")
+        t.append(f"speed {r.speed:.2f}  turn {r.turn:.2f}\n")
+        t.append("Pose     ", "bold")
+        t.append(f"x {r.x:+.2f} y {r.y:+.2f} θ {r.theta:+.2f} rad\n")
+        t.append("Odom     ", "bold")
+        t.append(f"v {r.v_odom:+.2f}  ω {r.w_odom:+.2f}\n")
+        t.append("Algo     ", "bold")
+        t.append(f"{r.algorithm} ({r.state})\n")
+        t.append("Mission  ", "bold")
+        t.append(f"{r.mission} {r.done}/{r.total}\n")
+        t.append("Goal     ", "bold")
+        t.append("none (manual)\n" if r.goal is None else f"({r.goal[0]:+.2f}, {r.goal[1]:+.2f})\n")
+        t.append("Errors   ", "bold")
+        if r.e_d is None or r.e_th is None:
+            t.append("—\n\n")
+        else:
+            t.append(f"e_d {r.e_d:.2f} m  e_θ {r.e_th:+.2f} rad\n\n")
+        t.append_text(Text.from_markup(KEY_HELP))
+        return t
 
 
 def heading_arrow(theta: float) -> str:
@@ -21,7 +106,7 @@ def render_map(
     width: int,
     height: int,
     trail: Sequence[tuple[float, float]],
-    pose: Pose | None,
+    pose: tuple[float, float, float] | None,
     goal: tuple[float, float] | None,
     waypoints: Sequence[tuple[float, float]] = (),
 ) -> Text:
@@ -29,7 +114,7 @@ def render_map(
     width, height = max(width, 4), max(height, 3)
     pts = list(trail) + list(waypoints)
     if pose is not None:
-        pts.append((pose.x, pose.y))
+        pts.append((pose[0], pose[1]))
     if goal is not None:
         pts.append(goal)
     if not pts:
@@ -52,55 +137,168 @@ def render_map(
             return r, c
         return None
 
+    def put(x: float, y: float, ch: str, style: str) -> None:
+        rc = cell(x, y)
+        if rc:
+            grid[rc[0]][rc[1]] = ch
+            styles[rc] = style
+
     for x, y in trail:
-        rc = cell(x, y)
-        if rc:
-            grid[rc[0]][rc[1]] = "·"
-            styles[rc] = "cyan"
+        put(x, y, "·", "cyan")
     for x, y in waypoints:
-        rc = cell(x, y)
-        if rc:
-            grid[rc[0]][rc[1]] = "o"
-            styles[rc] = "yellow"
+        put(x, y, "o", "yellow")
     if goal is not None:
-        rc = cell(*goal)
-        if rc:
-            grid[rc[0]][rc[1]] = "G"
-            styles[rc] = "bold magenta"
+        put(goal[0], goal[1], "G", "bold magenta")
     if pose is not None:
-        rc = cell(pose.x, pose.y)
-        if rc:
-            grid[rc[0]][rc[1]] = heading_arrow(pose.theta)
-            styles[rc] = "bold green"
+        put(pose[0], pose[1], heading_arrow(pose[2]), "bold green")
     text = Text(no_wrap=True, overflow="crop")
     for r, row in enumerate(grid):
-        for c, ch in enumerate(row):
-            text.append(ch, styles.get((r, c), ""))
+        # one span per run of equally styled cells, not one per character
+        start = 0
+        for c in range(1, width + 1):
+            if c == width or styles.get((r, c), "") != styles.get((r, start), ""):
+                text.append("".join(row[start:c]), styles.get((r, start), ""))
+                start = c
         if r < height - 1:
             text.append("\n")
     return text
 
 
-class MapView(Static):
+class TrajectoryMap(Bound):
+    SOURCE = "trajectory"
     DEFAULT_CSS = """
-    MapView { border: round $primary; height: 1fr; width: 1fr; }
+    TrajectoryMap { border: round $primary; height: 1fr; width: 1fr; }
     """
+    view: reactive[MapView] = reactive(MapView)
 
-    def show(
-        self,
-        trail: Sequence[tuple[float, float]],
-        pose: Pose | None,
-        goal: tuple[float, float] | None,
-        waypoints: Sequence[tuple[float, float]] = (),
-    ) -> None:
+    def draw(self) -> Text:
+        v = self.view
         w, h = self.content_size.width, self.content_size.height
-        if w <= 0 or h <= 0:
-            return
-        self.update(render_map(w, h, trail, pose, goal, waypoints))
+        return render_map(w, h, v.trail, v.pose, v.goal, v.waypoints)
 
 
-class StatusLine(Static):
+class AnalyticsTrail(Bound):
+    """The analytics screen's trajectory: the collected points (not the live trail)."""
+
+    SOURCE = "analytics"
     DEFAULT_CSS = """
-    StatusLine { dock: top; height: 1; background: $panel; color: $text; padding: 0 1; }
-    StatusLine.alarm { background: $error; text-style: bold; }
+    AnalyticsTrail { border: round $primary; height: 1fr; width: 1fr; }
     """
+    view: reactive[AnalyticsView] = reactive(AnalyticsView)
+
+    def draw(self) -> Text:
+        w, h = self.content_size.width, self.content_size.height
+        return render_map(w, h, self.view.trail, None, None)
+
+
+class StatsCards(Bound):
+    SOURCE = "analytics"
+    view: reactive[AnalyticsView] = reactive(AnalyticsView)
+
+    def draw(self) -> Text:
+        stats = self.view.stats
+        t = Text()
+        for i, name in enumerate(STATS_FIELDS):
+            t.append(f"{STAT_LABELS[name].short:>10} ", "bold")
+            t.append(f"{format_stat(name, getattr(stats, name)):<16}")
+            if i % 3 == 2 and i < len(STATS_FIELDS) - 1:
+                t.append("\n")
+        return t
+
+
+def fmt_ms(value: object) -> str:
+    if value is None:
+        return "N/A"
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        return f"{value:.3f} ms"
+    return "?"
+
+
+def fmt_signed(value: float | None) -> str:
+    return "N/A" if value is None else f"{value:+.3f} ms"
+
+
+CARDS = (("count", "count"), ("mean_ms", "mean"), ("min_ms", "min"), ("max_ms", "max"), ("p95_ms", "p95"),
+         ("stddev_ms", "stddev"))  # fmt: skip
+
+
+class TrackerLine(Bound):
+    SOURCE = "latency"
+    view: reactive[LatencySnapshot] = reactive(LatencySnapshot)
+
+    def draw(self) -> Text:
+        v = self.view
+        state = Text()
+        if v.simulated:
+            state.append("Client-side simulation: no network path, latency N/A", "bold")
+        elif v.reachable is None:
+            state.append("Polling the tracker…", "bold")
+        elif not v.reachable:
+            state.append(f"TRACKER UNREACHABLE ({v.error}) — retrying every 0.5 s", "bold red")
+        else:
+            state.append("tracker reachable", "bold green")
+            state.append(f" · deploy mode {v.deploy} · {len(v.window)} samples in window")
+            if v.stale:  # the robot ignores these: the operator must know why it does not move
+                limit = "" if v.max_command_age_ms is None else f" > {v.max_command_age_ms:g} ms"
+                state.append(f" · {v.stale} STALE{limit}, not forwarded", "bold red")
+            if v.rejected:
+                state.append(f" · {v.rejected} rejected", "bold yellow")
+        return state
+
+
+class TrackerCards(Bound):
+    SOURCE = "latency"
+    view: reactive[LatencySnapshot] = reactive(LatencySnapshot)
+
+    def draw(self) -> Text:
+        cards = Text()
+        for i, (key, label) in enumerate(CARDS):
+            value = self.view.stat(key)
+            text = "N/A" if value is None else (str(value) if key == "count" else fmt_ms(value))
+            cards.append(f"{label:>7} ", "bold")
+            cards.append(f"{text:<14}")
+            if i == 2:
+                cards.append("\n")
+        return cards
+
+
+class ClientLine(Bound):
+    """This console's own view: round trip, offset (NTP method), corrected one-way, loss."""
+
+    SOURCE = "latency"
+    view: reactive[LatencySnapshot] = reactive(LatencySnapshot)
+
+    def watch_view(self, view: LatencySnapshot) -> None:
+        self.display = not view.simulated
+
+    def draw(self) -> Text:
+        v = self.view
+        out = Text()
+        if v.simulated:
+            return out
+        s = v.client()
+        out.append("this console", "bold")
+        if v.link_down:
+            out.append(
+                f" · ROSBRIDGE LINK {v.link_state}: no commands, no round trips"
+                f" · sent {s['sent']} · lost {s['lost']}",
+                "bold red",
+            )
+            return out
+        if not s["n"]:
+            out.append(f" · no round trips yet · sent {s['sent']} · lost {s['lost']}")
+            return out
+        out.append(f" · rtt p50 {fmt_ms(s['rtt_p50_ms'])} p95 {fmt_ms(s['rtt_p95_ms'])}")
+        out.append(
+            f" · one-way corrected p50 {fmt_ms(s['corrected_p50_ms'])} (raw {fmt_ms(s['raw_p50_ms'])})\n"
+        )
+        off, unc = s["offset_ms"], s["offset_uncertainty_ms"]
+        out.append(f"clock offset {fmt_signed(off)} ± {fmt_ms(unc)}")
+        out.append(f" · negative {s['negative']} · lost {s['lost_in_window']} in 10 s ({s['lost']} total)")
+        warn = v.offset_warn_ms
+        if off is not None and abs(off) > warn:
+            out.append(
+                f"\nCLOCK OFFSET {off:+.1f} ms exceeds {warn:g} ms: raw one-way figures include it",
+                "bold red",
+            )
+        return out

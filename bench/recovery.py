@@ -27,8 +27,8 @@ from _common import emit
 
 from arbiter_tui.link.base import CONNECTED
 from arbiter_tui.link.rosbridge import RosLink
-from tests.conftest import start_backend
-from tests.netfault import FaultProxy
+from tests.support.backend import start_backend
+from tests.support.netfault import FaultProxy
 
 
 def wait(predicate: Callable[[], bool], timeout: float) -> float | None:

@@ -7,9 +7,12 @@ so that data survives screen switches. It is a circular buffer of
 one-byte algorithm code: 73 bytes per point), grown on demand up to
 ``max_data_points``, so statistics over a million points take milliseconds.
 
-Thread-safe: roslibpy delivers messages on the Twisted thread while the UI
-reads on its own loop. Observers are called after each change, outside the
-lock, with the name of the change.
+Who writes it: only the console's UI loop (the control loop samples odometry
+from the link's telemetry at the collection rate; roslibpy's Twisted thread
+writes telemetry, never the store). It still takes a lock, so a bench or a
+headless caller may write from another thread (tests/unit exercise concurrent
+writers). Observers are called after each change, outside the lock, with the
+name of the change.
 """
 
 from __future__ import annotations
@@ -139,6 +142,7 @@ class AnalyticsStore:
     def __init__(self, max_data_points: int = 1000, collection_rate: float = 10.0) -> None:
         self._lock = threading.RLock()
         self._observers: list[Observer] = []
+        self._version = 0
         self._is_collecting = False
         self._collection_rate = 10.0
         self._max = 1
@@ -216,6 +220,7 @@ class AnalyticsStore:
                 self._alg[:k] = keep_alg
                 self._size = k
                 self._next = k % self._num.shape[1] if k == n else k
+                self._version += 1
         self._notify("settings")
 
     # -- observers -----------------------------------------------------------
@@ -238,17 +243,25 @@ class AnalyticsStore:
             obs(change)
 
     # -- collection ----------------------------------------------------------
+    @property
+    def version(self) -> int:
+        """Changes whenever anything a reader sees changes (points, clearing, collecting on/off)."""
+        return self._version
+
     def start_collection(self) -> None:
         self._is_collecting = True
+        self._version += 1
         self._notify("collecting")
 
     def stop_collection(self) -> None:
         self._is_collecting = False
+        self._version += 1
         self._notify("collecting")
 
     def clear(self) -> None:
         with self._lock:
             self._reset_buffers(0)
+            self._version += 1
         self._notify("cleared")
 
     def record(self, point: DataPoint) -> bool:
@@ -285,6 +298,7 @@ class AnalyticsStore:
             if self._size < self._num.shape[1]:
                 self._size += 1
             self._total_recorded += 1
+            self._version += 1
         self._notify("recorded")
         return True
 

@@ -6,11 +6,13 @@ No Textual here: the app calls ``tick_control`` at the repeat rate and
 
 from __future__ import annotations
 
+import math
 import time
 from collections import deque
 from collections.abc import Callable
+from dataclasses import replace
 
-from arbiter_core.kinematics import Pose, clamp_twist, distance_error, heading_error
+from arbiter_core.kinematics import Limits, Pose, clamp_twist, distance_error, heading_error
 
 from ..analytics.store import AnalyticsStore, DataPoint
 from ..link.base import Link
@@ -18,9 +20,15 @@ from .algorithms import ALGORITHMS, MISSIONS, MissionProgress, make_controller
 from .teleop import Teleop
 
 TRAIL_POINTS = 2000
+TRAIL_STEP_M = 0.01  # the trail gets a point when the robot has moved this far: standing still adds nothing
 
 
 class ControlLoop:
+    """What the robot is told, and what the analytics record: each control tick asks teleop (a held key)
+    or the selected controller (a mission run) for a command and sends it on the link; each sample
+    turns the link's odometry into a :class:`DataPoint` for the store. No Textual: the app calls
+    :meth:`tick_control` and :meth:`sample` from its timers; tests call them with a fake clock."""
+
     def __init__(
         self,
         link: Link,
@@ -40,6 +48,7 @@ class ControlLoop:
         self.command = (0.0, 0.0)  # the last command sent
         self.unsent = 0  # commands refused by the link (disconnected)
         self.trail: deque[tuple[float, float]] = deque(maxlen=TRAIL_POINTS)
+        self.trail_version = 0  # bumped with every trail point: the map redraws only then
 
     # -- selection ----------------------------------------------------------------------
     def set_algorithm(self, name: str) -> None:
@@ -81,21 +90,39 @@ class ControlLoop:
     def goal(self) -> tuple[float, float]:
         return self.mission.goal
 
+    def autonomy_limits(self) -> Limits:
+        """A controller drives no faster than the max speed and turn shown on the control screen."""
+        base = self.teleop.limits
+        return replace(
+            base,
+            max_linear=min(self.teleop.speed, base.max_linear),
+            max_angular=min(self.teleop.turn, base.max_angular),
+        )
+
+    def _add_trail(self, x: float, y: float) -> None:
+        if self.trail and math.hypot(x - self.trail[-1][0], y - self.trail[-1][1]) < TRAIL_STEP_M:
+            return
+        self.trail.append((x, y))
+        self.trail_version += 1
+
     def tick_control(self, now: float) -> tuple[float, float] | None:
         pose, *_ = self.link.telemetry.snapshot()
-        self.trail.append((pose.x, pose.y))
+        self._add_trail(pose.x, pose.y)
         self.mission.update(pose)
+        limits = self.teleop.limits
         if self.running:
             if self.mission.done:
                 self.stop()
                 cmd = self.teleop.tick(now)
             else:
+                limits = self.autonomy_limits()
+                self.controller.limits = limits
                 cmd = self.controller.command(pose, self.mission)
         else:
             cmd = self.teleop.tick(now)
         if cmd is None:
             return None
-        v, w = clamp_twist(*cmd, self.teleop.limits)
+        v, w = clamp_twist(*cmd, limits)
         if self.link.send(v, w):
             self.command = (v, w)
         else:

@@ -18,6 +18,7 @@ from arbiter_core.record import LatencyRecord, RecordError
 
 from ..latency.clocksync import LatencyMeter
 
+STARTING = "STARTING"  # the console is up; its link (and the embedded backend) are being started
 CONNECTING = "CONNECTING"
 CONNECTED = "CONNECTED"
 RECONNECTING = "RECONNECTING"
@@ -80,3 +81,21 @@ class Link(Protocol):
     def close(self) -> None: ...
 
 
+
+
+class PendingLink:
+    """The link before the real one exists (the first frame is painted before the backend starts):
+    it sends nothing and reports ``STARTING``."""
+
+    def __init__(self) -> None:
+        self.telemetry = Telemetry()
+
+    @property
+    def state(self) -> str:
+        return STARTING
+
+    def send(self, v: float, w: float) -> bool:
+        return False
+
+    def close(self) -> None:
+        pass

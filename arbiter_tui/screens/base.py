@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING, cast
 from textual import events
 from textual.app import ComposeResult
 from textual.containers import Container
+from textual.geometry import Size
 from textual.screen import Screen
 from textual.widgets import Footer, Static
 
@@ -16,15 +17,14 @@ if TYPE_CHECKING:
     from ..app import ArbiterApp
 
 MIN_WIDTH, MIN_HEIGHT = 80, 24
+TOO_SMALL = (
+    f"Terminal too small: need at least {MIN_WIDTH}x{MIN_HEIGHT}. The robot is stopped and movement "
+    "keys are ignored until the window is larger (ctrl+q quits)."
+)
 
 
 class BaseScreen(Screen[None]):
-    DEFAULT_CSS = """
-    #too-small { display: none; width: 100%; height: 100%; content-align: center middle; text-style: bold; }
-    BaseScreen.too-small #too-small { display: block; }
-    BaseScreen.too-small #body { display: none; }
-    #body { height: 1fr; }
-    """
+    CSS_PATH = "base.tcss"
 
     @property
     def arbiter(self) -> ArbiterApp:
@@ -32,41 +32,27 @@ class BaseScreen(Screen[None]):
 
     def compose(self) -> ComposeResult:
         yield StatusLine(id="status")
-        yield Static(
-            f"Terminal too small: need at least {MIN_WIDTH}x{MIN_HEIGHT}. Enlarge the window (ctrl+q quits).",
-            id="too-small",
-        )
+        yield Static(TOO_SMALL, id="too-small")
         with Container(id="body"):
             yield from self.compose_body()
-        yield Footer()
+        # ctrl+p stays bound (and listed in ? help); not shown, so the footer fits in 80 columns
+        yield Footer(show_command_palette=False, compact=True)
 
     def compose_body(self) -> ComposeResult:
         yield from ()
 
     def on_mount(self) -> None:
-        self._mounted_once = True
-        self._check_size(self.app.size.width, self.app.size.height)
-        self.refresh_view()
+        self._check_size(self.app.size)
 
     def on_screen_resume(self) -> None:
-        self._check_size(self.app.size.width, self.app.size.height)
-        self.refresh_view()
+        self._check_size(self.app.size)
+        self.arbiter.publish_views()  # what this screen shows may not have been sampled meanwhile
 
     def on_resize(self, event: events.Resize) -> None:
-        self._check_size(event.size.width, event.size.height)
+        self._check_size(event.size)
 
-    def _check_size(self, width: int, height: int) -> None:
-        self.set_class(width < MIN_WIDTH or height < MIN_HEIGHT, "too-small")
-
-    _mounted_once = False
-
-    @property
-    def ready(self) -> bool:
-        """False until on_mount ran: the app's redraw timer can reach a screen made current just before."""
-        return self._mounted_once
-
-    def refresh_view(self) -> None:
-        """Redraw from the shared state (called by the app at its fixed UI rate)."""
-        status = self.query_one("#status", StatusLine)
-        status.update(self.arbiter.status_text())
-        status.set_class(self.arbiter.link_down(), "alarm")
+    def _check_size(self, size: Size) -> None:
+        small = size.width < MIN_WIDTH or size.height < MIN_HEIGHT
+        self.set_class(small, "too-small")
+        if small != self.arbiter.too_small:
+            self.arbiter.set_too_small(small)

@@ -13,14 +13,15 @@ from ..control.teleop import legend_long
 HELP = f"""[b]arbiter-tui[/b] — teleop console, analytics and latency monitor
 
 [b]Screens[/b]   1 control   2 analytics   3 latency   ? help   ctrl+p palette
-[b]Quit[/b]      ctrl+q or ctrl+c (the robot is stopped first)
+[b]Stop[/b]      space or k, on every screen   [b]Quit[/b] ctrl+q or ctrl+c (stops first)
 
 [b]Control[/b] (teleop_twist_keyboard keys; hold a key to keep moving)
 {legend_long()}
   a algorithm (manual, go_to_goal, pure_pursuit)   n mission   g go
-  The robot stops when keys stop, on leaving this screen, on focus loss.
+  A held key ends on leaving this screen; a mission run keeps driving on
+  screens 2 and 3. Focus loss or a too-small window stops the robot.
 
-[b]Analytics[/b]  r start/stop collection   x clear   c CSV   j JSON   m MCAP
+[b]Analytics[/b]  r record/pause   ctrl+s export (CSV, JSON, MCAP)   delete clear (asks)
 
 [b]Latency[/b]    polls GET /api/latency at 2 Hz; one-way latency = receive - stamp
 

@@ -12,9 +12,8 @@ from arbiter_tui.app import make_app
 from arbiter_tui.latency.tracker_client import TrackerClient
 from arbiter_tui.link.base import CONNECTED
 from arbiter_tui.link.rosbridge import RosLink
-from arbiter_tui.screens.control import LINK_DOWN
 from arbiter_tui.settings import Settings
-from arbiter_tui.widgets import StatusLine
+from arbiter_tui.widgets import LINK_DOWN, StatusLine
 
 from ..support.backend import free_port, get_json, start_backend
 from ..support.points import make_point
@@ -103,7 +102,8 @@ async def test_tracker_api_down_while_the_bridge_is_up(tmp_path):
             assert await until(pilot, lambda: "rtt p50" in text_of(app, "#lat-client"))
             api_only = start_backend("--api-port", str(api_port), "--no-bridge", "--no-sim")
             assert await until(pilot, lambda: "tracker reachable" in text_of(app, "#lat-state"), timeout=5)
-            assert "api ok" in text_of(app, "#status")
+            status = text_of(app, "#status")
+            assert "api" not in status and "deploy native" in status  # it answered: deploy mode shown
     finally:
         link.close()
         backend.stop()
@@ -156,9 +156,11 @@ async def test_export_to_a_directory_that_cannot_be_written(tmp_path):
     async with app.run_test(size=(100, 30)) as pilot:
         await pilot.press("2")
         for key in ("c", "j", "m"):
-            await pilot.press(key)
+            await pilot.press("ctrl+s", key)
             await pilot.pause(0.05)
-            msg = text_of(app, "#export-msg")
+            assert app.last_export.fmt == {"c": "csv", "j": "json", "m": "mcap"}[key]
+            assert app.last_export.error is not None
+            msg = [n.message for n in app._notifications][-1]
             assert msg.startswith("EXPORT FAILED") and "collected data kept" in msg, msg
         assert store.points() == before
         assert app.is_running  # still at the console

@@ -37,3 +37,17 @@ def test_client_side_simulation_shows_latency_na(snap_compare):
 
 def test_terminal_too_small(snap_compare):
     assert snap_compare(still_app(), terminal_size=(60, 20))
+
+
+@pytest.mark.parametrize("size", SIZES, ids=["100x30", "80x24"])
+def test_clear_confirmation(snap_compare, size):
+    assert snap_compare(still_app(), terminal_size=size, press=["2", "delete"])
+
+
+def test_export_chooser(snap_compare):
+    assert snap_compare(still_app(), terminal_size=(80, 24), press=["2", "ctrl+s"])
+
+
+@pytest.mark.parametrize("keys", [["a", "g"], ["a", "g", "2"]], ids=["control", "analytics"])
+def test_a_mission_run_on_screen(snap_compare, keys):
+    assert snap_compare(still_app(), terminal_size=(80, 24), press=keys)

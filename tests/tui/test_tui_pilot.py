@@ -4,10 +4,12 @@ import json
 
 import pytest
 
+from arbiter_core.kinematics import Pose
 from arbiter_tui.analytics.exports import CSV_HEADER
 from arbiter_tui.analytics.store import STORE, AnalyticsStore
 from arbiter_tui.link.base import DISCONNECTED
 from arbiter_tui.screens.analytics import AnalyticsScreen
+from arbiter_tui.screens.confirm import ConfirmClear
 from arbiter_tui.screens.control import ControlScreen
 from arbiter_tui.screens.help import HelpScreen
 from arbiter_tui.screens.latency import LatencyScreen
@@ -57,7 +59,7 @@ async def test_space_and_k_stop_at_once():
         assert app.link.sent[-1] == (0.0, 0.0)
 
 
-async def test_leaving_the_control_screen_stops_the_robot():
+async def test_leaving_the_control_screen_ends_a_held_key():
     app = still_app()
     async with app.run_test(size=SIZE) as pilot:
         await pilot.press("i")
@@ -120,10 +122,15 @@ async def test_screens_switch_and_keep_collected_data(tmp_path):
         assert isinstance(app.screen, AnalyticsScreen)
 
 
-async def test_export_keys_write_files_with_the_data(tmp_path):
+async def test_export_chooser_writes_files_with_the_data(tmp_path):
     app = still_app(tmp_path)
     async with app.run_test(size=SIZE) as pilot:
-        await pilot.press("2", "c", "j", "m")
+        await pilot.press("2", "ctrl+s", "c")
+        await pilot.press("ctrl+s", "j")
+        await pilot.press("ctrl+s", "m")
+        await pilot.pause()
+        assert isinstance(app.screen, AnalyticsScreen)  # the chooser closed each time
+        assert any("wrote" in n.message for n in app._notifications)
     files = sorted(p.suffix for p in tmp_path.iterdir())
     assert files == [".csv", ".json", ".mcap"]
     csv_file = next(tmp_path.glob("arbiter_analytics_*.csv"))
@@ -131,16 +138,120 @@ async def test_export_keys_write_files_with_the_data(tmp_path):
     assert lines[0] == CSV_HEADER and len(lines) == 121
     doc = json.loads(next(tmp_path.glob("*.json")).read_text())
     assert doc["stats"]["sampleCount"] == 120
-    assert "wrote" in app.export_message
+    assert app.last_export is not None and app.last_export.error is None
+
+
+async def test_export_all_and_escape(tmp_path):
+    app = still_app(tmp_path)
+    async with app.run_test(size=SIZE) as pilot:
+        await pilot.press("2", "ctrl+s", "escape")
+        assert list(tmp_path.iterdir()) == []
+        await pilot.press("ctrl+s", "a")
+        await pilot.pause()
+    assert sorted(p.suffix for p in tmp_path.iterdir()) == [".csv", ".json", ".mcap"]
 
 
 async def test_export_failure_is_shown_and_data_kept(tmp_path):
     app = still_app(tmp_path / "missing")
     async with app.run_test(size=SIZE) as pilot:
-        await pilot.press("2", "c")
-        assert "EXPORT FAILED" in app.export_message
+        await pilot.press("2", "ctrl+s", "c")
+        await pilot.pause()
+        assert app.last_export.error is not None
         assert len(app.store) == 120
-        assert "EXPORT FAILED" in str(app.screen.query_one("#export-msg").render())
+        failed = [n for n in app._notifications if "EXPORT FAILED" in n.message]
+        assert failed and "collected data kept" in failed[0].message and failed[0].severity == "error"
+
+
+async def test_clearing_asks_first_and_keep_is_the_default(tmp_path):
+    app = still_app(tmp_path)
+    async with app.run_test(size=SIZE) as pilot:
+        await pilot.press("2", "delete")
+        assert isinstance(app.screen, ConfirmClear)
+        await pilot.press("enter")  # the focused button keeps the data
+        assert isinstance(app.screen, AnalyticsScreen) and len(app.store) == 120
+        await pilot.press("delete", "n")
+        assert len(app.store) == 120
+        await pilot.press("delete", "y")
+        await pilot.pause()
+        assert len(app.store) == 0
+        assert any("cleared 120 samples" in n.message for n in app._notifications)
+
+
+TELEOP_LETTERS = "uiojklm,.qzwxec"
+
+
+@pytest.mark.parametrize("screen", ["1", "2", "3"])
+async def test_no_teleop_letter_is_destructive_on_any_screen(tmp_path, screen):
+    """Muscle memory from teleop_twist_keyboard must not lose data or write files anywhere."""
+    app = still_app(tmp_path)
+    async with app.run_test(size=SIZE) as pilot:
+        await pilot.press(screen)
+        kind = type(app.screen)
+        keys = [("comma" if k == "," else "full_stop" if k == "." else k) for k in TELEOP_LETTERS]
+        keys += [k.upper() for k in TELEOP_LETTERS if k.isalpha()]
+        for key in keys:
+            await pilot.press(key)
+            assert type(app.screen) is kind, key  # no dialog, no screen change
+        assert len(app.store) == 120 and not app.store.is_collecting
+        assert list(tmp_path.iterdir()) == []
+        if screen != "1":  # off the control screen, movement letters move nothing
+            assert all(cmd == (0.0, 0.0) for cmd in app.link.sent)
+
+
+async def test_an_autonomous_run_keeps_driving_on_screens_2_and_3_and_space_stops_it_there():
+    app = still_app()
+    async with app.run_test(size=SIZE) as pilot:
+        await pilot.press("a", "g")
+        for screen in ("2", "3"):
+            await pilot.press(screen)
+            n = len(app.link.sent)
+            app._control_tick()
+            assert app.loop.running and len(app.link.sent) == n + 1
+            assert app.link.sent[-1] != (0.0, 0.0)
+            await pilot.press("space")
+            assert not app.loop.running and app.link.sent[-1] == (0.0, 0.0)
+            assert app.stop_reason == "stop key"
+            await pilot.press("1", "g")  # start again for the next screen
+        await pilot.press("3", "k")  # k stops too
+        assert not app.loop.running and app.link.sent[-1] == (0.0, 0.0)
+
+
+async def test_a_terminal_too_small_stops_the_robot_and_ignores_movement_keys():
+    app = still_app()
+    async with app.run_test(size=SIZE) as pilot:
+        await pilot.press("a", "g")
+        app._control_tick()
+        assert app.loop.running
+        await pilot.resize_terminal(60, 20)
+        await pilot.pause()
+        assert not app.loop.running and app.link.sent[-1] == (0.0, 0.0)
+        assert app.stop_reason == "terminal too small"
+        n = len(app.link.sent)
+        await pilot.press("i", "i", "u", "g")
+        app._control_tick()
+        assert app.link.sent[n:] == [] and not app.teleop.moving and not app.loop.running
+        await pilot.resize_terminal(*SIZE)
+        await pilot.pause()
+        await pilot.press("i")
+        assert app.link.sent[-1] == (0.5, 0.0)  # back to normal once it fits
+
+
+async def test_widgets_do_no_work_when_their_data_did_not_change():
+    app = still_app()
+    async with app.run_test(size=SIZE) as pilot:
+        await pilot.pause()
+        widgets = [app.screen.query_one(q) for q in ("#status", "#panel", "#map")]
+        before = [w.renders for w in widgets]
+        for _ in range(20):
+            app.publish_views()
+            await pilot.pause()
+        assert [w.renders for w in widgets] == before  # nothing changed: nothing rendered
+        app.link.telemetry.pose = Pose(1.5, -0.5, 0.6)  # the robot moved
+        app.publish_views()
+        await pilot.pause()
+        status, panel, robot_map = (w.renders for w in widgets)
+        assert status == before[0]  # the status line did not change
+        assert panel > before[1] and robot_map > before[2]
 
 
 async def test_autonomous_controller_sends_commands_and_manual_keys_take_over():

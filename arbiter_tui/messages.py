@@ -1,0 +1,85 @@
+"""Everything that happens in the console, as past-tense Textual messages (one place to read them all).
+
+Data that changes continuously (pose, link state, stats) reaches widgets as frozen snapshots in the
+app's reactive attributes (``views.py``), sampled at the UI rate. Messages are for events: something
+finished, failed or was decided.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from textual.message import Message
+
+from .latency.tracker_client import TrackerClient
+from .link.base import Link
+
+
+class BackendStarted(Message):
+    """The link (and the tracker poller, when there is one) are ready: the console can drive."""
+
+    def __init__(self, link: Link, tracker: TrackerClient | None, cleanup: Callable[[], None]) -> None:
+        super().__init__()
+        self.link = link
+        self.tracker = tracker
+        self.cleanup = cleanup
+
+
+class BackendFailed(Message):
+    """Starting the embedded backend or the link failed; the console stays up and says why."""
+
+    def __init__(self, error: str) -> None:
+        super().__init__()
+        self.error = error
+
+
+class LinkStateChanged(Message):
+    """The rosbridge link went up, down or is reconnecting (sampled from the link's thread)."""
+
+    def __init__(self, old: str, new: str) -> None:
+        super().__init__()
+        self.old = old
+        self.new = new
+
+
+class LatencyPolled(Message):
+    """One poll of the tracker's API finished (a good answer or a failure; see the view)."""
+
+
+class RunFinished(Message):
+    """An autonomous mission run reached its last waypoint."""
+
+    def __init__(self, algorithm: str, mission: str) -> None:
+        super().__init__()
+        self.algorithm = algorithm
+        self.mission = mission
+
+
+@dataclass
+class ExportResult:
+    fmt: str
+    path: Path | None
+    points: int
+    error: str | None = None
+
+
+class ExportWritten(Message):
+    def __init__(self, result: ExportResult) -> None:
+        super().__init__()
+        self.result = result
+
+
+class ExportFailed(Message):
+    def __init__(self, result: ExportResult) -> None:
+        super().__init__()
+        self.result = result
+
+
+class DataCleared(Message):
+    """The user confirmed clearing the collected samples."""
+
+    def __init__(self, points: int) -> None:
+        super().__init__()
+        self.points = points

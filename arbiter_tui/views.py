@@ -1,0 +1,249 @@
+"""What each widget shows, as frozen snapshots built from the console's state (pure: no Textual).
+
+The app samples its sources (the link's telemetry, written on roslibpy's thread; the control loop; the
+store; the tracker poller) at the UI rate and assigns these snapshots to its reactive attributes.
+Values are rounded to what the screen prints, so a snapshot equals the previous one exactly when the
+screen would not change: Textual then calls no watcher and the widget does no work.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from arbiter_core.kinematics import distance_error, heading_error
+
+from .analytics.store import EMPTY_STATS, AnalyticsStats, AnalyticsStore
+from .control.loop import ControlLoop
+from .latency.tracker_client import LatencyView
+from .link.base import DISCONNECTED, RECONNECTING, STARTING, Link
+
+
+@dataclass(frozen=True, slots=True)
+class StatusView:
+    """The status line on every screen."""
+
+    link: str = STARTING
+    target: str = ""
+    deploy: str | None = None  # only once the tracker answered
+    algorithm: str = "manual"
+    collecting: bool = False
+    points: int = 0
+    api: str | None = None  # "api UNREACHABLE" / "api …" (not answered yet); None when it answers
+    error: str | None = None  # why the console could not start its link
+
+    @property
+    def alarm(self) -> bool:
+        return self.link in (DISCONNECTED, RECONNECTING) or self.error is not None
+
+    def text(self) -> str:
+        link = "DISCONNECTED (reconnecting)" if self.link == RECONNECTING else self.link
+        parts = [link, self.target]
+        if self.error:
+            parts.append(self.error)
+        if self.deploy:
+            parts.append(f"deploy {self.deploy}")
+        parts.append(self.algorithm)
+        parts.append(f"{'REC' if self.collecting else 'paused'} {self.points}")
+        if self.api:
+            parts.append(self.api)
+        return " · ".join(p for p in parts if p)
+
+
+@dataclass(frozen=True, slots=True)
+class RobotView:
+    """The control screen's panel: command, limits, pose, odometry, algorithm, mission, errors."""
+
+    link_down: bool = False
+    starting: bool = False
+    v_cmd: float = 0.0
+    w_cmd: float = 0.0
+    speed: float = 0.0
+    turn: float = 0.0
+    x: float = 0.0
+    y: float = 0.0
+    theta: float = 0.0
+    v_odom: float = 0.0
+    w_odom: float = 0.0
+    algorithm: str = "manual"
+    state: str = "stopped"  # driving (a mission run) / teleop (a held key) / stopped
+    mission: str = ""
+    done: int = 0
+    total: int = 0
+    goal: tuple[float, float] | None = None  # None in manual mode: there is no goal
+    e_d: float | None = None
+    e_th: float | None = None
+    too_small: bool = False
+
+
+@dataclass(frozen=True, slots=True)
+class MapView:
+    """The trajectory map: the trail (compared by its version, not point by point), pose, goal."""
+
+    version: int = 0
+    trail: tuple[tuple[float, float], ...] = field(default=(), compare=False)
+    pose: tuple[float, float, float] | None = None
+    goal: tuple[float, float] | None = None
+    waypoints: tuple[tuple[float, float], ...] = ()
+
+
+@dataclass(frozen=True, slots=True)
+class AnalyticsView:
+    """The analytics screen: the seed's nine stats, per algorithm, and what the plots draw."""
+
+    version: int = -1
+    collecting: bool = False
+    points: int = 0
+    stats: AnalyticsStats = EMPTY_STATS
+    by_algorithm: tuple[tuple[str, AnalyticsStats], ...] = ()
+    errors: tuple[float, ...] = field(default=(), compare=False)  # distance error, last 200
+    trail: tuple[tuple[float, float], ...] = field(default=(), compare=False)  # last 2000 x, y
+
+
+@dataclass(frozen=True, slots=True)
+class LatencySnapshot:
+    """The latency screen: the tracker's figures (polled) and this console's own (the meter)."""
+
+    simulated: bool = False
+    polled: int = 0  # the poller's view version and failures: new data or a new failure
+    failures: int = 0
+    reachable: bool | None = None
+    error: str | None = None
+    stats: tuple[tuple[str, Any], ...] = ()
+    deploy: str = "?"
+    stale: int = 0
+    rejected: int = 0
+    max_command_age_ms: float | None = None
+    window: tuple[float, ...] = field(default=(), compare=False)
+    records: tuple[Any, ...] = field(default=(), compare=False)  # LatencyRecord, newest first, <= 30
+    link_state: str = STARTING
+    link_down: bool = False
+    meter: tuple[tuple[str, Any], ...] = ()  # the meter's summary, rounded
+    offset_warn_ms: float = 10.0
+
+    def stat(self, key: str) -> Any:
+        return dict(self.stats).get(key)
+
+    def client(self) -> dict[str, Any]:
+        return dict(self.meter)
+
+
+# -- builders ----------------------------------------------------------------------------------
+def status_view(
+    link: Link,
+    target: str,
+    loop: ControlLoop,
+    store: AnalyticsStore,
+    tracker: LatencyView | None,
+    simulated: bool,
+    error: str | None = None,
+) -> StatusView:
+    api = deploy = None
+    if not simulated and tracker is not None:
+        reach = tracker.reachable
+        if reach:
+            deploy = tracker.deploy_mode  # shown once the tracker answered: that says the API is up
+        else:
+            api = "api …" if reach is None else "api UNREACHABLE"
+    return StatusView(
+        link=link.state,
+        target=target,
+        deploy=deploy,
+        algorithm=loop.algorithm,
+        collecting=store.is_collecting,
+        points=len(store),
+        api=api,
+        error=error,
+    )
+
+
+def robot_view(link: Link, loop: ControlLoop, too_small: bool = False) -> RobotView:
+    pose, v_odom, w_odom, _lat = link.telemetry.snapshot()
+    manual = loop.algorithm == "manual"
+    goal = None if manual else loop.goal()
+    e_d = e_th = None
+    if goal is not None:
+        e_d, e_th = round(distance_error(pose, goal), 2), round(heading_error(pose, goal), 2)
+    state = "driving" if loop.running else ("teleop" if loop.teleop.moving else "stopped")
+    mission = loop.mission
+    v, w = loop.command
+    return RobotView(
+        link_down=link.state in (DISCONNECTED, RECONNECTING),
+        starting=link.state == STARTING,
+        v_cmd=round(v, 2),
+        w_cmd=round(w, 2),
+        speed=round(loop.teleop.speed, 2),
+        turn=round(loop.teleop.turn, 2),
+        x=round(pose.x, 2),
+        y=round(pose.y, 2),
+        theta=round(pose.theta, 2),
+        v_odom=round(v_odom, 2),
+        w_odom=round(w_odom, 2),
+        algorithm=loop.algorithm,
+        state=state,
+        mission=loop.mission_name,
+        done=len(mission.waypoints) if mission.done else mission.index,
+        total=len(mission.waypoints),
+        goal=None if goal is None else (round(goal[0], 2), round(goal[1], 2)),
+        e_d=e_d,
+        e_th=e_th,
+        too_small=too_small,
+    )
+
+
+def map_view(link: Link, loop: ControlLoop, previous: MapView | None = None) -> MapView:
+    pose = link.telemetry.snapshot()[0]
+    version = loop.trail_version
+    trail = previous.trail if previous is not None and previous.version == version else tuple(loop.trail)
+    manual = loop.algorithm == "manual"
+    return MapView(
+        version=version,
+        trail=trail,
+        pose=(round(pose.x, 2), round(pose.y, 2), round(pose.theta, 1)),
+        goal=None if manual else loop.goal(),
+        waypoints=() if manual else tuple(loop.mission.waypoints),
+    )
+
+
+def analytics_view(store: AnalyticsStore, previous: AnalyticsView | None = None) -> AnalyticsView:
+    """Recomputed only when the store changed (its version), whatever the UI rate."""
+    version = store.version
+    if previous is not None and previous.version == version:
+        return previous
+    xs, ys = store.column("x", last=2000), store.column("y", last=2000)
+    return AnalyticsView(
+        version=version,
+        collecting=store.is_collecting,
+        points=len(store),
+        stats=store.stats(),
+        by_algorithm=tuple(store.stats_by_algorithm().items()),
+        errors=tuple(store.column("distanceError", last=200).tolist()),
+        trail=tuple(zip(xs.tolist(), ys.tolist(), strict=True)),
+    )
+
+
+def latency_snapshot(
+    view: LatencyView | None, link: Link, offset_warn_ms: float, simulated: bool
+) -> LatencySnapshot:
+    state = link.state
+    if simulated or view is None:
+        return LatencySnapshot(simulated=True, link_state=state, offset_warn_ms=offset_warn_ms)
+    summary = link.telemetry.meter.summary()
+    summary.pop("in_flight", None)  # changes with every command; not shown
+    return LatencySnapshot(
+        polled=view.version,
+        failures=view.failures,
+        reachable=view.reachable,
+        error=view.error,
+        stats=tuple(view.stats.items()),
+        deploy=view.deploy_mode,
+        stale=view.stale,
+        rejected=view.rejected,
+        max_command_age_ms=view.max_command_age_ms,
+        window=tuple(view.window),
+        records=tuple(reversed(view.records))[:30],
+        link_state=state,
+        link_down=state in (DISCONNECTED, RECONNECTING),
+        meter=tuple(summary.items()),
+        offset_warn_ms=offset_warn_ms,
+    )
