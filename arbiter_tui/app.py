@@ -120,13 +120,15 @@ class ArbiterApp(App[None]):
         self.too_small = False
         self._link_state: str | None = None
         self._was_running = False
+        self._shown_command: tuple[object, ...] = ()
+        self._analytics_at = float("-inf")
         store.collection_rate = settings.collection_rate
         if store.max_data_points != settings.max_points:
             store.max_data_points = settings.max_points
 
     # -- lifecycle -------------------------------------------------------------------------
     def on_mount(self) -> None:
-        self.publish_views()
+        self.publish_views(force=True)
         if self.settings.live:
             self.set_interval(1.0 / self.settings.repeat_rate, self._control_tick)
             self.set_interval(1.0 / self.store.collection_rate, self._sample)
@@ -198,7 +200,8 @@ class ArbiterApp(App[None]):
 
     @on(LatencyPolled)
     def _polled(self) -> None:
-        self.latency = self._latency_snapshot()
+        if self.current_mode == "latency":  # elsewhere nobody shows it: sampled when the screen shows
+            self.latency = self._latency_snapshot()
         self.status = self._status_view()
 
     def _control_tick(self) -> None:
@@ -232,8 +235,10 @@ class ArbiterApp(App[None]):
             self._cleanup()
 
     # -- views -----------------------------------------------------------------------------------
-    def publish_views(self) -> None:
-        """Sample every source into snapshots; only what the current screen shows is computed."""
+    def publish_views(self, force: bool = False) -> None:
+        """Sample every source into snapshots; only what the current screen shows is computed, and
+        the analytics at their own, lower rate unless ``force`` (a user action, a screen shown)."""
+        self._shown_command = (self.loop.command, self.teleop.speed, self.teleop.turn)
         state = self.link.state
         if self._link_state is not None and state != self._link_state:
             self.post_message(LinkStateChanged(self._link_state, state))
@@ -244,7 +249,10 @@ class ArbiterApp(App[None]):
             self.robot = robot_view(self.link, self.loop, self.too_small)
             self.trajectory = map_view(self.link, self.loop, self.trajectory)
         elif mode == "analytics":
-            self.analytics = analytics_view(self.store, self.analytics)
+            now = time.monotonic()
+            if force or now - self._analytics_at >= 1.0 / self.settings.analytics_rate:
+                self._analytics_at = now
+                self.analytics = analytics_view(self.store, self.analytics)
         elif mode == "latency":
             self.latency = self._latency_snapshot()
 
@@ -325,7 +333,9 @@ class ArbiterApp(App[None]):
         if result == "move":
             self.loop.running = False
             self._control_tick()  # respond to the first press at once, not at the next tick
-        self.publish_views()
+        if (self.loop.command, self.teleop.speed, self.teleop.turn) != self._shown_command:
+            # a new command or limit shows at once; a held key's repeats wait for the UI tick
+            self.publish_views()
         return True
 
     @staticmethod
@@ -370,7 +380,7 @@ class ArbiterApp(App[None]):
             self.store.stop_collection()
         else:
             self.store.start_collection()
-        self.publish_views()
+        self.publish_views(force=True)
 
     def ask_clear(self) -> None:
         from .screens.confirm import ConfirmClear
@@ -387,7 +397,7 @@ class ArbiterApp(App[None]):
     @on(DataCleared)
     def _cleared(self, event: DataCleared) -> None:
         self.notify(f"cleared {event.points} samples", timeout=3)
-        self.publish_views()
+        self.publish_views(force=True)
 
     def export(self, fmt: str) -> ExportResult:
         n = len(self.store)

@@ -12,6 +12,7 @@ from collections.abc import Sequence
 from typing import Any, ClassVar
 
 from rich.text import Text
+from textual.geometry import Size
 from textual.reactive import reactive
 from textual.widget import Widget
 
@@ -91,10 +92,9 @@ class RobotPanel(Bound):
         t.append("none (manual)\n" if r.goal is None else f"({r.goal[0]:+.2f}, {r.goal[1]:+.2f})\n")
         t.append("Errors   ", "bold")
         if r.e_d is None or r.e_th is None:
-            t.append("—\n\n")
+            t.append("—")
         else:
-            t.append(f"e_d {r.e_d:.2f} m  e_θ {r.e_th:+.2f} rad\n\n")
-        t.append_text(Text.from_markup(KEY_HELP))
+            t.append(f"e_d {r.e_d:.2f} m  e_θ {r.e_th:+.2f} rad")
         return t
 
 
@@ -164,31 +164,54 @@ def render_map(
     return text
 
 
-class TrajectoryMap(Bound):
-    SOURCE = "trajectory"
+class GridMap(Bound):
+    """A character map. Its grid is cheap to compute and costly to paint, so a new snapshot is painted
+    only when the grid it gives (at the widget's current size) differs from the one shown."""
+
     DEFAULT_CSS = """
-    TrajectoryMap { border: round $primary; height: 1fr; width: 1fr; }
+    GridMap { border: round $primary; height: 1fr; width: 1fr; }
     """
-    view: reactive[MapView] = reactive(MapView)
+    _shown: Text | None = None
+    _shown_size: Size | None = None
+
+    def grid(self, width: int, height: int) -> Text:
+        raise NotImplementedError
+
+    def watch_view(self) -> None:
+        size = self.content_size
+        if size.width <= 0 or size.height <= 0:
+            return  # not laid out yet: the first paint computes it
+        text = self.grid(size.width, size.height)
+        if (text, size) != (self._shown, self._shown_size):
+            self._shown, self._shown_size = text, size
+            self.refresh()
 
     def draw(self) -> Text:
+        size = self.content_size
+        if self._shown is None or size != self._shown_size:
+            self._shown, self._shown_size = self.grid(size.width, size.height), size
+        return self._shown
+
+
+class TrajectoryMap(GridMap):
+    """The live trail, pose, goal and waypoints (the control screen)."""
+
+    SOURCE = "trajectory"
+    view: reactive[MapView] = reactive(MapView, repaint=False)
+
+    def grid(self, width: int, height: int) -> Text:
         v = self.view
-        w, h = self.content_size.width, self.content_size.height
-        return render_map(w, h, v.trail, v.pose, v.goal, v.waypoints)
+        return render_map(width, height, v.trail, v.pose, v.goal, v.waypoints)
 
 
-class AnalyticsTrail(Bound):
+class AnalyticsTrail(GridMap):
     """The analytics screen's trajectory: the collected points (not the live trail)."""
 
     SOURCE = "analytics"
-    DEFAULT_CSS = """
-    AnalyticsTrail { border: round $primary; height: 1fr; width: 1fr; }
-    """
-    view: reactive[AnalyticsView] = reactive(AnalyticsView)
+    view: reactive[AnalyticsView] = reactive(AnalyticsView, repaint=False)
 
-    def draw(self) -> Text:
-        w, h = self.content_size.width, self.content_size.height
-        return render_map(w, h, self.view.trail, None, None)
+    def grid(self, width: int, height: int) -> Text:
+        return render_map(width, height, self.view.trail, None, None)
 
 
 class StatsCards(Bound):

@@ -1,15 +1,22 @@
 #!/usr/bin/env python
-"""The TUI's own cost in a real terminal (tmux, 100x30, embedded mode): CPU and terminal output per minute.
+"""The console's own cost in a real terminal, as ratios to a bare Textual app measured in the same run.
 
-Starts ``arbiter-tui`` in a detached tmux session, times the first frame (launch
-until the status line is on screen), then measures two phases of ``--seconds``
-each: the control screen while a key is held (``i`` auto-repeating at 10 Hz:
-teleop commands flowing, robot moving, data collected) and the latency screen
-open while the tracker is polled. CPU is the TUI process's user+system time
-(from /proc, the backend child excluded); output is every byte the TUI wrote to
-the terminal (tmux ``pipe-pane``). Last line: JSON, figures per minute.
+Both run in detached tmux sessions (100x30 by default): ``arbiter-tui`` in embedded mode and
+``bench/bare_app.py`` (a status line, a Static and a Sparkline updated at 5 Hz, a Footer). For each:
+the first frame (launch until its status line is on screen), then phases of ``--seconds`` each with
+the same key stream:
 
-    python bench/tui.py --seconds 30
+* ``control_key_held``: ``i`` every 0.1 s (a held key's auto-repeat: teleop commands flowing,
+  the robot moving, the control screen live);
+* ``latency_screen``: the latency screen open while the tracker is polled (keys: none);
+* ``analytics_collecting``: a go_to_goal mission driving and collection on, analytics screen open.
+
+The bare app gets the same keys and durations. CPU is the app process's user+system time (/proc; the
+embedded backend child excluded); output is every byte written to the terminal (tmux ``pipe-pane``).
+Each app runs ``--repeat`` times, alternating; the figures are medians and the ratios are of the
+medians. Last line: JSON with both apps' figures and the ratios.
+
+    python bench/tui.py --seconds 10 --repeat 3
 """
 
 from __future__ import annotations
@@ -17,6 +24,7 @@ from __future__ import annotations
 import argparse
 import os
 import shutil
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -27,6 +35,7 @@ from pathlib import Path
 from _common import emit
 
 TICK = os.sysconf("SC_CLK_TCK")
+HERE = Path(__file__).resolve().parent
 
 
 def tmux(*args: str) -> str:
@@ -38,10 +47,17 @@ def cpu_seconds(pid: int) -> float:
     return (int(fields[11]) + int(fields[12])) / TICK  # utime + stime
 
 
-def tui_pid(session: str) -> int:
-    shell = int(tmux("display-message", "-p", "-t", session, "#{pane_pid}").strip())
-    # the pane runs the TUI directly (no shell in between)
-    return shell
+def screen(session: str) -> str:
+    return tmux("capture-pane", "-p", "-t", session)
+
+
+def wait_for(session: str, text: str, timeout: float) -> float | None:
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < timeout:
+        if text in screen(session):
+            return time.monotonic() - t0
+        time.sleep(0.01)
+    return None
 
 
 def phase(session: str, pid: int, out: Path, seconds: float, key: str | None) -> dict:
@@ -53,53 +69,88 @@ def phase(session: str, pid: int, out: Path, seconds: float, key: str | None) ->
     dt = time.monotonic() - t0
     cpu = cpu_seconds(pid) - c0
     written = out.stat().st_size - b0
-    return {
-        "cpu_s_per_min": round(cpu / dt * 60, 2),
-        "cpu_percent_of_core": round(100 * cpu / dt, 2),
-        "bytes_per_min": round(written / dt * 60),
-        "kb_per_s": round(written / dt / 1000, 2),
-    }
+    return {"cpu_percent_of_core": round(100 * cpu / dt, 2), "kb_per_s": round(written / dt / 1000, 2)}
 
 
-def main() -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--seconds", type=float, default=30.0)
-    a = p.parse_args()
-    if shutil.which("tmux") is None:
-        print("tui: tmux is not installed", file=sys.stderr)
-        return 1
-    exe = str(Path(sys.executable).with_name("arbiter-tui"))
+def run(cmd: str, first_marker: str, ready_marker: str, steps: list, size: tuple, tmp: Path) -> dict:
+    """Launch ``cmd`` in tmux, time its first frame, then run ``steps``: (name, keys before, key held)."""
     session = f"arbiter-bench-{uuid.uuid4().hex[:8]}"
-    tmp = Path(tempfile.mkdtemp())
-    out = tmp / "terminal.bytes"
+    out = tmp / f"{session}.bytes"
     out.touch()
-    cmd = f"{exe} --bridge-port 0 --api-port 0 --export-dir {tmp} --log-file {tmp / 'tui.log'}"
-    t_launch = time.monotonic()
-    tmux("new-session", "-d", "-s", session, "-x", "100", "-y", "30", cmd)
+    tmux("new-session", "-d", "-s", session, "-x", str(size[0]), "-y", str(size[1]), cmd)
+    result: dict = {}
     try:
         tmux("pipe-pane", "-t", session, "-o", f"cat >> {out}")
-        first = None
-        while time.monotonic() - t_launch < 30:
-            screen = tmux("capture-pane", "-p", "-t", session)
-            if "CONNECT" in screen:
-                first = time.monotonic() - t_launch
-                break
-            time.sleep(0.01)
-        pid = tui_pid(session)
-        deadline = time.monotonic() + 15
-        while "CONNECTED" not in tmux("capture-pane", "-p", "-t", session) and time.monotonic() < deadline:
-            time.sleep(0.1)
-        control = phase(session, pid, out, a.seconds, "i")
-        tmux("send-keys", "-t", session, "3")
+        first = wait_for(session, first_marker, 30)
+        result["first_frame_s"] = None if first is None else round(first, 3)
+        pid = int(tmux("display-message", "-p", "-t", session, "#{pane_pid}").strip())
+        wait_for(session, ready_marker, 30)
         time.sleep(1.0)
-        latency = phase(session, pid, out, a.seconds, None)
+        for name, before, held, seconds in steps:
+            for key in before:
+                tmux("send-keys", "-t", session, key)
+                time.sleep(0.2)
+            time.sleep(0.5)
+            result[name] = phase(session, pid, out, seconds, held)
         tmux("send-keys", "-t", session, "C-q")
         time.sleep(1.0)
     finally:
         tmux("kill-session", "-t", session)
-    emit({"bench": "tui", "size": "100x30", "seconds_per_phase": a.seconds,
-          "first_frame_s": None if first is None else round(first, 3),
-          "control_teleop": control, "latency_screen": latency})  # fmt: skip
+    return result
+
+
+def median_of(runs: list[dict]) -> dict:
+    """The median of each figure over the runs (same keys)."""
+    out: dict = {}
+    for key, value in runs[0].items():
+        if isinstance(value, dict):
+            out[key] = median_of([r[key] for r in runs])
+        else:
+            values = [r[key] for r in runs if r[key] is not None]
+            out[key] = round(statistics.median(values), 3) if values else None
+    return out
+
+
+def main() -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--seconds", type=float, default=20.0, help="length of each phase")
+    p.add_argument("--size", default="100x30", help="terminal size, COLSxROWS")
+    p.add_argument("--repeat", type=int, default=3, help="runs of each app, alternating; medians reported")
+    a = p.parse_args()
+    if shutil.which("tmux") is None:
+        print("tui: tmux is not installed", file=sys.stderr)
+        return 1
+    size = tuple(int(n) for n in a.size.split("x"))
+    tmp = Path(tempfile.mkdtemp())
+    s = a.seconds
+    exe = str(Path(sys.executable).with_name("arbiter-tui"))
+    tui_cmd = f"{exe} --bridge-port 0 --api-port 0 --export-dir {tmp} --log-file {tmp / 'tui.log'}"
+    steps = [
+        ("control_key_held", [], "i", s),
+        ("latency_screen", ["3"], None, s),
+        ("analytics_collecting", ["1", "a", "g", "2", "r"], None, s),
+    ]
+    bare_cmd = f"{sys.executable} {HERE / 'bare_app.py'}"
+    tui_runs, bare_runs = [], []
+    for _ in range(a.repeat):  # alternating, so slow spells of a shared machine hit both alike
+        # the status line's target is on screen from the first frame
+        tui_runs.append(run(tui_cmd, "embedded", "CONNECTED", steps, size, tmp))
+        bare_runs.append(run(bare_cmd, "bare ready", "bare ready", steps, size, tmp))
+    tui, bare = median_of(tui_runs), median_of(bare_runs)
+    ratios: dict = {}
+    for name in ("control_key_held", "latency_screen", "analytics_collecting"):
+        t, b = tui[name], bare[name]
+        cpu_t, cpu_b = t["cpu_percent_of_core"], b["cpu_percent_of_core"]
+        ratios[name] = {
+            "cpu": round(cpu_t / cpu_b, 2) if cpu_b else None,
+            "output": round(t["kb_per_s"] / b["kb_per_s"], 2) if b["kb_per_s"] else None,
+        }
+    first = None
+    if tui.get("first_frame_s") is not None and bare.get("first_frame_s") is not None:
+        first = round(tui["first_frame_s"] - bare["first_frame_s"], 3)
+    emit({"bench": "tui", "size": a.size, "seconds_per_phase": s, "repeat": a.repeat, "arbiter_tui": tui,
+          "bare_textual": bare,
+          "ratios": ratios, "first_frame_minus_bare_s": first})  # fmt: skip
     return 0
 
 

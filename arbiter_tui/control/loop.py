@@ -99,7 +99,8 @@ class ControlLoop:
             max_angular=min(self.teleop.turn, base.max_angular),
         )
 
-    def _add_trail(self, x: float, y: float) -> None:
+    def add_trail(self, x: float, y: float) -> None:
+        """A trail point where the robot is, unless it has not moved ``TRAIL_STEP_M`` since the last."""
         if self.trail and math.hypot(x - self.trail[-1][0], y - self.trail[-1][1]) < TRAIL_STEP_M:
             return
         self.trail.append((x, y))
@@ -107,7 +108,7 @@ class ControlLoop:
 
     def tick_control(self, now: float) -> tuple[float, float] | None:
         pose, *_ = self.link.telemetry.snapshot()
-        self._add_trail(pose.x, pose.y)
+        self.add_trail(pose.x, pose.y)
         self.mission.update(pose)
         limits = self.teleop.limits
         if self.running:

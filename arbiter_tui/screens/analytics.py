@@ -5,34 +5,45 @@ None of its keys is a teleop letter: clearing asks first, exporting opens a choo
 
 from __future__ import annotations
 
+from rich.text import Text
 from textual.app import ComposeResult
 from textual.binding import Binding
 from textual.containers import Horizontal, Vertical
-from textual.widgets import DataTable, Sparkline, Static
+from textual.reactive import reactive
+from textual.widgets import Sparkline, Static
 
 from ..analytics.labels import STAT_LABELS, format_stat
 from ..views import AnalyticsView
-from ..widgets import AnalyticsTrail, StatsCards
+from ..widgets import AnalyticsTrail, Bound, StatsCards
 from .base import BaseScreen
 
 COMPARE = ("sampleCount", "avgDistanceError", "stdDevError", "p95Error", "avgHeadingError", "totalPathLength")
 
 
-class CompareTable(DataTable[str]):
-    """Per-algorithm stats; refilled only when the per-algorithm figures changed."""
+class CompareTable(Bound):
+    """Per-algorithm stats as aligned text: redrawn only when the per-algorithm figures changed."""
 
-    def on_mount(self) -> None:
-        self.add_columns("algorithm", *(STAT_LABELS[n].short for n in COMPARE))
-        self._shown: tuple[object, ...] | None = None
-        self.watch(self.app, "analytics", self._show)
+    SOURCE = "analytics"
+    view: reactive[AnalyticsView] = reactive(AnalyticsView, repaint=False)
+    _shown: tuple[object, ...] | None = None
 
-    def _show(self, view: AnalyticsView) -> None:
-        if view.by_algorithm == self._shown:
-            return
-        self._shown = view.by_algorithm
-        self.clear()
-        for algo, s in view.by_algorithm:
-            self.add_row(algo, *(format_stat(n, getattr(s, n), decimals=3, unit=False) for n in COMPARE))
+    def watch_view(self, view: AnalyticsView) -> None:
+        if view.by_algorithm != self._shown:
+            self._shown = view.by_algorithm
+            self.refresh()
+
+    def draw(self) -> Text:
+        rows = [["algorithm", *(STAT_LABELS[n].short for n in COMPARE)]]
+        for algo, s in self.view.by_algorithm:
+            rows.append([algo, *(format_stat(n, getattr(s, n), decimals=3, unit=False) for n in COMPARE)])
+        widths = [max(len(r[c]) for r in rows) for c in range(len(rows[0]))]
+        t = Text(no_wrap=True, overflow="crop")
+        for k, row in enumerate(rows):
+            line = "  ".join(cell.ljust(w) for cell, w in zip(row, widths, strict=True))
+            t.append(line, "bold" if k == 0 else "")
+            if k < len(rows) - 1:
+                t.append("\n")
+        return t
 
 
 class ErrorSparkline(Sparkline):
@@ -53,7 +64,7 @@ class AnalyticsScreen(BaseScreen):
 
     def compose_body(self) -> ComposeResult:
         yield StatsCards(id="cards")
-        yield CompareTable(id="compare", show_cursor=False, zebra_stripes=True)
+        yield CompareTable(id="compare")
         with Horizontal(id="plots"):
             yield AnalyticsTrail(id="traj")
             with Vertical(id="err-box"):

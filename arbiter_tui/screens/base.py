@@ -46,7 +46,7 @@ class BaseScreen(Screen[None]):
 
     def on_screen_resume(self) -> None:
         self._check_size(self.app.size)
-        self.arbiter.publish_views()  # what this screen shows may not have been sampled meanwhile
+        self.arbiter.publish_views(force=True)  # what it shows may not have been sampled meanwhile
 
     def on_resize(self, event: events.Resize) -> None:
         self._check_size(event.size)

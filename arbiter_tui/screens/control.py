@@ -5,9 +5,10 @@ from __future__ import annotations
 from textual import events
 from textual.app import ComposeResult
 from textual.binding import Binding
-from textual.containers import Horizontal
+from textual.containers import Horizontal, Vertical
+from textual.widgets import Static
 
-from ..widgets import RobotPanel, TrajectoryMap
+from ..widgets import KEY_HELP, RobotPanel, TrajectoryMap
 from .base import BaseScreen
 
 
@@ -21,7 +22,9 @@ class ControlScreen(BaseScreen):
 
     def compose_body(self) -> ComposeResult:
         with Horizontal():
-            yield RobotPanel(id="panel")
+            with Vertical(id="panel"):
+                yield RobotPanel(id="robot")
+                yield Static(KEY_HELP, id="keys")  # painted once: the legend never changes
             yield TrajectoryMap(id="map")
 
     def on_key(self, event: events.Key) -> None:

@@ -53,7 +53,7 @@ async def test_backend_killed_and_restarted_mid_drive(tmp_path):
             assert await until(pilot, lambda: text_of(app, "#status").startswith("DISCONNECTED"), timeout=2)
             assert time.monotonic() - killed <= 1.0
             assert app.screen.query_one("#status", StatusLine).has_class("alarm")
-            assert LINK_DOWN.splitlines()[0] in text_of(app, "#panel")
+            assert LINK_DOWN.splitlines()[0] in text_of(app, "#robot")
             assert not app.teleop.moving  # the held key is forgotten: no motion when the link returns
             backend.proc.wait()
             await pilot.pause(1.0)  # an absence: a dead link adds no points and sends nothing
@@ -68,7 +68,7 @@ async def test_backend_killed_and_restarted_mid_drive(tmp_path):
             await pilot.pause(1.0)  # an absence: nothing is sent by itself after the reconnect
             assert get_json(f"{backend.api}/api/health")["total_seen"] == 0  # nothing sent by itself
             assert link.telemetry.v == 0.0 and link.telemetry.pose.x == 0.0  # the new robot stood still
-            assert LINK_DOWN.splitlines()[0] not in text_of(app, "#panel")
+            assert LINK_DOWN.splitlines()[0] not in text_of(app, "#robot")
 
             await pilot.press("i")  # a new key press: advertised again, a zero first
             assert await until(pilot, lambda: get_json(f"{backend.api}/api/health")["total_seen"] >= 2)
@@ -121,7 +121,7 @@ async def test_bridge_down_while_the_tracker_api_is_up(tmp_path):
     try:
         async with app.run_test(size=(100, 30)) as pilot:
             assert await until(pilot, lambda: text_of(app, "#status").startswith("DISCONNECTED"), timeout=5)
-            assert LINK_DOWN.splitlines()[0] in text_of(app, "#panel")
+            assert LINK_DOWN.splitlines()[0] in text_of(app, "#robot")
             await pilot.press("i")
             assert link.telemetry.meter.sent == 0  # nothing goes out, nothing is queued
             await pilot.press("3")

@@ -14,7 +14,7 @@ from arbiter_tui.screens.control import ControlScreen
 from arbiter_tui.screens.help import HelpScreen
 from arbiter_tui.screens.latency import LatencyScreen
 
-from ..support.tui import RecordingLink, still_app
+from ..support.tui import RecordingLink, still_app, until
 
 SIZE = (100, 30)
 
@@ -240,7 +240,7 @@ async def test_widgets_do_no_work_when_their_data_did_not_change():
     app = still_app()
     async with app.run_test(size=SIZE) as pilot:
         await pilot.pause()
-        widgets = [app.screen.query_one(q) for q in ("#status", "#panel", "#map")]
+        widgets = [app.screen.query_one(q) for q in ("#status", "#robot", "#map")]
         before = [w.renders for w in widgets]
         for _ in range(20):
             app.publish_views()
@@ -274,3 +274,50 @@ def test_default_store_is_the_singleton():
 
     app = make_app(Settings(live=False, handle_signals=False), RecordingLink())
     assert app.store is STORE
+
+
+async def test_the_first_frame_comes_before_the_link_and_the_link_is_attached_when_ready():
+    import threading
+
+    from arbiter_tui.app import make_app
+    from arbiter_tui.settings import Settings
+
+    release = threading.Event()
+    link = RecordingLink()
+    closed = []
+
+    def connector():
+        release.wait(10)  # the embedded backend taking its time to start
+        return link, None, lambda: closed.append(True)
+
+    settings = Settings(handle_signals=False, transport="ros")
+    app = make_app(settings, store=AnalyticsStore(), connector=connector)
+    async with app.run_test(size=SIZE) as pilot:
+        await pilot.pause()
+        status = app.screen.query_one("#status").render().plain
+        assert status.startswith("STARTING · embedded ros"), status
+        await pilot.press("i")
+        assert link.sent == []  # nothing is sent before the link exists
+        release.set()
+        assert await until(pilot, lambda: app.link is link)
+        await pilot.press("i")
+        assert link.sent[-1] == (0.5, 0.0)
+        assert await until(pilot, lambda: "CONNECTED · embedded ros 9090/8085" in app.status_text())
+    app.close_link()
+    assert closed == [True]
+
+
+async def test_a_backend_that_cannot_start_is_said_on_screen():
+    from arbiter_tui.app import make_app
+    from arbiter_tui.settings import Settings
+
+    def connector():
+        raise RuntimeError("the bundled backend exited: address already in use")
+
+    app = make_app(Settings(handle_signals=False), store=AnalyticsStore(), connector=connector)
+    async with app.run_test(size=SIZE) as pilot:
+        assert await until(pilot, lambda: app.start_error is not None)
+        await pilot.pause()
+        status = app.screen.query_one("#status")
+        assert "address already in use" in status.render().plain and status.has_class("alarm")
+        assert app.is_running  # still at the console: quit with ctrl+q
