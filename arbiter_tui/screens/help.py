@@ -12,8 +12,8 @@ from ..control.teleop import legend_long
 
 HELP = f"""[b]arbiter-tui[/b] — teleop console, analytics and latency monitor
 
-[b]Screens[/b]   1 control   2 analytics   3 latency   ? help   ctrl+p palette
-[b]Stop[/b]      space or k, on every screen   [b]Quit[/b] ctrl+q or ctrl+c (stops first)
+[b]Screens[/b]   1 control  2 analytics  3 latency  ? help  ctrl+p palette
+[b]Stop[/b]      space or k, on every screen   [b]Quit[/b] ctrl+q/ctrl+c, stops first
 
 [b]Control[/b] (teleop_twist_keyboard keys; hold a key to keep moving)
 {legend_long()}
@@ -21,9 +21,9 @@ HELP = f"""[b]arbiter-tui[/b] — teleop console, analytics and latency monitor
   A held key ends on leaving this screen; a mission run keeps driving on
   screens 2 and 3. Focus loss or a too-small window stops the robot.
 
-[b]Analytics[/b]  r record/pause   ctrl+s export (CSV, JSON, MCAP)   delete clear (asks)
+[b]Analytics[/b]  r record/pause  ctrl+s export  delete clear (asks first)
 
-[b]Latency[/b]    polls GET /api/latency at 2 Hz; one-way latency = receive - stamp
+[b]Latency[/b]    polls GET /api/latency at 2 Hz; one-way = receive - stamp
 
 Press escape or ? to close."""
 
