@@ -7,13 +7,23 @@ import asyncio
 import errno
 import logging
 import signal
+import ssl
 import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from arbiter_core import auth
-from arbiter_core.cliargs import OneLineParser, count, non_negative_float, port, positive_float
+from arbiter_core.cliargs import (
+    OneLineParser,
+    add_log_level,
+    add_version,
+    count,
+    non_negative_float,
+    port,
+    positive_float,
+)
 from arbiter_core.kinematics import Limits
+from arbiter_core.logs import log_to_file
 from arbiter_core.topics import MEASURED_TYPES
 
 from .server import Backend, BackendConfig
@@ -45,6 +55,12 @@ def build_parser() -> argparse.ArgumentParser:
         help=f"file whose first line is the shared token (default: ${auth.TOKEN_ENV}); when a token is set "
         "every client must present it: rosbridge 'auth' op, ?token= or Authorization: Bearer",
     )
+    p.add_argument(
+        "--tls-cert",
+        type=Path,
+        help="PEM certificate (chain): serve wss:// and https:// instead of ws:// and http://",
+    )
+    p.add_argument("--tls-key", type=Path, help="PEM private key of --tls-cert (if not in the same file)")
     p.add_argument("--bridge-port", type=port, default=9090, help="rosbridge WebSocket port (default: 9090)")
     p.add_argument("--api-port", type=port, default=8085, help="tracker HTTP API port (default: 8085)")
     p.add_argument(
@@ -103,7 +119,11 @@ def build_parser() -> argparse.ArgumentParser:
         help="type of /cmd_vel_measured: twist (geometry_msgs/Twist, default) or twist_stamped "
         "(TwistStamped with the tracker's receive time, for Jazzy+ diff_drive_controller)",
     )
-    p.add_argument("--log-file", help="write logs to this file (default: warnings to stderr)")
+    p.add_argument(
+        "--log-file", help="write logs to this file, rotated at 1 MB, 3 kept (default: stderr)"
+    )
+    add_log_level(p)
+    add_version(p)
     p.epilog = (
         "In ROS mode, arguments after --ros-args go to rclpy: e.g. --ros-args -p deploy_mode:=pi "
         "-r __ns:=/robot1. Parameters override the flags."
@@ -204,22 +224,23 @@ def main(argv: list[str] | None = None) -> int:
     ours, ros_args = split_ros_args(sys.argv[1:] if argv is None else list(argv))
     args = build_parser().parse_args(ours)
     if args.log_file:
-        logging.basicConfig(
-            filename=args.log_file,
-            level=logging.INFO,
-            format="%(asctime)s %(name)s %(levelname)s %(message)s",
-        )
+        log_to_file(args.log_file, args.log_level)
     else:
-        logging.basicConfig(level=logging.WARNING, format="arbiter-backend: %(levelname)s %(message)s")
+        logging.basicConfig(level=args.log_level, format="arbiter-backend: %(levelname)s %(message)s")
     logging.getLogger("aiohttp.server").addFilter(_BadRequestFilter())
     try:
         token = auth.load_token(args.token_file)
     except auth.AuthConfigError as exc:
         print(f"arbiter-backend: {exc}", file=sys.stderr)
         return 2
+    if args.tls_key is not None and args.tls_cert is None:
+        print("arbiter-backend: --tls-key needs --tls-cert", file=sys.stderr)
+        return 2
     config = BackendConfig(
         host=args.host,
         allow_remote=args.allow_remote,
+        tls_cert=args.tls_cert,
+        tls_key=args.tls_key,
         token=token,
         bridge_port=args.bridge_port,
         api_port=args.api_port,
@@ -238,6 +259,11 @@ def main(argv: list[str] | None = None) -> int:
         measured_type=args.measured_type,
         transport=args.transport,
     )
+    try:
+        config.ssl_context()
+    except (OSError, ssl.SSLError) as exc:
+        print(f"arbiter-backend: cannot use --tls-cert/--tls-key: {exc}", file=sys.stderr)
+        return 2
     try:
         return _event_loop_runner()(_run(config, ros_args))
     except KeyboardInterrupt:

@@ -11,8 +11,10 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
+import ssl
 import time
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 from aiohttp import web
@@ -50,6 +52,15 @@ class BackendConfig:
     transport: str = "embedded"  # or "ros"
     token: str | None = None  # required from every client when set (see auth.py)
     allow_remote: bool = False  # without it only loopback addresses may be bound
+    tls_cert: Path | None = None  # with tls_key: serve wss:// and https:// (PEM files)
+    tls_key: Path | None = None
+
+    def ssl_context(self) -> ssl.SSLContext | None:
+        if self.tls_cert is None:
+            return None
+        ctx = ssl.create_default_context(ssl.Purpose.CLIENT_AUTH)
+        ctx.load_cert_chain(str(self.tls_cert), None if self.tls_key is None else str(self.tls_key))
+        return ctx
 
     def make_tracker(self) -> LatencyTracker:
         return LatencyTracker(
@@ -73,12 +84,13 @@ class Servers:
         self.bridge_port: int | None = None
         self.api_port: int | None = None
         self.sim_enabled = False
+        self._ssl = config.ssl_context()
 
     async def _serve(self, app: web.Application, port: int) -> int:
         runner = web.AppRunner(app, access_log=None, handle_signals=False)
         await runner.setup()
         self._runners.append(runner)
-        site = web.TCPSite(runner, self.config.host, port, reuse_address=True)
+        site = web.TCPSite(runner, self.config.host, port, reuse_address=True, ssl_context=self._ssl)
         await site.start()
         server = site._server
         assert server is not None and server.sockets  # type: ignore[union-attr]
@@ -108,6 +120,7 @@ class Servers:
             self.config.host,
             self.bridge_port,
             self.api_port,
+            secure=self._ssl is not None,
             deploy_mode=self.config.deploy_mode,
             sim="on" if self.sim_enabled else "off",
             transport=self.config.transport,

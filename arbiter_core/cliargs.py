@@ -54,3 +54,27 @@ def count(text: str, high: int = 1_000_000) -> int:
     if not 1 <= value <= high:
         raise argparse.ArgumentTypeError(f"must be between 1 and {high}, got {value}")
     return value
+
+
+LOG_LEVELS = ("DEBUG", "INFO", "WARNING", "ERROR")
+
+
+def add_version(parser: argparse.ArgumentParser, distribution: str = "arbiter-tui") -> None:
+    """``--version``: the installed package's version (one distribution carries both commands)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        text = version(distribution)
+    except PackageNotFoundError:  # running from a source tree that was never installed
+        text = "unknown (not installed)"
+    parser.add_argument("--version", action="version", version=f"{parser.prog} {text}")
+
+
+def add_log_level(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--log-level",
+        type=str.upper,
+        choices=LOG_LEVELS,
+        default="WARNING",
+        help="what the log keeps (default: WARNING)",
+    )

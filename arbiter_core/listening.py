@@ -16,17 +16,20 @@ class Listening:
     host: str
     bridge_port: int | None  # None: started with --no-bridge
     api_port: int
+    secure: bool = False  # wss:// and https://
     extras: tuple[tuple[str, str], ...] = ()  # deploy_mode, sim, transport, auth, in the order written
 
     def extra(self, key: str) -> str | None:
         return dict(self.extras).get(key)
 
 
-def format_listening(host: str, bridge_port: int | None, api_port: int, **extras: str) -> str:
+def format_listening(
+    host: str, bridge_port: int | None, api_port: int, secure: bool = False, **extras: str
+) -> str:
     parts = []
     if bridge_port is not None:
-        parts.append(f"rosbridge=ws://{host}:{bridge_port}")
-    parts.append(f"api=http://{host}:{api_port}")
+        parts.append(f"rosbridge={'wss' if secure else 'ws'}://{host}:{bridge_port}")
+    parts.append(f"api={'https' if secure else 'http'}://{host}:{api_port}")
     parts.extend(f"{key}={value}" for key, value in extras.items())
     return PREFIX + " ".join(parts)
 
@@ -42,12 +45,14 @@ def parse_listening(line: str) -> Listening | None:
         if eq:
             fields[key] = value
     try:
-        host, api_port = _host_port(fields.pop("api"), "http://")
+        api = fields.pop("api")
+        secure = api.startswith("https://")
+        host, api_port = _host_port(api, "https://" if secure else "http://")
         bridge = fields.pop("rosbridge", None)
-        bridge_port = None if bridge is None else _host_port(bridge, "ws://")[1]
+        bridge_port = None if bridge is None else _host_port(bridge, "wss://" if secure else "ws://")[1]
     except (KeyError, ValueError):
         return None
-    return Listening(host, bridge_port, api_port, tuple(fields.items()))
+    return Listening(host, bridge_port, api_port, secure, tuple(fields.items()))
 
 
 def _host_port(url: str, scheme: str) -> tuple[str, int]:

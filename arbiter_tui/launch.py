@@ -3,17 +3,22 @@
 from __future__ import annotations
 
 import argparse
-import logging
-import os
 import sys
-import tempfile
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
-from urllib.parse import urlparse
 
 from arbiter_core.auth import AuthConfigError, load_token
-from arbiter_core.cliargs import OneLineParser, count, port, positive_float
+from arbiter_core.cliargs import OneLineParser, add_log_level, add_version, count, port, positive_float
+from arbiter_core.logs import default_log_path, log_to_file
+from arbiter_core.urls import (
+    DEFAULT_ROSBRIDGE,
+    UrlError,
+    check_token_transport,
+    rosbridge_endpoint,
+    tracker_beside,
+    tracker_endpoint,
+)
 
 from .settings import CONNECT, EMBEDDED, SIM, Settings
 
@@ -30,8 +35,20 @@ def build_parser() -> argparse.ArgumentParser:
         "--connect", action="store_true", help="use servers that already run (--rosbridge, --tracker)"
     )
     m.add_argument("--sim", action="store_true", help="client-side simulation: no network, latency N/A")
-    p.add_argument("--rosbridge", default="ws://127.0.0.1:9090", help="rosbridge URL for --connect")
-    p.add_argument("--tracker", default="http://127.0.0.1:8085", help="latency tracker URL for --connect")
+    p.add_argument(
+        "--rosbridge",
+        help=f"rosbridge URL, ws:// or wss://, path kept (implies --connect; default {DEFAULT_ROSBRIDGE})",
+    )
+    p.add_argument(
+        "--tracker",
+        help="latency tracker URL, http:// or https:// (implies --connect; default: the rosbridge host, "
+        "port 8085)",
+    )
+    p.add_argument(
+        "--ca-file",
+        type=Path,
+        help="PEM certificate(s) to trust for wss:// and https:// (a private CA; default: the system's)",
+    )
     p.add_argument(
         "--bridge-port", type=port, default=9090, help="embedded: rosbridge port (a free one if taken)"
     )
@@ -75,34 +92,39 @@ def build_parser() -> argparse.ArgumentParser:
         "an Authorization: Bearer header to the rosbridge endpoint and the tracker API",
     )
     p.add_argument(
-        "--log-file", help="log file for the client libraries (default: a file in the temp directory)"
+        "--log-file",
+        help=f"the console's log, rotated at 1 MB, 3 kept (default: {default_log_path('arbiter-tui').parent}"
+        "/arbiter-tui-<pid>.log); nothing is ever logged to the terminal",
     )
+    add_log_level(p)
+    add_version(p)
     return p
-
-
-def _host_port(url: str, default_port: int) -> tuple[str, int]:
-    u = urlparse(url)
-    if u.scheme not in ("ws", "wss") or not u.hostname:
-        raise ValueError(f"--rosbridge must be a ws:// URL, got {url!r}")
-    return u.hostname, u.port or default_port
 
 
 def run_app(argv: list[str]) -> int:
     args = build_parser().parse_args(argv)
-    log_file = args.log_file or os.path.join(tempfile.gettempdir(), "arbiter-tui.log")
     # roslibpy/twisted/autobahn must never write to the terminal the TUI owns.
-    logging.basicConfig(
-        filename=log_file, level=logging.INFO, format="%(asctime)s %(name)s %(levelname)s %(message)s"
-    )
+    log_file = str(log_to_file(args.log_file or default_log_path("arbiter-tui"), args.log_level))
     if not args.export_dir.is_dir():
         print(f"arbiter-tui: --export-dir {args.export_dir} is not a directory", file=sys.stderr)
         return 2
-    mode = CONNECT if args.connect else SIM if args.sim else EMBEDDED
+    named = args.rosbridge is not None or args.tracker is not None
+    if args.sim and named:
+        print("arbiter-tui: --rosbridge/--tracker name servers to drive; not with --sim", file=sys.stderr)
+        return 2
+    # naming a server means using it: never silently start the bundled simulator instead
+    mode = CONNECT if args.connect or named else SIM if args.sim else EMBEDDED
     token = None
     if mode == CONNECT:
         try:
             token = load_token(args.token_file)
-        except AuthConfigError as exc:
+            bridge = rosbridge_endpoint(args.rosbridge or DEFAULT_ROSBRIDGE)
+            tracker = tracker_endpoint(args.tracker) if args.tracker else tracker_beside(bridge)
+            check_token_transport(bridge, "--rosbridge", token)
+            check_token_transport(tracker, "--tracker", token)
+            if args.ca_file is not None and not args.ca_file.is_file():
+                raise UrlError(f"--ca-file {args.ca_file}: no such file")
+        except (AuthConfigError, UrlError) as exc:
             print(f"arbiter-tui: {exc}", file=sys.stderr)
             return 2
     settings = Settings(
@@ -118,13 +140,7 @@ def run_app(argv: list[str]) -> int:
         offset_warn_ms=args.offset_warn_ms,
     )
     if mode == CONNECT:
-        try:
-            _host_port(args.rosbridge, 9090)
-        except ValueError as exc:
-            print(f"arbiter-tui: {exc}", file=sys.stderr)
-            return 2
-        settings.rosbridge_url = args.rosbridge
-        settings.tracker_url = args.tracker
+        settings.rosbridge_url, settings.tracker_url = bridge.url, tracker.url
     from .app import make_app
 
     if mode == SIM:
@@ -153,17 +169,26 @@ def _connect(
         from .link.embedded import EmbeddedBackend
 
         backend = EmbeddedBackend.start(
-            args.bridge_port, args.api_port, log_file=log_file, transport=args.transport
+            args.bridge_port,
+            args.api_port,
+            log_file=str(Path(log_file).with_suffix(".backend.log")),  # its own file: rotation is per writer
+            transport=args.transport,
+            extra_args=["--log-level", args.log_level],
         )
         backend.supervise()
-        host, port = "127.0.0.1", backend.bridge_port
-        settings.rosbridge_url = f"ws://{host}:{port}"
+        settings.rosbridge_url = f"ws://127.0.0.1:{backend.bridge_port}"
         settings.tracker_url = f"http://127.0.0.1:{backend.api_port}"
-    else:
-        host, port = _host_port(args.rosbridge, 9090)
+    bridge = rosbridge_endpoint(settings.rosbridge_url)
     try:
-        link = RosLink(host, port, token=token)
-        tracker = TrackerClient(settings.tracker_url or "", token=token)
+        link = RosLink(
+            bridge.host,
+            bridge.port,
+            token=token,
+            path=bridge.path,
+            secure=bridge.secure,
+            ca_file=args.ca_file,
+        )
+        tracker = TrackerClient(settings.tracker_url or "", token=token, ca_file=args.ca_file)
     except BaseException:
         if backend is not None:
             backend.stop()

@@ -7,8 +7,10 @@ seed's own) is polled by ``limit``, and records newer than the last timestamp se
 
 from __future__ import annotations
 
+import ssl
 from collections import deque
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from arbiter_core.record import LatencyRecord, RecordError
@@ -112,7 +114,12 @@ def _count(value: Any) -> int:
 
 class TrackerClient:
     def __init__(
-        self, base_url: str, timeout: float = 1.0, limit: int = 50, token: str | None = None
+        self,
+        base_url: str,
+        timeout: float = 1.0,
+        limit: int = 50,
+        token: str | None = None,
+        ca_file: Path | None = None,
     ) -> None:
         self.base_url = base_url.rstrip("/")
         self.limit = limit
@@ -120,7 +127,9 @@ class TrackerClient:
         import httpx  # here, not at module level: ~90 ms the console's first frame need not wait for
 
         headers = {} if token is None else {"Authorization": f"Bearer {token}"}
-        self._client: httpx.AsyncClient = httpx.AsyncClient(timeout=timeout, headers=headers)
+        # https:// is verified against the system's CAs, or against --ca-file (a private CA)
+        verify: Any = True if ca_file is None else ssl.create_default_context(cafile=str(ca_file))
+        self._client: httpx.AsyncClient = httpx.AsyncClient(timeout=timeout, headers=headers, verify=verify)
 
     async def poll(self) -> LatencyView:
         import httpx

@@ -6,6 +6,7 @@ import json
 import logging
 import threading
 import time
+from pathlib import Path
 from typing import Any
 
 from arbiter_core import envelope, topics
@@ -22,15 +23,20 @@ STAMPED = topics.absolute(topics.STAMPED)
 
 
 def _write_now(proto: Any, payload: bytes) -> None:
-    """Send a text frame on the reactor thread: straight into the socket when nothing is buffered
-    (so ordering is kept), otherwise through autobahn and Twisted's buffer."""
+    """Send a text frame on the reactor thread: straight into the socket when it is a plain TCP
+    socket with nothing buffered (so ordering is kept), otherwise through autobahn and Twisted's
+    buffer (TLS, or data already queued)."""
+    from twisted.internet import tcp
+
     transport = getattr(proto, "transport", None)
     if (
-        transport is None
+        # only a plain TCP socket: under TLS (a BufferingTLSTransport, or tcp.Client after startTLS)
+        # writeSomeData would bypass the encryption (found by the wss:// test)
+        not isinstance(transport, tcp.Client)
+        or transport.TLS
         or getattr(proto, "state", None) != getattr(proto, "STATE_OPEN", object())
-        or transport._tempDataBuffer
-        or transport.dataBuffer
-        or not hasattr(transport, "writeSomeData")
+        or getattr(transport, "_tempDataBuffer", True)
+        or getattr(transport, "dataBuffer", True)
     ):
         proto.sendMessage(payload, isBinary=False)
         return
@@ -46,7 +52,16 @@ class RosLink:
     """The rosbridge link: stamped commands out, odometry and latency reports in (roslibpy on Twisted's
     thread; its callbacks only write :class:`Telemetry`)."""
 
-    def __init__(self, host: str, port: int, odom_throttle_ms: int = 50, token: str | None = None) -> None:
+    def __init__(
+        self,
+        host: str,
+        port: int,
+        odom_throttle_ms: int = 50,
+        token: str | None = None,
+        path: str = "/",
+        secure: bool = False,
+        ca_file: Path | None = None,
+    ) -> None:
         from roslibpy.comm import select_factory
         from twisted.internet import reactor
         from twisted.internet.threads import blockingCallFromThread
@@ -61,22 +76,27 @@ class RosLink:
         self._zero_first = False
         self._ever_connected = False
         self._reactor: Any = reactor
+        host_part = f"[{host}]" if ":" in host else host
+        self.url = f"{'wss' if secure else 'ws'}://{host_part}:{port}{path or '/'}"
+        self._tls = tls_options(host, ca_file) if secure else None
         # Build on the reactor thread when it already runs (a second link in one process): the
         # connection attempt is queued behind this call, so the ping options and the event hooks
         # are in place before the first connection is made. Otherwise the reactor starts below.
         if reactor.running:
-            blockingCallFromThread(reactor, self._build, host, port, token, odom_throttle_ms)
+            blockingCallFromThread(reactor, self._build, token, odom_throttle_ms)
         else:
-            self._build(host, port, token, odom_throttle_ms)
+            self._build(token, odom_throttle_ms)
         self.ros.factory.manager.run()  # start the reactor thread without blocking on the connection
 
-    def _build(self, host: str, port: int, token: str | None, odom_throttle_ms: int) -> None:
+    def _build(self, token: str | None, odom_throttle_ms: int) -> None:
         import roslibpy
 
         # The token goes in the handshake's Authorization header: sent on every reconnect, before any
-        # frame, and never part of a URL that could be logged.
+        # frame, and never part of a URL that could be logged. (Plain ws:// to another machine with a
+        # token is refused before a link is made: arbiter_core.urls.check_token_transport.)
         headers = None if token is None else {"Authorization": f"Bearer {token}"}
-        self.ros = roslibpy.Ros(host, port, headers=headers)
+        # A whole URL with port=None is used as given by roslibpy: scheme, host, port and path kept.
+        self.ros = make_ros(self.url, headers, self._tls)
         factory = self.ros.factory
         # A silently dead link (cable out, Wi-Fi gone, NAT timeout) sends no FIN: only pings find it.
         factory.setProtocolOptions(autoPingInterval=PING_INTERVAL_S, autoPingTimeout=PING_TIMEOUT_S)
@@ -186,3 +206,49 @@ class RosLink:
                 self.ros.close(timeout=2)
         except Exception:  # closing a dead link must never take the app down
             log.debug("closing the rosbridge link failed", exc_info=True)
+
+
+def tls_options(host: str, ca_file: Path | None) -> Any:
+    """Twisted client TLS options that verify the server's certificate and name: against ``ca_file``
+    (PEM, one or more certificates) when given, else the system's trust store."""
+    from twisted.internet import ssl
+
+    if ca_file is None:
+        trust = ssl.platformTrust()
+    else:
+        pem = Path(ca_file).read_bytes()
+        certs = [
+            ssl.Certificate.loadPEM(b"-----BEGIN CERTIFICATE-----" + part)
+            for part in pem.split(b"-----BEGIN CERTIFICATE-----")[1:]
+        ]
+        if not certs:
+            raise ValueError(f"--ca-file {ca_file}: no PEM certificate in it")
+        trust = ssl.trustRootFromCertificates(certs)
+    return ssl.optionsForClientTLS(host, trustRoot=trust)
+
+
+def make_ros(url: str, headers: dict[str, str] | None, tls: Any) -> Any:
+    """A ``roslibpy.Ros`` for ``url``. For wss://, its factory connects with ``tls`` (verifying the
+    certificate and host name) from the very first attempt: roslibpy's own factory connects wss://
+    without any verification, and ``Ros.__init__`` starts connecting before it could be changed, so
+    the factory is made here (these three attributes are all ``Ros.__init__`` sets in roslibpy 2.1.0,
+    pinned in pyproject.toml; tests/integration/test_urls_tls.py fails if verification is skipped)."""
+    import roslibpy
+    from roslibpy.comm import select_factory
+
+    if tls is None:
+        return roslibpy.Ros(url, port=None, headers=headers)
+    from autobahn.twisted.websocket import connectWS
+
+    base = select_factory()
+
+    class VerifiedFactory(base):  # type: ignore[misc, valid-type]
+        def _connect(self) -> None:
+            self.connector = connectWS(self, contextFactory=tls)
+
+    ros = roslibpy.Ros.__new__(roslibpy.Ros)
+    ros._id_counter = 0
+    ros.factory = VerifiedFactory(url, headers=headers)
+    ros.is_connecting = False
+    ros.connect()
+    return ros

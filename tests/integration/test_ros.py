@@ -69,6 +69,8 @@ def test_rclpy_commands_records_twists_odometry_and_watchdog(peer):
         pub = peer.node.create_publisher(String, "/stamped_cmd_vel", 10)
         wait_matched(pub)
         assert wait_for(lambda: len(odom) > 3, 10)
+        for topic in ("/cmd_vel_measured", "/latency_report"):  # volatile: match before the first command
+            assert wait_for(lambda t=topic: peer.matched(t) > 0, 10)
         start_x = odom[-1]
         n = 25
         sent = [(0.5 + 0.01 * i, 0.1 * (i % 3)) for i in range(n)]
@@ -117,6 +119,8 @@ def test_twist_stamped_carries_the_receive_time(peer):
         got = peer.collect(TwistStamped, "/cmd_vel_measured")
         pub = peer.node.create_publisher(String, "/stamped_cmd_vel", 10)
         wait_matched(pub)
+        # volatile: the twist is only seen by a subscription already matched to the tracker's publisher
+        assert wait_for(lambda: peer.matched("/cmd_vel_measured") > 0, 10)
         pub.publish(String(data=envelope.build(0.15, -0.2, seq=7)))
         assert wait_for(lambda: len(got) >= 1, 5)
         msg = got[0]

@@ -1,0 +1,136 @@
+"""URLs done right, through real servers: wss:// is TLS with a verified certificate, the path is kept,
+and a token never travels in clear to another machine."""
+
+import socket
+import threading
+import time
+
+import httpx
+import pytest
+from aiohttp import web
+
+from arbiter_backend.bridge import RosbridgeEndpoint
+from arbiter_backend.bus import TopicBus
+from arbiter_tui.cli import main as tui_main
+from arbiter_tui.latency.tracker_client import TrackerClient
+from arbiter_tui.link.base import CONNECTED
+from arbiter_tui.link.rosbridge import RosLink
+
+from ..support.backend import start_backend
+from ..support.certs import self_signed
+from ..support.waits import async_until
+
+
+@pytest.fixture
+def tls_backend(tmp_path):
+    cert, key = self_signed(tmp_path)
+    b = start_backend("--tls-cert", str(cert), "--tls-key", str(key))
+    yield b, cert
+    b.stop()
+
+
+async def test_wss_with_a_private_ca_drives_the_robot_and_https_polls_the_tracker(tls_backend):
+    backend, cert = tls_backend
+    link = RosLink("localhost", backend.bridge_port, secure=True, ca_file=cert)
+    api = f"https://localhost:{backend.api_port}"
+    tracker = TrackerClient(api, ca_file=cert)
+    try:
+        assert link.url.startswith("wss://localhost:")
+        assert await async_until(lambda: link.state == CONNECTED, timeout=10)
+        for _ in range(5):
+            assert link.send(0.2, 0.0)
+        assert await async_until(lambda: link.telemetry.reports >= 5, timeout=5)  # reports came back over TLS
+        view = await tracker.poll()
+        assert view.reachable and view.stats["count"] == 5, view.error
+        with pytest.raises(httpx.HTTPError):  # plain http to the TLS port is not answered as http
+            httpx.get(f"http://localhost:{backend.api_port}/api/health", timeout=2)
+    finally:
+        link.close()
+        await tracker.aclose()
+
+
+async def test_wss_to_an_untrusted_certificate_never_connects(tls_backend):
+    backend, _cert = tls_backend
+    link = RosLink("localhost", backend.bridge_port, secure=True)  # the system's CAs do not know it
+    try:
+        assert not await async_until(lambda: link.state == CONNECTED, timeout=2.5)
+        assert (
+            httpx.get(f"https://localhost:{backend.api_port}/api/health", verify=str(_cert)).json()[
+                "total_seen"
+            ]
+            == 0
+        )
+    finally:
+        link.close()
+
+
+def test_wss_opens_with_a_tls_hello_and_never_sends_the_token_in_clear():
+    token = "s3cret-token-0123456789"
+    with socket.socket() as server:
+        server.bind(("127.0.0.1", 0))
+        server.listen(1)
+        server.settimeout(10)
+        port = server.getsockname()[1]
+        got: list[bytes] = []
+
+        def accept():
+            conn, _ = server.accept()
+            with conn:
+                conn.settimeout(3)
+                try:
+                    got.append(conn.recv(4096))
+                except OSError:
+                    got.append(b"")
+
+        t = threading.Thread(target=accept, daemon=True)
+        t.start()
+        link = RosLink("localhost", port, secure=True, token=token)
+        try:
+            t.join(10)
+        finally:
+            link.close()
+    assert got and got[0][:1] == b"\x16"  # a TLS handshake record (ClientHello)
+    assert b"GET" not in got[0] and token.encode() not in got[0]
+
+
+async def test_the_url_path_is_kept():
+    endpoint = RosbridgeEndpoint(TopicBus())
+    app = web.Application()
+    app.router.add_get("/rosbridge/ws", endpoint.handle)  # a server mounted below a path
+    runner = web.AppRunner(app)
+    await runner.setup()
+    site = web.TCPSite(runner, "127.0.0.1", 0)
+    await site.start()
+    port = site._server.sockets[0].getsockname()[1]
+    good = RosLink("127.0.0.1", port, path="/rosbridge/ws")
+    wrong = RosLink("127.0.0.1", port)  # "/": 404
+    try:
+        assert good.url == f"ws://127.0.0.1:{port}/rosbridge/ws"
+        assert await async_until(lambda: good.state == CONNECTED, timeout=10)
+        await_wrong = time.monotonic() + 1.5
+        assert not await async_until(lambda: wrong.state == CONNECTED, timeout=await_wrong - time.monotonic())
+    finally:
+        good.close()
+        wrong.close()
+        await endpoint.close_all()
+        await runner.cleanup()
+
+
+@pytest.mark.parametrize(
+    ("args", "words"),
+    [
+        (["--rosbridge", "ws://10.9.8.7:9090"], "never sent in clear"),
+        (["--rosbridge", "ws://127.0.0.1:9090", "--tracker", "http://10.9.8.7:8085"], "use https://"),
+        (["--rosbridge", "ftp://robot"], "must start with ws:// or wss://"),
+        (["--rosbridge", "wss://robot:70000"], "out of range"),
+        (["--tracker", "http://:8085"], "no host"),
+        (["--sim", "--rosbridge", "ws://robot"], "not with --sim"),
+        (["--rosbridge", "wss://robot", "--ca-file", "/definitely/missing.pem"], "no such file"),
+    ],
+)
+def test_bad_urls_and_the_token_rule_stop_before_anything_starts(args, words, capsys, tmp_path, monkeypatch):
+    monkeypatch.setenv("ARBITER_TOKEN", "t" * 24)
+    monkeypatch.chdir(tmp_path)
+    assert tui_main([*args, "--log-file", str(tmp_path / "log")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and words in err[0], err
