@@ -12,7 +12,7 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from arbiter_core import auth
+from arbiter_core import auth, topics
 from arbiter_core.cliargs import (
     OneLineParser,
     add_log_level,
@@ -54,6 +54,12 @@ def build_parser() -> argparse.ArgumentParser:
         type=Path,
         help=f"file whose first line is the shared token (default: ${auth.TOKEN_ENV}); when a token is set "
         "every client must present it: rosbridge 'auth' op, ?token= or Authorization: Bearer",
+    )
+    p.add_argument(
+        "--namespace",
+        default="",
+        help="put every node and topic under this namespace, e.g. /robot1 (as --ros-args -r __ns:=/robot1; "
+        "names stay relative, so --ros-args -r remaps work)",
     )
     p.add_argument(
         "--tls-cert",
@@ -233,6 +239,11 @@ def main(argv: list[str] | None = None) -> int:
     except auth.AuthConfigError as exc:
         print(f"arbiter-backend: {exc}", file=sys.stderr)
         return 2
+    try:
+        ns = topics.namespace(args.namespace)
+    except topics.TopicNameError as exc:
+        print(f"arbiter-backend: --{exc}", file=sys.stderr)
+        return 2
     if args.tls_key is not None and args.tls_cert is None:
         print("arbiter-backend: --tls-key needs --tls-cert", file=sys.stderr)
         return 2
@@ -241,6 +252,7 @@ def main(argv: list[str] | None = None) -> int:
         allow_remote=args.allow_remote,
         tls_cert=args.tls_cert,
         tls_key=args.tls_key,
+        namespace=ns,
         token=token,
         bridge_port=args.bridge_port,
         api_port=args.api_port,

@@ -30,10 +30,6 @@ from .tracker import DEFAULT_MAX_COMMAND_AGE_MS, LatencyTracker
 
 log = logging.getLogger(__name__)
 
-TOPIC_STAMPED = topics.absolute(topics.STAMPED)
-TOPIC_MEASURED = topics.absolute(topics.MEASURED)
-TOPIC_REPORT = topics.absolute(topics.REPORT)
-TOPIC_ODOM = topics.absolute(topics.ODOM)
 
 
 @dataclass
@@ -52,6 +48,7 @@ class BackendConfig:
     transport: str = "embedded"  # or "ros"
     token: str | None = None  # required from every client when set (see auth.py)
     allow_remote: bool = False  # without it only loopback addresses may be bound
+    namespace: str = ""  # every topic of the backend under it (arbiter_core.topics.namespace form)
     tls_cert: Path | None = None  # with tls_key: serve wss:// and https:// (PEM files)
     tls_key: Path | None = None
 
@@ -139,28 +136,34 @@ class Backend(Servers):
         self.sim_enabled = self.simulator is not None
         self.endpoint = bridge.RosbridgeEndpoint(self.bus, token=config.token)
         self._tasks: list[asyncio.Task[None]] = []
+        # relative names under the namespace, as the ROS transport's nodes resolve them
+        ns = config.namespace
+        self.topic_stamped = topics.resolve(topics.STAMPED, ns)
+        self.topic_measured = topics.resolve(topics.MEASURED, ns)
+        self.topic_report = topics.resolve(topics.REPORT, ns)
+        self.topic_odom = topics.resolve(topics.ODOM, ns)
         for topic, type_name in (
-            (TOPIC_STAMPED, topics.TYPE_STRING),
-            (TOPIC_MEASURED, topics.MEASURED_TYPES[config.measured_type]),
-            (TOPIC_REPORT, topics.TYPE_STRING),
-            (TOPIC_ODOM, topics.TYPE_ODOM),
+            (self.topic_stamped, topics.TYPE_STRING),
+            (self.topic_measured, topics.MEASURED_TYPES[config.measured_type]),
+            (self.topic_report, topics.TYPE_STRING),
+            (self.topic_odom, topics.TYPE_ODOM),
         ):
             self.bus.declare(topic, type_name)
-        self.bus.subscribe(TOPIC_STAMPED, self._on_stamped)
+        self.bus.subscribe(self.topic_stamped, self._on_stamped)
         if self.simulator is not None:
             sim = self.simulator
-            self.bus.subscribe(TOPIC_MEASURED, lambda m: sim.on_twist(m, time.monotonic()))
+            self.bus.subscribe(self.topic_measured, lambda m: sim.on_twist(m, time.monotonic()))
 
     def _on_stamped(self, msg: dict[str, Any]) -> None:
         recv_ns = time.time_ns()
         accepted = self.tracker.on_stamped(msg.get("data"), recv_ns)
         if accepted is None:
             return
-        self.bus.publish(TOPIC_REPORT, {"data": accepted.text})
+        self.bus.publish(self.topic_report, {"data": accepted.text})
         if accepted.forward is not None:
             v, w = accepted.forward
             twist = topics.measured_message(v, w, self.config.measured_type, recv_ns)
-            self.bus.publish(TOPIC_MEASURED, twist)
+            self.bus.publish(self.topic_measured, twist)
 
     async def _watchdog(self) -> None:
         period = min(0.05, self.config.cmd_timeout / 4)
@@ -169,7 +172,7 @@ class Backend(Servers):
             if self.tracker.watchdog_due():
                 log.info("no command for %.2fs: publishing zero twist", self.config.cmd_timeout)
                 self.bus.publish(
-                    TOPIC_MEASURED,
+                    self.topic_measured,
                     topics.measured_message(0.0, 0.0, self.config.measured_type, time.time_ns()),
                 )
 
@@ -180,7 +183,7 @@ class Backend(Servers):
         next_t = loop.time()
         while True:
             odom = self.simulator.tick(time.monotonic(), time.time_ns())
-            self.bus.publish(TOPIC_ODOM, odom)
+            self.bus.publish(self.topic_odom, odom)
             next_t += period
             delay = next_t - loop.time()
             if delay < -period:  # fell behind (suspended?): resynchronise instead of bursting

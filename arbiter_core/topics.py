@@ -6,6 +6,7 @@ with ``ros.convert``, so each message is defined once for both transports.
 
 from __future__ import annotations
 
+import re
 from typing import Any
 
 # Names without the leading slash resolve to /stamped_cmd_vel etc. in the root namespace and
@@ -43,3 +44,43 @@ def measured_message(v: float, w: float, measured_type: str, stamp_ns: int) -> d
         },
         "twist": twist(v, w),
     }
+
+
+# -- names, the ROS way ---------------------------------------------------------------------------
+class TopicNameError(ValueError):
+    """A namespace or topic name that ROS 2 would refuse."""
+
+
+_TOKEN = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+
+
+def _check_tokens(name: str, what: str) -> None:
+    parts = [p for p in name.strip("/").split("/")] if name.strip("/") else []
+    for part in parts:
+        if not _TOKEN.fullmatch(part):
+            raise TopicNameError(
+                f"{what} {name!r}: each part must start with a letter or _ and hold only letters, "
+                "digits and _ (no //, no trailing /)"
+            )
+    if "//" in name or (name.endswith("/") and name != "/"):
+        raise TopicNameError(f"{what} {name!r}: no empty parts and no trailing /")
+
+
+def namespace(text: str | None) -> str:
+    """A namespace as ROS writes it: ``""`` for the root, else ``/a/b`` (a leading / is added)."""
+    if text is None or text in ("", "/"):
+        return ""
+    ns = text if text.startswith("/") else "/" + text
+    _check_tokens(ns, "namespace")
+    return ns
+
+
+def resolve(name: str, ns: str = "", what: str = "topic") -> str:
+    """A topic name resolved the ROS way: absolute names as given, relative ones under ``ns``.
+    (``~`` private names are the node's business, not a client's: refused.)"""
+    if name.startswith("~"):
+        raise TopicNameError(f"{what} {name!r}: a private (~) name belongs to a node; give the full name")
+    _check_tokens(name, what)
+    if not name.strip("/"):
+        raise TopicNameError("a topic name cannot be empty")
+    return name if name.startswith("/") else f"{ns}/{name}"

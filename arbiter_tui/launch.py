@@ -8,6 +8,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from arbiter_core import topics
 from arbiter_core.auth import AuthConfigError, load_token
 from arbiter_core.cliargs import OneLineParser, add_log_level, add_version, count, port, positive_float
 from arbiter_core.logs import default_log_path, log_to_file
@@ -43,6 +44,18 @@ def build_parser() -> argparse.ArgumentParser:
         "--tracker",
         help="latency tracker URL, http:// or https:// (implies --connect; default: the rosbridge host, "
         "port 8085)",
+    )
+    p.add_argument(
+        "--namespace",
+        default="",
+        help="the robot's namespace, e.g. /robot1: the stamped-command, report and odometry topics "
+        "resolve under it (the embedded backend runs under it too)",
+    )
+    p.add_argument(
+        "--odom-topic",
+        default="odom",
+        help="nav_msgs/Odometry topic; relative names resolve under --namespace, absolute ones are used "
+        "as given (default: odom; a Jazzy diff_drive_controller: diff_drive_controller/odom)",
     )
     p.add_argument(
         "--ca-file",
@@ -107,6 +120,12 @@ def run_app(argv: list[str]) -> int:
     log_file = str(log_to_file(args.log_file or default_log_path("arbiter-tui"), args.log_level))
     if not args.export_dir.is_dir():
         print(f"arbiter-tui: --export-dir {args.export_dir} is not a directory", file=sys.stderr)
+        return 2
+    try:
+        ns = topics.namespace(args.namespace)
+        topics.resolve(args.odom_topic, ns, what="odom-topic")
+    except topics.TopicNameError as exc:
+        print(f"arbiter-tui: --{exc}", file=sys.stderr)
         return 2
     named = args.rosbridge is not None or args.tracker is not None
     if args.sim and named:
@@ -173,7 +192,7 @@ def _connect(
             args.api_port,
             log_file=str(Path(log_file).with_suffix(".backend.log")),  # its own file: rotation is per writer
             transport=args.transport,
-            extra_args=["--log-level", args.log_level],
+            extra_args=["--log-level", args.log_level, "--namespace", args.namespace or "/"],
         )
         backend.supervise()
         settings.rosbridge_url = f"ws://127.0.0.1:{backend.bridge_port}"
@@ -187,6 +206,8 @@ def _connect(
             path=bridge.path,
             secure=bridge.secure,
             ca_file=args.ca_file,
+            namespace=topics.namespace(args.namespace),
+            odom_topic=args.odom_topic,
         )
         tracker = TrackerClient(settings.tracker_url or "", token=token, ca_file=args.ca_file)
     except BaseException:

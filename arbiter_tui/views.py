@@ -8,6 +8,7 @@ screen would not change: Textual then calls no watcher and the widget does no wo
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -16,7 +17,7 @@ from arbiter_core.kinematics import distance_error, heading_error
 from .analytics.store import EMPTY_STATS, AnalyticsStats, AnalyticsStore
 from .control.loop import ControlLoop
 from .latency.tracker_client import LatencyView
-from .link.base import DISCONNECTED, RECONNECTING, STARTING, Link
+from .link.base import CONNECTED, DISCONNECTED, RECONNECTING, STARTING, Link
 
 
 @dataclass(frozen=True, slots=True)
@@ -31,10 +32,11 @@ class StatusView:
     points: int = 0
     api: str | None = None  # "api UNREACHABLE" / "api …" (not answered yet); None when it answers
     error: str | None = None  # why the console could not start its link
+    warning: str | None = None  # e.g. "no odometry on /robot1/odom"
 
     @property
     def alarm(self) -> bool:
-        return self.link in (DISCONNECTED, RECONNECTING) or self.error is not None
+        return self.link in (DISCONNECTED, RECONNECTING) or self.error is not None or self.warning is not None
 
     def text(self) -> str:
         link = "DISCONNECTED (reconnecting)" if self.link == RECONNECTING else self.link
@@ -43,6 +45,8 @@ class StatusView:
             parts.append(self.error)
         if self.deploy:
             parts.append(f"deploy {self.deploy}")
+        if self.warning:
+            parts.append(self.warning)
         parts.append(self.algorithm)
         parts.append(f"{'REC' if self.collecting else 'paused'} {self.points}")
         if self.api:
@@ -74,6 +78,7 @@ class RobotView:
     e_d: float | None = None
     e_th: float | None = None
     too_small: bool = False
+    warning: str | None = None  # e.g. "no odometry on /robot1/odom"
 
 
 @dataclass(frozen=True, slots=True)
@@ -137,6 +142,7 @@ def status_view(
     tracker: LatencyView | None,
     simulated: bool,
     error: str | None = None,
+    now: float | None = None,
 ) -> StatusView:
     api = deploy = None
     if not simulated and tracker is not None:
@@ -154,10 +160,20 @@ def status_view(
         points=len(store),
         api=api,
         error=error,
+        warning=odometry_warning(link, time.monotonic() if now is None else now),
     )
 
 
-def robot_view(link: Link, loop: ControlLoop, too_small: bool = False) -> RobotView:
+def odometry_warning(link: Link, now: float) -> str | None:
+    """``no odometry on TOPIC`` while the link is up and odometry has not come for a while."""
+    if link.state == CONNECTED and link.telemetry.odometry_missing(now):
+        return f"no odometry on {getattr(link, 'topic_odom', '/odom')}"
+    return None
+
+
+def robot_view(
+    link: Link, loop: ControlLoop, too_small: bool = False, now: float | None = None
+) -> RobotView:
     pose, v_odom, w_odom, _lat = link.telemetry.snapshot()
     manual = loop.algorithm == "manual"
     goal = None if manual else loop.goal()
@@ -188,6 +204,7 @@ def robot_view(link: Link, loop: ControlLoop, too_small: bool = False) -> RobotV
         e_d=e_d,
         e_th=e_th,
         too_small=too_small,
+        warning=odometry_warning(link, time.monotonic() if now is None else now),
     )
 
 

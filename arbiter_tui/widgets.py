@@ -76,6 +76,8 @@ class RobotPanel(Bound):
             t.append("Starting: connecting to the robot…\n", "bold yellow")
         if r.too_small:
             t.append("Terminal too small: robot stopped.\n", "bold red")
+        if r.warning:
+            t.append(f"{r.warning}\n", "bold red")
         t.append("Command  ", "bold")
         t.append(f"v {r.v_cmd:+.2f} m/s  ω {r.w_cmd:+.2f} rad/s\n")
         t.append("Max      ", "bold")

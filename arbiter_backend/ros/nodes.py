@@ -65,7 +65,7 @@ def _limits_params(node: Node, config: BackendConfig) -> tuple[Limits, float, st
 
 class TrackerNode(Node):
     def __init__(self, config: BackendConfig, context: Context) -> None:
-        super().__init__(tracker.NODE_NAME, context=context)
+        super().__init__(tracker.NODE_NAME, namespace=config.namespace, context=context)
         limits, cmd_timeout, measured_type = _limits_params(self, config)
         deploy_mode = self.declare_parameter("deploy_mode", config.deploy_mode).value
         max_records = int(self.declare_parameter("max_records", config.max_records).value)
@@ -125,7 +125,7 @@ class TrackerNode(Node):
 
 class SimulatorNode(Node):
     def __init__(self, config: BackendConfig, context: Context) -> None:
-        super().__init__(simulator.NODE_NAME, context=context)
+        super().__init__(simulator.NODE_NAME, namespace=config.namespace, context=context)
         limits, cmd_timeout, measured_type = _limits_params(self, config)
         rate = _positive("rate_hz", self.declare_parameter("rate_hz", simulator.RATE_HZ).value)
         self.sim = simulator.DiffDriveSimulator(limits, cmd_timeout=cmd_timeout)

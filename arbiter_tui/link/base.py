@@ -24,6 +24,7 @@ CONNECTED = "CONNECTED"
 RECONNECTING = "RECONNECTING"
 DISCONNECTED = "DISCONNECTED"
 SIMULATED = "SIMULATED"
+ODOM_SILENCE_S = 2.0  # connected this long without odometry: said on screen
 
 
 @dataclass
@@ -38,6 +39,8 @@ class Telemetry:
     odom_count: int = 0
     latency_ms: float | None = None
     reports: int = 0
+    odom_at: float | None = None  # monotonic time of the last odometry message
+    connected_at: float | None = None  # monotonic time the link last came up
     meter: LatencyMeter = field(default_factory=LatencyMeter)
 
     def set_odom(self, msg: dict[str, Any]) -> None:
@@ -53,6 +56,15 @@ class Telemetry:
         with self.lock:
             self.pose, self.v, self.w = pose, v, w
             self.odom_count += 1
+            self.odom_at = time.monotonic()
+
+    def odometry_missing(self, now: float, after_s: float = ODOM_SILENCE_S) -> bool:
+        """Connected for ``after_s`` and no odometry in that long (never, or it stopped)."""
+        with self.lock:
+            if self.connected_at is None:
+                return False
+            last = self.connected_at if self.odom_at is None else max(self.odom_at, self.connected_at)
+            return now - last >= after_s
 
     def set_report(self, msg: dict[str, Any]) -> None:
         arrival = time.monotonic()

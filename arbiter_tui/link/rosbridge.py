@@ -19,7 +19,6 @@ log = logging.getLogger(__name__)
 MAX_RECONNECT_DELAY_S = 2.0
 PING_INTERVAL_S = 1.0  # WebSocket keep-alive: a ping every second...
 PING_TIMEOUT_S = 2.0  # ...and a link with no pong for this long is dropped (then reconnected)
-STAMPED = topics.absolute(topics.STAMPED)
 
 
 def _write_now(proto: Any, payload: bytes) -> None:
@@ -61,6 +60,8 @@ class RosLink:
         path: str = "/",
         secure: bool = False,
         ca_file: Path | None = None,
+        namespace: str = "",
+        odom_topic: str = topics.ODOM,
     ) -> None:
         from roslibpy.comm import select_factory
         from twisted.internet import reactor
@@ -76,6 +77,10 @@ class RosLink:
         self._zero_first = False
         self._ever_connected = False
         self._reactor: Any = reactor
+        # relative names resolve under the namespace, absolute ones are used as given (ROS rules)
+        self.topic_stamped = topics.resolve(topics.STAMPED, namespace)
+        self.topic_report = topics.resolve(topics.REPORT, namespace)
+        self.topic_odom = topics.resolve(odom_topic, namespace)
         host_part = f"[{host}]" if ":" in host else host
         self.url = f"{'wss' if secure else 'ws'}://{host_part}:{port}{path or '/'}"
         self._tls = tls_options(host, ca_file) if secure else None
@@ -120,14 +125,11 @@ class RosLink:
         factory.clientConnectionFailed = failed
         factory.on("ready", self._on_ready)
         self.ros.on("close", self._on_close)
-        self._cmd = roslibpy.Topic(self.ros, STAMPED, topics.TYPE_STRING, queue_size=1)
+        self._cmd = roslibpy.Topic(self.ros, self.topic_stamped, topics.TYPE_STRING, queue_size=1)
         self._odom = roslibpy.Topic(
-            self.ros, topics.absolute(topics.ODOM), topics.TYPE_ODOM, throttle_rate=odom_throttle_ms,
-            queue_length=1,
+            self.ros, self.topic_odom, topics.TYPE_ODOM, throttle_rate=odom_throttle_ms, queue_length=1
         )
-        self._report = roslibpy.Topic(
-            self.ros, topics.absolute(topics.REPORT), topics.TYPE_STRING, queue_length=10
-        )
+        self._report = roslibpy.Topic(self.ros, self.topic_report, topics.TYPE_STRING, queue_length=10)
         self._cmd.advertise()
         self._odom.subscribe(self.telemetry.set_odom)
         self._report.subscribe(self.telemetry.set_report)
@@ -135,6 +137,8 @@ class RosLink:
     def _on_ready(self, proto: Any) -> None:
         # roslibpy has no handler for rosbridge "status" frames; ours records the message.
         proto._message_handlers["status"] = self._on_status
+        with self.telemetry.lock:
+            self.telemetry.connected_at = time.monotonic()
         with self._lock:
             self._state = CONNECTED
             if self._ever_connected:
@@ -145,6 +149,8 @@ class RosLink:
         with self._lock:
             if self._state != "CLOSED":
                 self._state = DISCONNECTED
+        with self.telemetry.lock:
+            self.telemetry.connected_at = None
         self.telemetry.meter.reset_pending(time.monotonic())  # in flight: never reported
 
     def _on_status(self, message: dict[str, Any]) -> None:
@@ -189,7 +195,7 @@ class RosLink:
         offset = None if est is None else est.offset_ms
         text = envelope.build(v, w, seq=seq, clock_ns=lambda: now_ns, offset_ms=offset)
         frame = json.dumps(
-            {"op": "publish", "id": f"cmd:{seq}", "topic": STAMPED, "msg": {"data": text}},
+            {"op": "publish", "id": f"cmd:{seq}", "topic": self.topic_stamped, "msg": {"data": text}},
             separators=(",", ":"),
         )
         self.telemetry.meter.on_send(seq, envelope.stamp_ms_from_ns(now_ns), mono)

@@ -6,6 +6,7 @@ imported; `.ci/run` sets ARBITER_REQUIRE_ROS so CI fails instead of skipping.
 """
 
 import json
+import math
 import time
 
 import pytest
@@ -32,6 +33,7 @@ from ..support.ros import (
     TwistStamped,
     use_test_domain,
 )
+from ..support.tui import until
 
 ros_domain = pytest.fixture(scope="module", autouse=True)(use_test_domain)
 
@@ -305,3 +307,62 @@ async def test_tui_in_embedded_ros_mode_drives_the_robot(tmp_path):
     finally:
         link.close()
         backend.stop()
+
+
+async def test_a_namespaced_diff_drive_robot_is_driven_from_the_console(peer, tmp_path):
+    """As `arbiter-backend --transport ros --no-sim --namespace /robot1 --measured-type twist_stamped
+    --ros-args -r cmd_vel_measured:=cmd_vel` in front of a Jazzy diff_drive_controller."""
+    node = peer.node
+    odom_pub = node.create_publisher(Odometry, "/robot1/diff_drive_controller/odom", 10)
+    pose = {"x": 0.0}
+    got = []
+
+    def on_cmd(msg):  # the robot: integrates TwistStamped commands and reports odometry
+        got.append((msg.twist.linear.x, msg.twist.angular.z, msg.header.frame_id))
+        pose["x"] += msg.twist.linear.x * 0.1
+
+    node.create_subscription(TwistStamped, "/robot1/cmd_vel", on_cmd, 10)
+
+    def tick():
+        o = Odometry()
+        o.header.frame_id = "odom"
+        o.pose.pose.position.x = pose["x"]
+        o.pose.pose.orientation.w = 1.0
+        odom_pub.publish(o)
+
+    node.create_timer(0.05, tick)
+    backend = ros_backend(
+        "--no-sim", "--namespace", "/robot1", "--measured-type", "twist_stamped",
+        "--ros-args", "-r", "cmd_vel_measured:=cmd_vel",
+    )  # fmt: skip
+    link = RosLink(
+        "127.0.0.1", backend.bridge_port, namespace="/robot1", odom_topic="diff_drive_controller/odom"
+    )
+    app = make_app(
+        Settings(handle_signals=False, export_dir=tmp_path, mode="connect"),
+        link,
+        TrackerClient(backend.api),
+        store=AnalyticsStore(),
+    )
+    try:
+        async with app.run_test(size=(100, 30)) as pilot:
+            assert await until(pilot, lambda: link.state == CONNECTED, timeout=15)
+            assert await until(pilot, lambda: link.telemetry.odom_count > 0, timeout=10)
+            assert await until(pilot, lambda: peer.node.count_publishers("/robot1/cmd_vel") > 0, 10)
+            for _ in range(60):  # hold i until the robot has moved 10 cm (DDS discovery takes a moment)
+                await pilot.press("i")
+                await pilot.pause(0.1)
+                if link.telemetry.pose.x > 0.1:
+                    break
+            assert link.telemetry.pose.x > 0.1  # the console sees the robot's own odometry
+            assert got and all(v >= 0 and math.isfinite(v) for v, _, _ in got)
+            assert max(v for v, _, _ in got) > 0 and got[-1][2] == "base_link"
+            names = dict(node.get_topic_names_and_types())
+            assert "/robot1/stamped_cmd_vel" in names and "/robot1/latency_report" in names
+            assert names["/robot1/cmd_vel"] == ["geometry_msgs/msg/TwistStamped"]
+            nodes = {(n, ns) for n, ns in node.get_node_names_and_namespaces()}
+            assert ("latency_tracker", "/robot1") in nodes
+            await pilot.press("ctrl+q")
+    finally:
+        link.close()
+        assert backend.stop() == 0
