@@ -264,7 +264,11 @@ class ArbiterApp(App[None]):
 
     def _latency_snapshot(self) -> LatencySnapshot:
         return latency_snapshot(
-            self.latency_view(), self.link, self.settings.offset_warn_ms, self.settings.mode == SIM
+            self.latency_view(),
+            self.link,
+            self.settings.offset_warn_ms,
+            self.settings.mode == SIM,
+            self.settings.tracker_url or "",
         )
 
     def target(self) -> str:

@@ -31,7 +31,7 @@ class StatusView:
     collecting: bool = False
     points: int = 0
     api: str | None = None  # "api UNREACHABLE" / "api …" (not answered yet); None when it answers
-    error: str | None = None  # why the console could not start its link
+    error: str | None = None  # why the console could not start its link, or why the link is down
     warning: str | None = None  # e.g. "no odometry on /robot1/odom"
 
     @property
@@ -110,6 +110,7 @@ class LatencySnapshot:
     """The latency screen: the tracker's figures (polled) and this console's own (the meter)."""
 
     simulated: bool = False
+    url: str = ""  # the tracker's
     polled: int = 0  # the poller's view version and failures: new data or a new failure
     failures: int = 0
     reachable: bool | None = None
@@ -159,7 +160,7 @@ def status_view(
         collecting=store.is_collecting,
         points=len(store),
         api=api,
-        error=error,
+        error=error or getattr(link, "error", None),
         warning=odometry_warning(link, time.monotonic() if now is None else now),
     )
 
@@ -240,7 +241,7 @@ def analytics_view(store: AnalyticsStore, previous: AnalyticsView | None = None)
 
 
 def latency_snapshot(
-    view: LatencyView | None, link: Link, offset_warn_ms: float, simulated: bool
+    view: LatencyView | None, link: Link, offset_warn_ms: float, simulated: bool, url: str = ""
 ) -> LatencySnapshot:
     state = link.state
     if simulated or view is None:
@@ -248,6 +249,7 @@ def latency_snapshot(
     summary = link.telemetry.meter.summary()
     summary.pop("in_flight", None)  # changes with every command; not shown
     return LatencySnapshot(
+        url=url,
         polled=view.version,
         failures=view.failures,
         reachable=view.reachable,

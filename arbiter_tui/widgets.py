@@ -259,7 +259,8 @@ class TrackerLine(Bound):
         elif v.reachable is None:
             state.append("Polling the tracker…", "bold")
         elif not v.reachable:
-            state.append(f"TRACKER UNREACHABLE ({v.error}) — retrying every 0.5 s", "bold red")
+            at = f" at {v.url}" if v.url else ""
+            state.append(f"TRACKER UNREACHABLE{at}: {v.error} — retrying every 0.5 s", "bold red")
         else:
             state.append("tracker reachable", "bold green")
             state.append(f" · deploy mode {v.deploy} · {len(v.window)} samples in window")

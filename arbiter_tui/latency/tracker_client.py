@@ -15,6 +15,8 @@ from typing import TYPE_CHECKING, Any
 
 from arbiter_core.record import LatencyRecord, RecordError
 
+from ..link.errors import connect_failure, http_failure
+
 if TYPE_CHECKING:
     import httpx
 
@@ -108,6 +110,17 @@ class LatencyView:
         self.failures += 1
 
 
+def _chain(exc: BaseException) -> str:
+    """The exception and its causes in one line: httpx says "All connection attempts failed" and keeps
+    the useful part (ConnectionRefusedError, a DNS or TLS error) further down the chain."""
+    parts, seen = [], 0
+    current: BaseException | None = exc
+    while current is not None and seen < 6:
+        parts.append(f"{type(current).__name__}: {current}")
+        current, seen = current.__cause__ or current.__context__, seen + 1
+    return " | ".join(parts)
+
+
 def _count(value: Any) -> int:
     return value if isinstance(value, int) and not isinstance(value, bool) and value >= 0 else 0
 
@@ -140,9 +153,11 @@ class TrackerClient:
             resp.raise_for_status()
             self.view.apply(resp.json())
         except httpx.HTTPStatusError as exc:
-            self.view.fail(f"HTTP {exc.response.status_code}")
+            self.view.fail(http_failure(exc.response.status_code))
+        except httpx.TimeoutException:
+            self.view.fail("timed out (host down or unreachable)")
         except httpx.HTTPError as exc:
-            self.view.fail(type(exc).__name__)
+            self.view.fail(connect_failure(type(exc).__name__, _chain(exc)))
         except ValueError as exc:
             self.view.fail(f"bad response: {exc}")
         return self.view

@@ -11,12 +11,13 @@ from typing import Any
 
 from arbiter_core import envelope, topics
 
-from . import wsframe
+from . import errors, wsframe
 from .base import CONNECTED, CONNECTING, DISCONNECTED, RECONNECTING, Telemetry
 
 log = logging.getLogger(__name__)
 
 MAX_RECONNECT_DELAY_S = 2.0
+AUTH_RETRY_S = 30.0  # a rejected token is retried this slowly: it will be rejected again
 PING_INTERVAL_S = 1.0  # WebSocket keep-alive: a ping every second...
 PING_TIMEOUT_S = 2.0  # ...and a link with no pong for this long is dropped (then reconnected)
 
@@ -76,6 +77,7 @@ class RosLink:
         self._seq = 0
         self._zero_first = False
         self._ever_connected = False
+        self._error: str | None = None
         self._reactor: Any = reactor
         # relative names resolve under the namespace, absolute ones are used as given (ROS rules)
         self.topic_stamped = topics.resolve(topics.STAMPED, namespace)
@@ -120,9 +122,34 @@ class RosLink:
             with self._lock:
                 if self._state != "CLOSED":
                     self._state = DISCONNECTED
+            value = getattr(reason, "value", reason)
+            self._set_error(errors.connect_failure(type(value).__name__, str(value)))
             original_failed(connector, reason)
 
         factory.clientConnectionFailed = failed
+        original_lost = factory.clientConnectionLost
+
+        def lost(connector: Any, reason: Any) -> None:  # a TLS handshake that failed ends up here
+            value = getattr(reason, "value", reason)
+            if "SSL" in type(value).__module__ + type(value).__name__:
+                self._set_error(errors.connect_failure(type(value).__name__, str(value)))
+            original_lost(connector, reason)
+
+        factory.clientConnectionLost = lost
+        link = self
+
+        class Protocol(factory.protocol):  # type: ignore[misc, name-defined]
+            def onClose(self, wasClean: bool, code: int | None, reason: str | None) -> None:
+                said = errors.close_failure(code, reason)
+                if said is not None:
+                    link._set_error(said)
+                    if said.startswith(errors.TOKEN_HINT):
+                        # the same token will be refused again: retry slowly, and say so
+                        factory.delay = max(factory.delay, AUTH_RETRY_S / factory.factor)
+                        factory.maxDelay = AUTH_RETRY_S
+                super().onClose(wasClean, code, reason)
+
+        factory.protocol = Protocol
         factory.on("ready", self._on_ready)
         self.ros.on("close", self._on_close)
         self._cmd = roslibpy.Topic(self.ros, self.topic_stamped, topics.TYPE_STRING, queue_size=1)
@@ -134,9 +161,23 @@ class RosLink:
         self._odom.subscribe(self.telemetry.set_odom)
         self._report.subscribe(self.telemetry.set_report)
 
+    def _set_error(self, text: str) -> None:
+        with self._lock:
+            self._error = text
+        log.warning("rosbridge link %s: %s", self.url, text)
+
+    @property
+    def error(self) -> str | None:
+        """Why the link is down, in words (None while it is up, or before it ever failed)."""
+        with self._lock:
+            return None if self._state == CONNECTED else self._error
+
     def _on_ready(self, proto: Any) -> None:
         # roslibpy has no handler for rosbridge "status" frames; ours records the message.
         proto._message_handlers["status"] = self._on_status
+        self.ros.factory.maxDelay = MAX_RECONNECT_DELAY_S  # a token accepted: back to fast retries
+        with self._lock:
+            self._error = None
         with self.telemetry.lock:
             self.telemetry.connected_at = time.monotonic()
         with self._lock:
@@ -208,6 +249,8 @@ class RosLink:
         with self._lock:
             self._state = "CLOSED"
         try:
+            # a link that is down would otherwise go on reconnecting for the life of the process
+            self._reactor.callFromThread(self.ros.factory.stopTrying)
             if self.ros.is_connected:
                 self.ros.close(timeout=2)
         except Exception:  # closing a dead link must never take the app down
