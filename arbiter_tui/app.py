@@ -25,6 +25,7 @@ from textual.screen import Screen
 
 from .analytics.files import ExportError, export_store
 from .analytics.store import STORE, AnalyticsStore
+from .config import save_theme
 from .control.loop import ControlLoop
 from .control.teleop import Teleop
 from .latency.tracker_client import LatencyView, TrackerClient
@@ -128,6 +129,9 @@ class ArbiterApp(App[None]):
 
     # -- lifecycle -------------------------------------------------------------------------
     def on_mount(self) -> None:
+        if self.settings.theme:
+            self.theme = self.settings.theme
+        self._theme_loaded = True
         self.publish_views(force=True)
         if self.settings.live:
             self.set_interval(1.0 / self.settings.repeat_rate, self._control_tick)
@@ -144,6 +148,18 @@ class ArbiterApp(App[None]):
             for sig in (signal.SIGHUP, signal.SIGTERM):
                 with contextlib.suppress(NotImplementedError, RuntimeError, ValueError):
                     loop.add_signal_handler(sig, self._on_signal, sig)
+
+    _theme_loaded = False
+
+    def watch_theme(self, theme: str) -> None:
+        """A theme chosen in the palette is kept in the config file for next time."""
+        if not self._theme_loaded or self.settings.config_path is None or theme == self.settings.theme:
+            return
+        self.settings.theme = theme
+        try:
+            save_theme(self.settings.config_path, theme)
+        except OSError as exc:
+            self.notify(f"could not save the theme in {self.settings.config_path}: {exc}", severity="warning")
 
     @work(thread=True, exclusive=True, group="connect", exit_on_error=False)
     def _connect(self) -> None:

@@ -21,6 +21,7 @@ from arbiter_core.urls import (
     tracker_endpoint,
 )
 
+from . import config
 from .settings import CONNECT, EMBEDDED, SIM, Settings
 
 
@@ -109,13 +110,57 @@ def build_parser() -> argparse.ArgumentParser:
         help=f"the console's log, rotated at 1 MB, 3 kept (default: {default_log_path('arbiter-tui').parent}"
         "/arbiter-tui-<pid>.log); nothing is ever logged to the terminal",
     )
+    p.add_argument(
+        "--config",
+        type=Path,
+        help=f"config file (TOML; keys are these long option names, plus theme; flags win; default: "
+        f"{config.default_path()})",
+    )
+    p.add_argument(
+        "--print-config", action="store_true", help="print the effective settings and where each came from"
+    )
     add_log_level(p)
     add_version(p)
     return p
 
 
+def parse(argv: list[str]) -> tuple[argparse.Namespace, config.Loaded, set[str]] | int:
+    """Defaults, then the config file, then the command line; an int is an exit status."""
+    from textual.theme import BUILTIN_THEMES
+
+    parser = build_parser()
+    early = argparse.ArgumentParser(add_help=False)
+    early.add_argument("--config", type=Path)
+    known, _ = early.parse_known_args(argv)
+    path = known.config or config.default_path()
+    try:
+        loaded = config.load(path, parser, list(BUILTIN_THEMES))
+        if known.config is not None and not loaded.exists:
+            raise config.ConfigError(f"config {path}: no such file")
+    except config.ConfigError as exc:
+        print(f"arbiter-tui: {exc}", file=sys.stderr)
+        return 2
+    parser.set_defaults(**loaded.values)
+    args = parser.parse_args(argv)
+    cli = config.given_on_command_line(parser, argv)
+    # a mode chosen on the command line wins over one (and its servers) from the file
+    if "sim" in cli:
+        for dest in ("connect", "rosbridge", "tracker"):
+            if dest not in cli and dest in loaded.values:
+                setattr(args, dest, False if dest == "connect" else None)
+    if "connect" in cli and "sim" not in cli:
+        args.sim = False
+    if args.print_config:
+        print(config.describe(args, parser, loaded, cli))
+        return 0
+    return args, loaded, cli
+
+
 def run_app(argv: list[str]) -> int:
-    args = build_parser().parse_args(argv)
+    parsed = parse(argv)
+    if isinstance(parsed, int):
+        return parsed
+    args, loaded, _cli = parsed
     # roslibpy/twisted/autobahn must never write to the terminal the TUI owns.
     log_file = str(log_to_file(args.log_file or default_log_path("arbiter-tui"), args.log_level))
     if not args.export_dir.is_dir():
@@ -157,6 +202,8 @@ def run_app(argv: list[str]) -> int:
         repeat_rate=args.repeat_rate,
         key_timeout=args.key_timeout,
         offset_warn_ms=args.offset_warn_ms,
+        config_path=loaded.path,
+        theme=loaded.theme,
     )
     if mode == CONNECT:
         settings.rosbridge_url, settings.tracker_url = bridge.url, tracker.url

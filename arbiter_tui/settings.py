@@ -30,3 +30,5 @@ class Settings:
     live: bool = True  # timers and workers on; snapshot tests turn it off for still frames
     handle_signals: bool = True
     offset_warn_ms: float = 10.0  # warn when the estimated clock offset to the tracker exceeds this
+    config_path: Path | None = None  # where a theme chosen in the palette is kept (None: nowhere)
+    theme: str | None = None  # from the config file

@@ -321,3 +321,19 @@ async def test_a_backend_that_cannot_start_is_said_on_screen():
         status = app.screen.query_one("#status")
         assert "address already in use" in status.render().plain and status.has_class("alarm")
         assert app.is_running  # still at the console: quit with ctrl+q
+
+
+async def test_a_theme_chosen_in_the_console_is_kept_in_the_config_file(tmp_path):
+    from arbiter_tui.app import make_app
+    from arbiter_tui.settings import Settings
+
+    path = tmp_path / "config.toml"
+    path.write_text("speed = 0.3\n")
+    settings = Settings(live=False, handle_signals=False, config_path=path, theme="nord")
+    app = make_app(settings, RecordingLink(), store=AnalyticsStore())
+    async with app.run_test(size=SIZE) as pilot:
+        assert app.theme == "nord"  # from the file
+        assert path.read_text() == "speed = 0.3\n"  # loading it wrote nothing
+        app.theme = "dracula"  # as the palette's theme picker does
+        await pilot.pause()
+    assert path.read_text() == 'theme = "dracula"\nspeed = 0.3\n'
