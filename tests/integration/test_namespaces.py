@@ -56,8 +56,8 @@ async def test_the_embedded_bus_under_a_namespace_and_no_odometry_said_plainly(t
                     await pilot.pause(0.05)
                     if link.telemetry.odom_count:
                         break
-                assert await until(pilot, lambda: said not in app.screen.query_one("#status").render().plain)
-                assert said not in app.screen.query_one("#robot").render().plain
+                shown = lambda: [app.screen.query_one(q).render().plain for q in ("#status", "#robot")]  # noqa: E731
+                assert await until(pilot, lambda: all(said not in text for text in shown()))
                 await ws.close()
             await pilot.press("ctrl+q")
     finally:
