@@ -23,6 +23,7 @@ import itertools
 import json
 import logging
 import re
+import socket
 import time
 from collections import deque
 from collections.abc import Callable
@@ -172,8 +173,10 @@ class RosbridgeEndpoint:
         if not authenticated:
             deadline = loop.call_later(auth.AUTH_DEADLINE_S, self._auth_timeout, client)
         log.info("client %d connected from %s", client.id, request.remote)
+        sock = request.transport.get_extra_info("socket") if request.transport is not None else None
         try:
             async for msg in ws:
+                quick_ack(sock)
                 if client.kick is not None:
                     continue  # being closed: nothing more is read into the robot
                 if msg.type == WSMsgType.TEXT:
@@ -462,6 +465,19 @@ class RosbridgeEndpoint:
             raise BadFrame("args.type must be a string")
         want = normalize_type(t)
         return {"topics": [topic for topic, ty in self.bus.topics() if ty == want]}
+
+
+def quick_ack(sock: socket.socket | None) -> None:
+    """ACK what a client sent at once (Linux TCP_QUICKACK, which the kernel clears again, hence once
+    per frame). A client with Nagle's algorithm on (a plain roslibpy script) holds its next small
+    frame until the previous one is ACKed; with delayed ACKs here that stalled it ~40 ms at a time."""
+    if sock is None or QUICKACK is None:
+        return
+    with contextlib.suppress(OSError):
+        sock.setsockopt(socket.IPPROTO_TCP, QUICKACK, 1)
+
+
+QUICKACK = getattr(socket, "TCP_QUICKACK", None)
 
 
 def make_app(endpoint: RosbridgeEndpoint) -> web.Application:

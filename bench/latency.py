@@ -22,7 +22,7 @@ import time
 
 from _common import emit, pct, sleep_until
 
-from arbiter_core import stats
+from arbiter_core import envelope, stats
 from arbiter_tui.latency.clocksync import LatencyMeter
 from arbiter_tui.link.base import CONNECTED
 from arbiter_tui.link.embedded import EmbeddedBackend
@@ -65,12 +65,49 @@ def tcp_floor(count: int, rate: float) -> list[float]:
     return res
 
 
+def plain_client(bridge_port: int, api: str, count: int, rate: float) -> list[float]:
+    """A plain roslibpy client as any user script writes it (Twisted transport, Nagle left on): it
+    subscribes to /cmd_vel_measured and publishes at ``rate`` with every 7th envelope malformed (the
+    tracker rejects those). One-way latencies of the good ones, from the tracker's records."""
+    import httpx
+    import roslibpy
+
+    ros = roslibpy.Ros("127.0.0.1", bridge_port)
+    ros.run(timeout=10)
+    try:
+        roslibpy.Topic(ros, "/cmd_vel_measured", "geometry_msgs/Twist").subscribe(lambda _m: None)
+        pub = roslibpy.Topic(ros, "/stamped_cmd_vel", "std_msgs/String")
+        pub.advertise()
+        time.sleep(0.5)
+        since = httpx.get(f"{api}/api/latency?limit=0").json()["last_rx_seq"]
+        t = time.monotonic()
+        for i in range(count):
+            sleep_until(t)
+            data = "{bad" if i % 7 == 6 else envelope.build(0.1, 0.0, seq=i)
+            pub.publish(roslibpy.Message({"data": data}))
+            t += 1.0 / rate
+        time.sleep(1.0)
+        out: list[float] = []
+        while True:
+            body = httpx.get(f"{api}/api/latency", params={"since": since, "limit": 1000}).json()
+            out += [r["latency_ms"] for r in body["records"]]
+            since = body["records"][-1]["rx_seq"] if body["records"] else since
+            if not body.get("more"):
+                return out
+    finally:
+        ros.close()
+
+
 def main() -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--count", type=int, default=2000)
     p.add_argument("--rate", type=float, default=100.0)
     p.add_argument("--warmup", type=int, default=50)
     p.add_argument("--transport", choices=("embedded", "ros"), default="embedded")
+    p.add_argument(
+        "--plain-client", action="store_true",
+        help="also: a plain roslibpy client (Nagle on, subscribed, some envelopes rejected) at 200 Hz",
+    )  # fmt: skip
     a = p.parse_args()
 
     backend = EmbeddedBackend.start(0, 0, transport=a.transport, timeout=30)
@@ -98,6 +135,11 @@ def main() -> int:
             time.sleep(0.02)
         meter.expire(time.monotonic() + meter.lost_after_s + 1)
         samples = meter.samples()
+        plain = (
+            plain_client(backend.bridge_port, f"http://127.0.0.1:{backend.api_port}", a.count, 200.0)
+            if a.plain_client
+            else []
+        )
     finally:
         link.close()
         backend.stop()
@@ -129,6 +171,17 @@ def main() -> int:
             "floor_p50_ms": floor50,
             "floor_p95_ms": pct(floor, 0.95),
             "p50_over_floor": round(p50 / floor50, 1) if p50 and floor50 else None,
+            **(
+                {
+                    "plain_client_n": len(plain),
+                    "plain_client_p50_ms": pct(plain, 0.5),
+                    "plain_client_p95_ms": pct(plain, 0.95),
+                    "plain_client_p99_ms": pct(plain, 0.99),
+                    "plain_client_max_ms": round(max(plain), 4),
+                }
+                if plain
+                else {}
+            ),
         }
     )
     return 0

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
 import logging
 import threading
@@ -139,6 +140,15 @@ class RosLink:
         link = self
 
         class Protocol(factory.protocol):  # type: ignore[misc, name-defined]
+            def connectionMade(self) -> None:
+                # commands are small and must leave at once: no Nagle (also under TLS)
+                for layer in (self.transport, getattr(self.transport, "transport", None)):
+                    if layer is not None and hasattr(layer, "setTcpNoDelay"):
+                        with contextlib.suppress(Exception):
+                            layer.setTcpNoDelay(True)
+                        break
+                super().connectionMade()
+
             def onClose(self, wasClean: bool, code: int | None, reason: str | None) -> None:
                 said = errors.close_failure(code, reason)
                 if said is not None:
