@@ -16,6 +16,8 @@ from __future__ import annotations
 
 import argparse
 import multiprocessing as mp
+import os
+import random
 import socket
 import sys
 import time
@@ -23,6 +25,7 @@ import time
 from _common import emit, pct, sleep_until
 
 from arbiter_core import envelope, stats
+from arbiter_core.urls import rosbridge_endpoint, tracker_beside, tracker_endpoint
 from arbiter_tui.latency.clocksync import LatencyMeter
 from arbiter_tui.link.base import CONNECTED
 from arbiter_tui.link.embedded import EmbeddedBackend
@@ -65,14 +68,69 @@ def tcp_floor(count: int, rate: float) -> list[float]:
     return res
 
 
-def plain_client(bridge_port: int, api: str, count: int, rate: float) -> list[float]:
+def _dds_receiver(result_q, count: int) -> None:
+    """The DDS floor's subscriber: its own process, rclpy, std_msgs/String, the product's QoS."""
+    import rclpy
+    from rclpy.executors import SingleThreadedExecutor
+    from std_msgs.msg import String
+
+    from arbiter_backend.ros.bus import default_qos
+
+    rclpy.init()
+    node = rclpy.create_node("arbiter_floor_sub")
+    out: list[float] = []
+    node.create_subscription(
+        String, "/arbiter_floor", lambda m: out.append((time.time_ns() - int(m.data)) / 1e6), default_qos()
+    )
+    ex = SingleThreadedExecutor()
+    ex.add_node(node)
+    deadline = time.monotonic() + 60 + count / 50
+    while len(out) < count and time.monotonic() < deadline:
+        ex.spin_once(timeout_sec=0.1)
+    result_q.put(out)
+    node.destroy_node()
+    rclpy.try_shutdown()
+
+
+def dds_floor(count: int, rate: float) -> list[float]:
+    """rclpy publisher -> subscriber across two processes with the product's QoS and message type:
+    the floor under the ``--transport ros`` path, measured in the same run."""
+    import rclpy
+    from std_msgs.msg import String
+
+    from arbiter_backend.ros.bus import default_qos
+
+    ctx = mp.get_context("spawn")
+    result_q = ctx.Queue()
+    proc = ctx.Process(target=_dds_receiver, args=(result_q, count), daemon=True)
+    proc.start()
+    rclpy.init()
+    node = rclpy.create_node("arbiter_floor_pub")
+    pub = node.create_publisher(String, "/arbiter_floor", default_qos())
+    deadline = time.monotonic() + 20
+    while pub.get_subscription_count() == 0 and time.monotonic() < deadline:
+        time.sleep(0.05)
+    time.sleep(0.5)
+    t = time.monotonic()
+    for _ in range(count):
+        sleep_until(t)
+        pub.publish(String(data=str(time.time_ns())))
+        t += 1.0 / rate
+    res = result_q.get(timeout=60)
+    node.destroy_node()
+    rclpy.try_shutdown()
+    proc.join(5)
+    return res
+
+
+def plain_client(url: str, api: str, count: int, rate: float) -> list[float]:
     """A plain roslibpy client as any user script writes it (Twisted transport, Nagle left on): it
     subscribes to /cmd_vel_measured and publishes at ``rate`` with every 7th envelope malformed (the
     tracker rejects those). One-way latencies of the good ones, from the tracker's records."""
     import httpx
     import roslibpy
 
-    ros = roslibpy.Ros("127.0.0.1", bridge_port)
+    ros = roslibpy.Ros(url, port=None)
     ros.run(timeout=10)
     try:
         roslibpy.Topic(ros, "/cmd_vel_measured", "geometry_msgs/Twist").subscribe(lambda _m: None)
@@ -108,10 +166,24 @@ def main() -> int:
         "--plain-client", action="store_true",
         help="also: a plain roslibpy client (Nagle on, subscribed, some envelopes rejected) at 200 Hz",
     )  # fmt: skip
+    p.add_argument("--rosbridge", help="measure a server that already runs (ours elsewhere, or the stock "
+                   "rosbridge_server with our tracker behind it) instead of starting one")  # fmt: skip
+    p.add_argument("--tracker", help="with --rosbridge: its tracker's API (default: the same host, 8085)")
     a = p.parse_args()
+    if a.transport == "ros" or a.rosbridge:
+        # DDS on this host only, on a domain of its own: other runs on the machine are not measured
+        os.environ.setdefault("ROS_DOMAIN_ID", str(random.Random(os.getpid()).randint(101, 200)))
+        os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
 
-    backend = EmbeddedBackend.start(0, 0, transport=a.transport, timeout=30)
-    link = RosLink("127.0.0.1", backend.bridge_port)
+    if a.rosbridge:
+        bridge = rosbridge_endpoint(a.rosbridge)
+        api = (tracker_endpoint(a.tracker) if a.tracker else tracker_beside(bridge)).url.rstrip("/")
+        backend = None
+        link = RosLink(bridge.host, bridge.port, path=bridge.path, secure=bridge.secure)
+    else:
+        backend = EmbeddedBackend.start(0, 0, transport=a.transport, timeout=30)
+        api = f"http://127.0.0.1:{backend.api_port}"
+        link = RosLink("127.0.0.1", backend.bridge_port)
     try:
         deadline = time.monotonic() + 15
         while link.state != CONNECTED and time.monotonic() < deadline:
@@ -135,24 +207,23 @@ def main() -> int:
             time.sleep(0.02)
         meter.expire(time.monotonic() + meter.lost_after_s + 1)
         samples = meter.samples()
-        plain = (
-            plain_client(backend.bridge_port, f"http://127.0.0.1:{backend.api_port}", a.count, 200.0)
-            if a.plain_client
-            else []
-        )
+        plain = plain_client(link.url, api, a.count, 200.0) if a.plain_client else []
     finally:
         link.close()
-        backend.stop()
+        if backend is not None:
+            backend.stop()
 
     one_way = [s.raw_ms for s in samples]
     rtt = [s.rtt_ms for s in samples]
     floor = tcp_floor(min(a.count, 2000), a.rate)
+    dds = dds_floor(min(a.count, 2000), a.rate) if a.transport == "ros" else []
     est = meter.offset()
     p50, floor50 = pct(one_way, 0.5), pct(floor, 0.5)
     emit(
         {
             "bench": "latency",
             "transport": a.transport,
+            "server": a.rosbridge or "ours, started by the bench",
             "count": a.count,
             "rate_hz": a.rate,
             "one_way_p50_ms": p50,
@@ -171,6 +242,17 @@ def main() -> int:
             "floor_p50_ms": floor50,
             "floor_p95_ms": pct(floor, 0.95),
             "p50_over_floor": round(p50 / floor50, 1) if p50 and floor50 else None,
+            **(
+                {
+                    "dds_floor_p50_ms": pct(dds, 0.5),
+                    "dds_floor_p95_ms": pct(dds, 0.95),
+                    "dds_floor_p99_ms": pct(dds, 0.99),
+                    "p50_over_dds_floor": round(p50 / pct(dds, 0.5), 2) if p50 else None,
+                    "rtt_p50_over_dds_floor": round(pct(rtt, 0.5) / pct(dds, 0.5), 2) if rtt else None,
+                }
+                if dds
+                else {}
+            ),
             **(
                 {
                     "plain_client_n": len(plain),
