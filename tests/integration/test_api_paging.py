@@ -11,6 +11,7 @@ from arbiter_core import envelope
 from arbiter_tui.latency.tracker_client import TrackerClient
 
 from ..support.backend import free_port, start_backend, wait_for
+from ..support.servers import serve
 
 
 async def publish(bridge_port: int, seqs: range) -> None:
@@ -110,11 +111,7 @@ async def test_a_tracker_without_rx_seq_is_polled_by_limit():
 
     app = web.Application()
     app.router.add_get("/api/latency", latency)
-    runner = web.AppRunner(app)
-    await runner.setup()
-    site = web.TCPSite(runner, "127.0.0.1", 0)
-    await site.start()
-    port = site._server.sockets[0].getsockname()[1]
+    runner, port = await serve(app)
     client = TrackerClient(f"http://127.0.0.1:{port}", limit=4)
 
     def add(n: int) -> None:

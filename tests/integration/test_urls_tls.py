@@ -20,6 +20,7 @@ from arbiter_tui.link.rosbridge import AUTH_RETRY_S, RosLink
 
 from ..support.backend import start_backend
 from ..support.certs import self_signed
+from ..support.servers import serve
 from ..support.waits import async_until
 
 
@@ -97,11 +98,7 @@ async def test_the_url_path_is_kept():
     endpoint = RosbridgeEndpoint(TopicBus())
     app = web.Application()
     app.router.add_get("/rosbridge/ws", endpoint.handle)  # a server mounted below a path
-    runner = web.AppRunner(app)
-    await runner.setup()
-    site = web.TCPSite(runner, "127.0.0.1", 0)
-    await site.start()
-    port = site._server.sockets[0].getsockname()[1]
+    runner, port = await serve(app)
     good = RosLink("127.0.0.1", port, path="/rosbridge/ws")
     wrong = RosLink("127.0.0.1", port)  # "/": 404
     try:

@@ -6,6 +6,8 @@ import pytest
 
 from arbiter_tui.link.wsframe import mask_bytes, text_frame
 
+from ..support.servers import serve
+
 
 def decode(frame: bytes) -> tuple[int, bytes]:
     b0, b1 = frame[0], frame[1]
@@ -53,11 +55,7 @@ async def test_aiohttp_server_reads_our_frames():
 
     app = web.Application()
     app.router.add_get("/", handler)
-    runner = web.AppRunner(app)
-    await runner.setup()
-    site = web.TCPSite(runner, "127.0.0.1", 0)
-    await site.start()
-    port = site._server.sockets[0].getsockname()[1]
+    runner, port = await serve(app)
     reader, writer = await asyncio.open_connection("127.0.0.1", port)
     writer.write(
         b"GET / HTTP/1.1\r\nHost: x\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"

@@ -87,3 +87,20 @@ def test_console_bad_values_are_one_line_errors(args, capsys, tmp_path, monkeypa
     assert code == 2, args
     lines = err.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("arbiter-tui"), err
+
+
+@pytest.mark.parametrize(
+    ("main", "prog"), [(backend_cli.main, "arbiter-backend"), (tui_cli.main, "arbiter-tui")]
+)
+def test_version_comes_from_the_package_metadata(main, prog, capsys):
+    from importlib.metadata import version
+
+    code, out, _ = run_main(main, ["--version"], capsys)
+    assert code == 0 and out.strip() == f"{prog} {version('arbiter-tui')}"
+
+
+def test_help_names_the_log_file_and_the_config_file(capsys):
+    code, out, _ = run_main(tui_cli.main, ["--help"], capsys)
+    assert code == 0
+    flat = " ".join(out.split())
+    assert "arbiter-tui-<pid>.log" in flat and "config.toml" in flat and "--print-config" in flat
