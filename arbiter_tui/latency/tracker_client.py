@@ -155,7 +155,7 @@ class TrackerClient:
         except httpx.HTTPStatusError as exc:
             self.view.fail(http_failure(exc.response.status_code))
         except httpx.TimeoutException:
-            self.view.fail("timed out (host down or unreachable)")
+            self.view.fail("timed out")
         except httpx.HTTPError as exc:
             self.view.fail(connect_failure(type(exc).__name__, _chain(exc)))
         except ValueError as exc:

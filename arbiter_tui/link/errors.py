@@ -18,13 +18,13 @@ def connect_failure(kind: str, text: str) -> str:
     if "certificate" in low or "ssl" in low or "tls" in low:
         return TLS_HINT if "verif" in low or "certificate" in low else f"TLS failure: {text or kind}"
     if "refused" in low:
-        return "connection refused (nothing listens on that port)"
+        return "connection refused"
     if "dns" in low or "name or service not known" in low or "nodename nor servname" in low or (
         "getaddrinfo" in low
     ):
-        return "DNS lookup failed (unknown host name)"
+        return "DNS lookup failed (unknown host)"
     if "timeout" in low or "timed out" in low:
-        return "timed out (host down or unreachable)"
+        return "timed out"
     if "unreachable" in low:
         return "network unreachable"
     return f"cannot connect ({kind}{': ' + text if text else ''})"[:160]
