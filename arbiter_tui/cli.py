@@ -11,6 +11,10 @@ def main(argv: list[str] | None = None) -> int:
         from .analytics.stats_cmd import run
 
         return run(argv[1:])
+    if argv and argv[0] == "compare":
+        from .analytics.compare_cmd import run as run_compare
+
+        return run_compare(argv[1:])
     from .launch import run_app
 
     return run_app(argv)

@@ -111,6 +111,7 @@ def test_pure_console_logic_imports_without_ui_or_network():
         "arbiter_tui.control.algorithms",
         "arbiter_tui.control.teleop",
         "arbiter_tui.latency.clocksync",
+        "arbiter_tui.analytics.compare",
     ]
     r = run_blocked(pure, {"textual", "rich", "aiohttp", "httpx", "roslibpy", "twisted", "socket"})
     # mcap is only imported lazily by to_mcap, so the pure modules import without it too

@@ -1,0 +1,120 @@
+"""``arbiter-tui compare``: every algorithm on every mission in simulated time, ranked; CI-friendly."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+from arbiter_core.cliargs import OneLineParser, positive_float
+
+from .compare import (
+    AUTONOMOUS,
+    MISSION_NAMES,
+    RULE,
+    CompareError,
+    RunResult,
+    best,
+    compare,
+    parse_names,
+    ranked,
+)
+from .exports import to_csv, to_json, to_mcap
+from .files import ExportError, write_new_file
+from .store import stats_of_points
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = OneLineParser(
+        prog="arbiter-tui compare",
+        description="Run control algorithms on missions in the client-side simulator, in simulated time "
+        "(seconds, not minutes), and rank them. " + RULE + ".",
+    )
+    p.add_argument(
+        "--mission", default=",".join(MISSION_NAMES), help=f"comma-separated ({', '.join(MISSION_NAMES)})"
+    )
+    p.add_argument(
+        "--algorithms", default=",".join(AUTONOMOUS), help=f"comma-separated ({', '.join(AUTONOMOUS)})"
+    )
+    p.add_argument(
+        "--speed", type=positive_float, default=0.5, help="max speed of the controllers, m/s (0.5)"
+    )
+    p.add_argument("--turn", type=positive_float, default=1.0, help="max turn rate, rad/s (1.0)")
+    p.add_argument("--json", action="store_true", help="one JSON object: runs (ranked), best, rule")
+    p.add_argument("--export-dir", type=Path, help="also write every run's data points as CSV, JSON and MCAP")
+    return p
+
+
+def table(results: list[RunResult]) -> str:
+    top = best(results)
+    head = [
+        "rank",
+        "algorithm",
+        "mission",
+        "done",
+        "time s",
+        "final e_d m",
+        "avg e_d m",
+        "p95 e_d m",
+        "max |v| m/s",
+    ]
+    rows = [head]
+    for i, r in enumerate(ranked(results), 1):
+        mark = " *" if r is top else ""
+        rows.append([
+            f"{i}{mark}", r.algorithm, r.mission, "yes" if r.completed else "NO", f"{r.time_s:.1f}",
+            f"{r.final_error_m:.3f}", f"{r.stats.avgDistanceError:.3f}", f"{r.stats.p95Error:.3f}",
+            f"{r.max_linear_vel:.3f}",
+        ])  # fmt: skip
+    widths = [max(len(row[c]) for row in rows) for c in range(len(head))]
+    lines = ["  ".join(cell.ljust(w) for cell, w in zip(row, widths, strict=True)).rstrip() for row in rows]
+    lines.append(f"* {RULE}: " + (f"{top.algorithm} on {top.mission}" if top else "no run completed"))
+    return "\n".join(lines)
+
+
+def export(results: list[RunResult], directory: Path) -> list[Path]:
+    points = [p for r in results for p in r.points]
+    stats = stats_of_points(points)
+    stem = f"arbiter_compare_{time.time_ns() // 1_000_000}"
+    return [
+        write_new_file(directory, stem, "csv", to_csv(points).encode()),
+        write_new_file(directory, stem, "json", to_json(points, stats).encode()),
+        write_new_file(directory, stem, "mcap", to_mcap(points, stats)),
+    ]
+
+
+def run(argv: list[str]) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        missions = parse_names(args.mission, MISSION_NAMES, "mission")
+        algorithms = parse_names(args.algorithms, AUTONOMOUS, "algorithms")
+    except CompareError as exc:
+        print(f"arbiter-tui compare: {exc}", file=sys.stderr)
+        return 2
+    if args.export_dir is not None and not args.export_dir.is_dir():
+        print(f"arbiter-tui compare: --export-dir {args.export_dir} is not a directory", file=sys.stderr)
+        return 2
+    results = compare(missions, algorithms, args.speed, args.turn)
+    written: list[Path] = []
+    if args.export_dir is not None:
+        try:
+            written = export(results, args.export_dir)
+        except ExportError as exc:
+            print(f"arbiter-tui compare: {exc}", file=sys.stderr)
+            return 1
+    top = best(results)
+    if args.json:
+        body = {
+            "runs": [r.as_dict() for r in ranked(results)],
+            "best": None if top is None else {"algorithm": top.algorithm, "mission": top.mission},
+            "rule": RULE,
+            "exports": [str(p) for p in written],
+        }
+        print(json.dumps(body, allow_nan=False))
+    else:
+        print(table(results))
+        for path in written:
+            print(f"wrote {path}")
+    return 0

@@ -1,0 +1,87 @@
+"""`arbiter-tui compare`: every algorithm on every mission in simulated time, ranked by a stated rule."""
+
+import json
+import time
+
+import pytest
+
+from arbiter_tui.analytics.compare import RULE, run_one
+from arbiter_tui.analytics.files import load_points
+from arbiter_tui.analytics.store import STATS_FIELDS
+from arbiter_tui.cli import main
+
+
+def run_json(capsys, *args):
+    assert main(["compare", "--json", *args]) == 0
+    return json.loads(capsys.readouterr().out)
+
+
+def test_json_schema_ranking_and_best(capsys):
+    started = time.monotonic()
+    body = run_json(capsys)
+    wall = time.monotonic() - started
+    runs = body["runs"]
+    assert {(r["algorithm"], r["mission"]) for r in runs} == {
+        (a, m) for a in ("go_to_goal", "pure_pursuit") for m in ("square", "figure_eight")
+    }
+    for r in runs:
+        assert set(r) == {
+            "algorithm",
+            "mission",
+            "completed",
+            "time_s",
+            "final_error_m",
+            "max_linear_vel",
+            "stats",
+        }
+        assert tuple(r["stats"]) == STATS_FIELDS and r["completed"] and r["final_error_m"] <= 0.15
+    errors = [r["stats"]["avgDistanceError"] for r in runs]
+    assert errors == sorted(errors)  # ranked by the rule
+    assert body["best"] == {"algorithm": runs[0]["algorithm"], "mission": runs[0]["mission"]}
+    assert body["rule"] == RULE
+    # simulated time: minutes of driving in (much) less wall time
+    assert sum(r["time_s"] for r in runs) > 10 * wall
+
+
+def test_the_speed_cap_holds_for_every_sample(capsys):
+    body = run_json(capsys, "--mission", "figure_eight", "--speed", "0.1", "--turn", "0.3")
+    for r in body["runs"]:
+        assert r["completed"] and r["max_linear_vel"] <= 0.1 and r["stats"]["maxLinearVel"] <= 0.1
+    result = run_one("pure_pursuit", "figure_eight", speed=0.1, turn=0.3)
+    assert all(abs(p.linearVel) <= 0.1 + 1e-12 and abs(p.angularVel) <= 0.3 + 1e-12 for p in result.points)
+
+
+@pytest.mark.parametrize(
+    ("args", "words"),
+    [
+        (["--mission", "circle"], "unknown 'circle'; choose from square, figure_eight"),
+        (["--algorithms", "go_to_goal,manual"], "unknown 'manual'; choose from go_to_goal, pure_pursuit"),
+        (["--mission", ","], "give at least one of"),
+        (["--speed", "0"], "must be a positive finite number"),
+    ],
+)
+def test_bad_names_are_one_line_errors(capsys, args, words):
+    code = None
+    try:
+        code = main(["compare", *args])
+    except SystemExit as exc:
+        code = exc.code
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and words in err[0], err
+
+
+def test_export_dir_writes_the_runs_data(tmp_path, capsys):
+    body = run_json(capsys, "--mission", "square", "--export-dir", str(tmp_path))
+    paths = sorted(body["exports"])
+    assert [p.rsplit(".", 1)[1] for p in paths] == ["csv", "json", "mcap"]
+    total = sum(r["stats"]["sampleCount"] for r in body["runs"])
+    for p in paths[:2]:  # CSV and JSON read back with the same reader `stats` uses
+        points = load_points(tmp_path / p.rsplit("/", 1)[1])
+        assert len(points) == total and {q.algorithm for q in points} == {"go_to_goal", "pure_pursuit"}
+
+
+def test_the_table_names_the_best_and_the_rule(capsys):
+    assert main(["compare", "--mission", "square"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[0].split()[:3] == ["rank", "algorithm", "mission"]
+    assert out[1].startswith("1 *") and out[-1].startswith(f"* {RULE}: ")
