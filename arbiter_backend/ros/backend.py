@@ -80,6 +80,7 @@ class RosBackend(Servers):
     async def start(self) -> None:
         if self.bridge_node is not None:
             self.bus = RosBus(self.bridge_node, asyncio.get_running_loop())
+            self.tracker_node.local_report = self.bus.deliver_local
             self.endpoint = bridge.RosbridgeEndpoint(self.bus, token=self.config.token)
         await self.start_servers(self.endpoint, self.tracker)
         self._thread = threading.Thread(target=self._spin, name="rclpy-executor", daemon=True)

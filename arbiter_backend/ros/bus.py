@@ -14,6 +14,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
+import threading
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -52,6 +53,9 @@ def default_qos() -> QoSProfile:
     )
 
 
+LOCAL_MEMORY = 10_000  # texts remembered for dropping their DDS copy (a few seconds at any real rate)
+
+
 class RosBus:
     def __init__(self, node: Node, loop: asyncio.AbstractEventLoop) -> None:
         self.node = node
@@ -60,6 +64,11 @@ class RosBus:
         self._pubs: dict[str, _Pub] = {}
         self._subs: dict[str, _Sub] = {}
         self.published = 0
+        # texts handed over in-process (deliver_local), so that their DDS copy is not fanned out twice
+        self._local: dict[str, dict[str, None]] = {}
+        self._local_lock = threading.Lock()
+        self.local_delivered = 0
+        self.dds_copies_dropped = 0
 
     # -- types ------------------------------------------------------------------------------
     def _graph(self) -> dict[str, list[str]]:
@@ -168,7 +177,26 @@ class RosBus:
         sub = self._subs.get(topic)
         return len(sub.callbacks) if sub else 0
 
+    def deliver_local(self, topic: str, text: str) -> None:
+        """A ``std_msgs/String`` published by a node of this process (the tracker's report), handed to
+        the WebSocket subscribers at once instead of after a DDS round through the executor; it is
+        still published on DDS for everyone else, and that copy is not fanned out again here."""
+        with self._local_lock:
+            seen = self._local.setdefault(topic, {})
+            seen[text] = None
+            if len(seen) > LOCAL_MEMORY:
+                del seen[next(iter(seen))]
+        self.local_delivered += 1
+        with contextlib.suppress(RuntimeError):  # the loop is closed: shutting down
+            self.loop.call_soon_threadsafe(self._fanout, topic, {"data": text})
+
     def _on_message(self, topic: str, msg: Any) -> None:  # executor thread
+        text = getattr(msg, "data", None)
+        if isinstance(text, str) and topic in self._local:
+            with self._local_lock:
+                if self._local[topic].pop(text, False) is None:
+                    self.dds_copies_dropped += 1
+                    return  # already delivered in-process
         try:
             data = to_json(msg)
         except Exception:

@@ -14,6 +14,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 import time
+from collections.abc import Callable
 from typing import Any
 
 from rclpy.context import Context
@@ -97,6 +98,8 @@ class TrackerNode(Node):
         self.measured_pub = self.create_publisher(self._measured_cls, topics.MEASURED, qos)
         self.create_subscription(self._string, topics.STAMPED, self._on_stamped, qos)
         self.create_timer(min(0.05, cmd_timeout / 4), self._watchdog)
+        # set by the backend when the rosbridge relay runs in this process (RosBus.deliver_local)
+        self.local_report: Callable[[str, str], None] | None = None
 
     def _forward(self, v: float, w: float, stamp_ns: int) -> None:
         msg = topics.measured_message(v, w, self.config.measured_type, stamp_ns)
@@ -108,6 +111,8 @@ class TrackerNode(Node):
             accepted = self.tracker.on_stamped(msg.data, recv_ns)
             if accepted is None:
                 return
+            if self.local_report is not None:  # first: registered before the DDS copy can arrive
+                self.local_report(self.report_pub.topic_name, accepted.text)
             self.report_pub.publish(self._string(data=accepted.text))
             if accepted.forward is not None:
                 self._forward(*accepted.forward, recv_ns)
