@@ -81,6 +81,8 @@ class RosBackend(Servers):
         if self.bridge_node is not None:
             self.bus = RosBus(self.bridge_node, asyncio.get_running_loop())
             self.tracker_node.local_report = self.bus.deliver_local
+            stamped = self.tracker_node.stamped_sub.topic_name
+            self.bus.local_handlers[stamped] = self.tracker_node.on_local_command
             self.endpoint = bridge.RosbridgeEndpoint(self.bus, token=self.config.token)
         await self.start_servers(self.endpoint, self.tracker)
         self._thread = threading.Thread(target=self._spin, name="rclpy-executor", daemon=True)

@@ -69,6 +69,7 @@ class RosBus:
         self._local_lock = threading.Lock()
         self.local_delivered = 0
         self.dds_copies_dropped = 0
+        self.local_handlers: dict[str, Callable[[str], None]] = {}  # topic -> a node's in-process handler
 
     # -- types ------------------------------------------------------------------------------
     def _graph(self) -> dict[str, list[str]]:
@@ -124,6 +125,9 @@ class RosBus:
         if t is None:
             raise MessageError(f"cannot infer the type of {topic}: not yet advertised")
         ros_msg = to_ros(message_class(t), msg)
+        handler = self.local_handlers.get(topic)
+        if handler is not None and isinstance(getattr(ros_msg, "data", None), str):
+            handler(ros_msg.data)  # in-process first: it registers the text before the DDS copy exists
         pub = self._pubs.get(topic)
         if pub is None:  # published without advertise: keep a publisher, as rosbridge does
             pub = _Pub(t, self.node.create_publisher(message_class(t), topic, default_qos()))

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import dataclasses
 import logging
+import threading
 import time
 from collections.abc import Callable
 from typing import Any
@@ -64,6 +65,9 @@ def _limits_params(node: Node, config: BackendConfig) -> tuple[Limits, float, st
     return limits, _positive("cmd_timeout", cmd_timeout), _measured(measured_type)
 
 
+LOCAL_MEMORY = 10_000  # in-process commands remembered until their DDS copy arrives
+
+
 class TrackerNode(Node):
     def __init__(self, config: BackendConfig, context: Context) -> None:
         super().__init__(tracker.NODE_NAME, namespace=config.namespace, context=context)
@@ -96,19 +100,45 @@ class TrackerNode(Node):
         self._measured_cls = message_class(topics.MEASURED_TYPES[measured_type])
         self.report_pub = self.create_publisher(self._string, topics.REPORT, qos)
         self.measured_pub = self.create_publisher(self._measured_cls, topics.MEASURED, qos)
-        self.create_subscription(self._string, topics.STAMPED, self._on_stamped, qos)
+        self.stamped_sub = self.create_subscription(self._string, topics.STAMPED, self._on_stamped, qos)
         self.create_timer(min(0.05, cmd_timeout / 4), self._watchdog)
         # set by the backend when the rosbridge relay runs in this process (RosBus.deliver_local)
         self.local_report: Callable[[str, str], None] | None = None
+        self._local: dict[str, int] = {}  # texts handled in-process whose DDS copy is still to come
+        self._local_lock = threading.Lock()
 
     def _forward(self, v: float, w: float, stamp_ns: int) -> None:
         msg = topics.measured_message(v, w, self.config.measured_type, stamp_ns)
         self.measured_pub.publish(to_ros(self._measured_cls, msg))
 
+    def on_local_command(self, text: str) -> None:
+        """A command the rosbridge relay of this process received: handled now, on the caller's thread,
+        instead of after a DDS round through the executor. The relay still publishes it on DDS for
+        every other subscriber; its DDS copy reaching this node is then skipped (counted by text, so a
+        client that sends the same text twice is handled twice)."""
+        with self._local_lock:
+            self._local[text] = self._local.get(text, 0) + 1
+            if len(self._local) > LOCAL_MEMORY:
+                del self._local[next(iter(self._local))]
+        self._handle(text)
+
     def _on_stamped(self, msg: Any) -> None:
+        text = msg.data
+        if self._local:
+            with self._local_lock:
+                left = self._local.get(text)
+                if left:
+                    if left == 1:
+                        del self._local[text]
+                    else:
+                        self._local[text] = left - 1
+                    return  # handled already, in-process
+        self._handle(text)
+
+    def _handle(self, text: str) -> None:
         recv_ns = self.get_clock().now().nanoseconds
         try:
-            accepted = self.tracker.on_stamped(msg.data, recv_ns)
+            accepted = self.tracker.on_stamped(text, recv_ns)
             if accepted is None:
                 return
             if self.local_report is not None:  # first: registered before the DDS copy can arrive

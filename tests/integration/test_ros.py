@@ -169,17 +169,22 @@ def test_roslibpy_through_our_endpoint_relays_any_installed_type(peer):
         out.publish(roslibpy.Message({"pose": {"position": {"y": -1.25}}}))
         assert wait_for(lambda: back == [-1.25], 5)
 
-        # stamped commands through the relay reach the tracker node
+        # stamped commands through the relay reach the tracker node (handed over in-process) and are
+        # still published on DDS for everyone else; each is recorded and reported exactly once
+        on_dds = peer.collect(String, "/stamped_cmd_vel", lambda m: envelope.parse(m.data).seq)
+        before = get_json(f"{backend.api}/api/health")["total_seen"]
         cmd = roslibpy.Topic(ros, "/stamped_cmd_vel", "std_msgs/String")
         cmd.advertise()
-        # the relay's publisher and the tracker's subscription share the backend's DDS participant:
-        # once a peer has discovered the publisher, the tracker has matched it too
-        assert wait_for(lambda: peer.node.count_publishers("/stamped_cmd_vel") > 0, 10)
+        assert wait_for(lambda: peer.matched("/stamped_cmd_vel") > 0, 10)
         for i in range(10):
             cmd.publish(roslibpy.Message({"data": envelope.build(0.2, 0.0, seq=i)}))
             time.sleep(0.02)
         assert wait_for(lambda: len(reports) >= 10, 5)
         assert [r["seq"] for r in reports] == list(range(10))
+        assert wait_for(lambda: len(on_dds) >= 10, 5) and on_dds == list(range(10))
+        time.sleep(0.3)  # an absence: no DDS copy is handled a second time
+        assert get_json(f"{backend.api}/api/health")["total_seen"] == before + 10
+        assert len(reports) == 10
 
         # the rosapi service lists the real graph
         svc = roslibpy.Service(ros, "/rosapi/topics", "rosapi/Topics")
