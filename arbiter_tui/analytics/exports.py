@@ -113,6 +113,42 @@ def to_mcap(points: Sequence[DataPoint], stats: AnalyticsStats | None = None) ->
     return buf.getvalue()
 
 
+MCAP_MAGIC = b"\x89MCAP0\r\n"
+
+
+def parse_mcap(data: bytes) -> list[DataPoint]:
+    """The DataPoints of an MCAP export (the ``/arbiter/data_point`` channel; other channels ignored)."""
+    from mcap.exceptions import McapError
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+
+    if not data.startswith(MCAP_MAGIC):
+        raise ExportFormatError("not an MCAP file")
+    points: list[DataPoint] = []
+    try:
+        reader = make_reader(io.BytesIO(data), decoder_factories=[DecoderFactory()])
+        for _schema, _channel, _message, m in reader.iter_decoded_messages(topics=[MCAP_POINT_TOPIC]):
+            where = f"MCAP message {len(points) + 1}"
+            row = {
+                "timestamp": m.timestamp,
+                "x": m.x,
+                "y": m.y,
+                "theta": m.theta,
+                "linearVel": m.linear_vel,
+                "angularVel": m.angular_vel,
+                "distanceError": m.distance_error,
+                "headingError": m.heading_error,
+                "algorithm": m.algorithm,
+                "latencyMs": m.latency_ms if m.has_latency else None,
+            }
+            points.append(_point_from_mapping(row, where))
+    except (McapError, AttributeError, ValueError, EOFError) as exc:
+        if isinstance(exc, ExportFormatError):
+            raise
+        raise ExportFormatError(f"not an arbiter MCAP export: {exc}") from None
+    return points
+
+
 def _mcap_point(p: DataPoint) -> dict[str, Any]:
     p.validate()  # the CDR writer silently zero-fills missing fields: refuse them here
     return {

@@ -10,7 +10,16 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
-from .exports import ExportFormatError, parse_csv, parse_json, to_csv, to_json, to_mcap
+from .exports import (
+    MCAP_MAGIC,
+    ExportFormatError,
+    parse_csv,
+    parse_json,
+    parse_mcap,
+    to_csv,
+    to_json,
+    to_mcap,
+)
 from .store import AnalyticsStore, DataPoint
 
 FORMATS = ("csv", "json", "mcap")
@@ -84,7 +93,7 @@ def export_store(
 
 
 def load_points(path: Path) -> list[DataPoint]:
-    """Read a CSV or JSON export (chosen by content, not by name)."""
+    """Read a CSV, JSON or MCAP export (chosen by content, not by name)."""
     path = Path(path)
     try:
         st = path.stat()
@@ -98,10 +107,12 @@ def load_points(path: Path) -> list[DataPoint]:
         raw = path.read_bytes()
     except IsADirectoryError:
         raise ExportFormatError(f"{path} is a directory") from None
+    if raw.startswith(MCAP_MAGIC):
+        return parse_mcap(raw)
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError:
-        raise ExportFormatError("not a text file (CSV or JSON export expected)") from None
+        raise ExportFormatError("not a CSV, JSON or MCAP export") from None
     stripped = text.lstrip("\ufeff \t\r\n")
     if stripped.startswith("{"):
         return parse_json(text)

@@ -1,4 +1,4 @@
-"""``arbiter-tui stats FILE``: the nine AnalyticsStats of a CSV or JSON export."""
+"""``arbiter-tui stats FILE``: the nine AnalyticsStats of a CSV, JSON or MCAP export."""
 
 from __future__ import annotations
 
@@ -18,9 +18,10 @@ from .store import STATS_FIELDS, stats_of_points
 def build_parser() -> argparse.ArgumentParser:
     p = OneLineParser(
         prog="arbiter-tui stats",
-        description="Print the nine AnalyticsStats of an arbiter analytics export (CSV or JSON).",
+        description="Print the nine AnalyticsStats of an arbiter analytics export "
+        "(CSV, JSON or MCAP, recognised by content).",
     )
-    p.add_argument("file", type=Path, help="an arbiter_analytics_*.csv or *.json export")
+    p.add_argument("file", type=Path, help="an arbiter_analytics_*.csv, *.json or *.mcap export")
     p.add_argument("--json", action="store_true", help="print one JSON object with the seed's camelCase keys")
     return p
 

@@ -7,7 +7,7 @@ import sys
 
 import pytest
 
-from arbiter_tui.analytics.exports import to_csv, to_json
+from arbiter_tui.analytics.exports import to_csv, to_json, to_mcap
 from arbiter_tui.analytics.store import STATS_FIELDS, stats_of_points
 
 from ..support.points import random_points
@@ -24,11 +24,14 @@ def run(*args):
     )
 
 
-@pytest.mark.parametrize("fmt", ["csv", "json"])
+@pytest.mark.parametrize("fmt", ["csv", "json", "mcap"])
 def test_stats_json_matches_the_store(tmp_path, fmt):
     pts = random_points(40, seed=9)
     f = tmp_path / f"export.{fmt}"
-    f.write_text(to_csv(pts) if fmt == "csv" else to_json(pts))
+    if fmt == "mcap":  # the console's own MCAP export, read back by content
+        f.write_bytes(to_mcap(pts))
+    else:
+        f.write_text(to_csv(pts) if fmt == "csv" else to_json(pts))
     r = run(f, "--json")
     assert r.returncode == 0, r.stderr
     got = json.loads(r.stdout)
@@ -98,3 +101,12 @@ def test_a_bad_flag_is_one_line_on_stderr_from_the_real_entry_point():
     assert "Traceback" not in r.stderr
     lines = r.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("arbiter-tui"), r.stderr
+
+
+def test_a_broken_mcap_is_one_line(tmp_path):
+    good = to_mcap(random_points(30))
+    f = tmp_path / "cut.mcap"
+    f.write_bytes(good[: len(good) // 2])  # truncated mid-file
+    r = run(f)
+    assert r.returncode == 1 and "Traceback" not in r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1 and "MCAP" in r.stderr
