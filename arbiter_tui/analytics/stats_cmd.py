@@ -12,7 +12,7 @@ from arbiter_core.cliargs import OneLineParser
 from .exports import ExportFormatError
 from .files import load_points
 from .labels import format_stat
-from .store import STATS_FIELDS, stats_of_points
+from .store import STATS_FIELDS, AnalyticsStore, stats_of_points
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -23,6 +23,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("file", type=Path, help="an arbiter_analytics_*.csv, *.json or *.mcap export")
     p.add_argument("--json", action="store_true", help="print one JSON object with the seed's camelCase keys")
+    p.add_argument(
+        "--by",
+        choices=("algorithm",),
+        help="one set of stats per algorithm (with --json: an object keyed by algorithm); path length "
+        "counts only steps between consecutive samples of the same algorithm, as on the analytics screen",
+    )
     return p
 
 
@@ -39,11 +45,22 @@ def run(argv: list[str]) -> int:
     except (ExportFormatError, OSError) as exc:
         print(f"arbiter-tui stats: {args.file}: {exc}", file=sys.stderr)
         return 1
-    stats = stats_of_points(points)
+    if args.by is None:
+        groups = {"": stats_of_points(points)}
+    else:
+        store = AnalyticsStore(max_data_points=max(1, len(points)))
+        store.start_collection()
+        for point in points:
+            store.record(point)
+        groups = store.stats_by_algorithm()
     if args.json:
-        print(json.dumps(stats.as_dict(), allow_nan=False))
+        body = groups[""].as_dict() if args.by is None else {k: v.as_dict() for k, v in groups.items()}
+        print(json.dumps(body, allow_nan=False))
         return 0
     width = max(len(f) for f in STATS_FIELDS)
-    for name in STATS_FIELDS:
-        print(f"{name:<{width}}  {format_stat(name, getattr(stats, name), decimals=6)}")
+    for group, stats in groups.items():
+        if group:
+            print(f"[{group}]")
+        for name in STATS_FIELDS:
+            print(f"{name:<{width}}  {format_stat(name, getattr(stats, name), decimals=6)}")
     return 0

@@ -110,3 +110,25 @@ def test_a_broken_mcap_is_one_line(tmp_path):
     r = run(f)
     assert r.returncode == 1 and "Traceback" not in r.stderr
     assert len(r.stderr.strip().splitlines()) == 1 and "MCAP" in r.stderr
+
+
+def test_by_algorithm_matches_the_analytics_screens_grouping(tmp_path):
+    from arbiter_tui.analytics.store import AnalyticsStore
+
+    pts = random_points(90, seed=3)
+    f = tmp_path / "e.json"
+    f.write_text(to_json(pts))
+    r = run(f, "--by", "algorithm", "--json")
+    assert r.returncode == 0, r.stderr
+    got = json.loads(r.stdout)
+    store = AnalyticsStore(max_data_points=1000)
+    store.start_collection()
+    for p in pts:
+        store.record(p)
+    want = {k: v.as_dict() for k, v in store.stats_by_algorithm().items()}
+    assert set(got) == set(want) == {p.algorithm for p in pts}
+    for algo in want:
+        for k in STATS_FIELDS:
+            assert got[algo][k] == pytest.approx(want[algo][k], rel=1e-12)
+    table = run(f, "--by", "algorithm").stdout.splitlines()
+    assert [line for line in table if line.startswith("[")] == [f"[{a}]" for a in want]
