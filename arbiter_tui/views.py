@@ -12,8 +12,6 @@ import time
 from dataclasses import dataclass, field
 from typing import Any
 
-from arbiter_core.kinematics import distance_error, heading_error
-
 from .analytics.store import EMPTY_STATS, AnalyticsStats, AnalyticsStore
 from .control.loop import ControlLoop
 from .latency.tracker_client import LatencyView
@@ -180,7 +178,7 @@ def robot_view(
     goal = None if manual else loop.goal()
     e_d = e_th = None
     if goal is not None:
-        e_d, e_th = round(distance_error(pose, goal), 2), round(heading_error(pose, goal), 2)
+        e_d, e_th = (round(e, 2) for e in loop.errors(pose))
     state = "driving" if loop.running else ("teleop" if loop.teleop.moving else "stopped")
     mission = loop.mission
     v, w = loop.command

@@ -14,7 +14,6 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
-import threading
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -29,6 +28,7 @@ from arbiter_core.topics import QOS_DEPTH
 
 from ..bus import Callback, TypeClash
 from .convert import message_class, to_json, to_ros
+from .local import HandledLocally
 
 log = logging.getLogger(__name__)
 
@@ -53,9 +53,6 @@ def default_qos() -> QoSProfile:
     )
 
 
-LOCAL_MEMORY = 10_000  # texts remembered for dropping their DDS copy (a few seconds at any real rate)
-
-
 class RosBus:
     def __init__(self, node: Node, loop: asyncio.AbstractEventLoop) -> None:
         self.node = node
@@ -65,10 +62,8 @@ class RosBus:
         self._subs: dict[str, _Sub] = {}
         self.published = 0
         # texts handed over in-process (deliver_local), so that their DDS copy is not fanned out twice
-        self._local: dict[str, dict[str, None]] = {}
-        self._local_lock = threading.Lock()
+        self._local: dict[str, HandledLocally] = {}
         self.local_delivered = 0
-        self.dds_copies_dropped = 0
         self.local_handlers: dict[str, Callable[[str], None]] = {}  # topic -> a node's in-process handler
 
     # -- types ------------------------------------------------------------------------------
@@ -185,22 +180,19 @@ class RosBus:
         """A ``std_msgs/String`` published by a node of this process (the tracker's report), handed to
         the WebSocket subscribers at once instead of after a DDS round through the executor; it is
         still published on DDS for everyone else, and that copy is not fanned out again here."""
-        with self._local_lock:
-            seen = self._local.setdefault(topic, {})
-            seen[text] = None
-            if len(seen) > LOCAL_MEMORY:
-                del seen[next(iter(seen))]
+        handled = self._local.get(topic)
+        if handled is None:
+            handled = self._local.setdefault(topic, HandledLocally())
+        handled.note(text)
         self.local_delivered += 1
         with contextlib.suppress(RuntimeError):  # the loop is closed: shutting down
             self.loop.call_soon_threadsafe(self._fanout, topic, {"data": text})
 
     def _on_message(self, topic: str, msg: Any) -> None:  # executor thread
         text = getattr(msg, "data", None)
-        if isinstance(text, str) and topic in self._local:
-            with self._local_lock:
-                if self._local[topic].pop(text, False) is None:
-                    self.dds_copies_dropped += 1
-                    return  # already delivered in-process
+        handled = self._local.get(topic)
+        if handled is not None and isinstance(text, str) and handled.take(text):
+            return  # already delivered in-process
         try:
             data = to_json(msg)
         except Exception:

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import dataclasses
 import logging
-import threading
 import time
 from collections.abc import Callable
 from typing import Any
@@ -28,6 +27,7 @@ from .. import tracker
 from ..server import BackendConfig
 from .bus import default_qos
 from .convert import message_class, to_json, to_ros
+from .local import HandledLocally
 
 log = logging.getLogger(__name__)
 
@@ -63,9 +63,6 @@ def _limits_params(node: Node, config: BackendConfig) -> tuple[Limits, float, st
         max_angular_accel=_positive("max_angular_accel", ang_acc),
     )
     return limits, _positive("cmd_timeout", cmd_timeout), _measured(measured_type)
-
-
-LOCAL_MEMORY = 10_000  # in-process commands remembered until their DDS copy arrives
 
 
 class TrackerNode(Node):
@@ -104,8 +101,7 @@ class TrackerNode(Node):
         self.create_timer(min(0.05, cmd_timeout / 4), self._watchdog)
         # set by the backend when the rosbridge relay runs in this process (RosBus.deliver_local)
         self.local_report: Callable[[str, str], None] | None = None
-        self._local: dict[str, int] = {}  # texts handled in-process whose DDS copy is still to come
-        self._local_lock = threading.Lock()
+        self._local = HandledLocally()  # commands handled in-process whose DDS copy is still to come
 
     def _forward(self, v: float, w: float, stamp_ns: int) -> None:
         msg = topics.measured_message(v, w, self.config.measured_type, stamp_ns)
@@ -116,24 +112,13 @@ class TrackerNode(Node):
         instead of after a DDS round through the executor. The relay still publishes it on DDS for
         every other subscriber; its DDS copy reaching this node is then skipped (counted by text, so a
         client that sends the same text twice is handled twice)."""
-        with self._local_lock:
-            self._local[text] = self._local.get(text, 0) + 1
-            if len(self._local) > LOCAL_MEMORY:
-                del self._local[next(iter(self._local))]
+        self._local.note(text)
         self._handle(text)
 
     def _on_stamped(self, msg: Any) -> None:
-        text = msg.data
-        if self._local:
-            with self._local_lock:
-                left = self._local.get(text)
-                if left:
-                    if left == 1:
-                        del self._local[text]
-                    else:
-                        self._local[text] = left - 1
-                    return  # handled already, in-process
-        self._handle(text)
+        if self._local.take(msg.data):
+            return  # handled already, in-process
+        self._handle(msg.data)
 
     def _handle(self, text: str) -> None:
         recv_ns = self.get_clock().now().nanoseconds
