@@ -228,7 +228,7 @@ class ArbiterApp(App[None]):
             log.exception("control tick failed")
         running = self.loop.running
         if self._was_running and not running and self.loop.mission.done:
-            self.post_message(RunFinished(self.loop.algorithm, self.loop.mission_name))
+            self.post_message(RunFinished(self.loop.algorithm, self.loop.mission_label))
         self._was_running = running
 
     def _sample(self) -> None:
@@ -347,8 +347,8 @@ class ArbiterApp(App[None]):
         if result is None:
             return False
         if result == "move" and not was_manual:
-            # Manual keys take over from an autonomous controller.
-            self.loop.set_algorithm("manual")
+            # Manual keys take over from an autonomous controller (g resumes its mission).
+            self.loop.override()
             self.teleop.press(key, self.clock())
         if result == "move":
             self.loop.running = False

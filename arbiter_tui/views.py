@@ -196,7 +196,7 @@ def robot_view(
         w_odom=round(w_odom, 2),
         algorithm=loop.algorithm,
         state=state,
-        mission=loop.mission_name,
+        mission=loop.mission_label,
         done=len(mission.waypoints) if mission.done else mission.index,
         total=len(mission.waypoints),
         goal=None if goal is None else (round(goal[0], 2), round(goal[1], 2)),

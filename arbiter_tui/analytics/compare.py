@@ -7,7 +7,7 @@ figure-eight run that takes 40 s on the robot takes a fraction of a second here.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 from arbiter_core.kinematics import Pose, distance_error
@@ -16,13 +16,13 @@ from ..control.algorithms import ALGORITHMS, MISSIONS
 from ..control.loop import ControlLoop
 from ..control.teleop import Teleop
 from ..link.sim import SimLink
-from .store import AnalyticsStats, AnalyticsStore, DataPoint, stats_of_points
+from .runs import RULE, RunSummary, best_of, rank_key
+from .store import AnalyticsStats, AnalyticsStore, DataPoint
 
 AUTONOMOUS = tuple(a for a in ALGORITHMS if a != "manual")
 SIM_HZ = 50.0
 CONTROL_HZ = 10.0
 TIME_LIMIT_S = 600.0  # a run that has not finished by then counts as not completed
-RULE = "best: lowest mean distance error (avg e_d) among completed runs"
 
 
 class CompareError(ValueError):
@@ -39,6 +39,7 @@ class RunResult:
     max_linear_vel: float  # the largest |v| commanded
     stats: AnalyticsStats
     points: list[DataPoint] = field(repr=False, compare=False)
+    summary: RunSummary | None = field(default=None, repr=False, compare=False)  # as the console keeps it
 
     def as_dict(self) -> dict[str, Any]:
         return {
@@ -60,15 +61,20 @@ class _Clock:
 
 
 def run_one(
-    algorithm: str, mission: str, speed: float = 0.5, turn: float = 1.0, collection_rate: float = 10.0
+    algorithm: str,
+    mission: str,
+    speed: float = 0.5,
+    turn: float = 1.0,
+    collection_rate: float = 10.0,
+    run_id: int = 1,
 ) -> RunResult:
-    """One mission run from the origin, in simulated time."""
+    """One mission run from the origin, in simulated time; its points carry ``run_id``."""
     clock = _Clock()
     link = SimLink(clock=clock)
     store = AnalyticsStore(max_data_points=1_000_000, collection_rate=collection_rate)
     loop = ControlLoop(link, store, Teleop(speed=speed, turn=turn), wall_ms=lambda: clock.t * 1000.0)
     loop.set_algorithm(algorithm)
-    loop.mission_name = mission
+    loop.set_mission(mission)
     store.start_collection()
     assert loop.start_autonomous()
     step = 1.0 / SIM_HZ
@@ -88,7 +94,9 @@ def run_one(
     completed = loop.mission.done
     pose = link.telemetry.snapshot()[0]
     last = loop.mission.waypoints[-1]
-    points = store.points()
+    if loop.running:  # out of time
+        loop.stop()
+    (summary,) = store.runs()
     return RunResult(
         algorithm=algorithm,
         mission=mission,
@@ -96,8 +104,9 @@ def run_one(
         time_s=clock.t,
         final_error_m=distance_error(Pose(pose.x, pose.y, pose.theta), last),
         max_linear_vel=max_v,
-        stats=stats_of_points(points),
-        points=points,
+        stats=summary.stats,
+        points=[replace(p, runId=run_id) for p in store.points() if p.runId == summary.id],
+        summary=replace(summary, id=run_id),
     )
 
 
@@ -114,17 +123,18 @@ def parse_names(text: str, valid: tuple[str, ...], what: str) -> list[str]:
 def compare(
     missions: list[str], algorithms: list[str], speed: float = 0.5, turn: float = 1.0
 ) -> list[RunResult]:
-    return [run_one(a, m, speed, turn) for m in missions for a in algorithms]
+    pairs = [(a, m) for m in missions for a in algorithms]
+    return [run_one(a, m, speed, turn, run_id=i) for i, (a, m) in enumerate(pairs, 1)]
 
 
 def ranked(results: list[RunResult]) -> list[RunResult]:
     """Completed runs first, by mean distance error; then the others, by the same."""
-    return sorted(results, key=lambda r: (not r.completed, r.stats.avgDistanceError))
+    return sorted(results, key=rank_key)
 
 
 def best(results: list[RunResult]) -> RunResult | None:
-    done = [r for r in results if r.completed]
-    return min(done, key=lambda r: r.stats.avgDistanceError) if done else None
+    return best_of(results)
 
 
 MISSION_NAMES = tuple(MISSIONS)
+__all__ = ["AUTONOMOUS", "MISSION_NAMES", "RULE", "CompareError", "RunResult", "best", "compare", "ranked"]

@@ -76,12 +76,13 @@ def table(results: list[RunResult]) -> str:
 
 def export(results: list[RunResult], directory: Path) -> list[Path]:
     points = [p for r in results for p in r.points]
+    runs = [r.summary for r in results if r.summary is not None]
     stats = stats_of_points(points)
     stem = f"arbiter_compare_{time.time_ns() // 1_000_000}"
     return [
         write_new_file(directory, stem, "csv", to_csv(points).encode()),
-        write_new_file(directory, stem, "json", to_json(points, stats).encode()),
-        write_new_file(directory, stem, "mcap", to_mcap(points, stats)),
+        write_new_file(directory, stem, "json", to_json(points, stats, runs).encode()),
+        write_new_file(directory, stem, "mcap", to_mcap(points, stats, runs)),
     ]
 
 

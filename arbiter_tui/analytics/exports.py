@@ -1,10 +1,13 @@
 """Serialise and parse analytics exports (pure: text/bytes in and out, no files).
 
-* CSV: the seed's header line and column order, numbers as JavaScript prints them.
-* JSON: ``{"dataPoints": [...], "stats": {...}}`` with the seed's camelCase keys; strict
-  (no NaN/Infinity tokens; an unknown latency is ``null``).
-* MCAP: one ROS 2 (CDR) message per data point on ``/arbiter/data_point`` with an explicit
-  message definition, plus the stats on ``/arbiter/stats``; Foxglove and PlotJuggler open it.
+* CSV: the seed's ten columns in its order, numbers as JavaScript prints them, then ours: ``runId``
+  (empty outside a run). The seed's own CSV (ten columns) reads back too.
+* JSON: ``{"dataPoints": [...], "stats": {...}, "runs": [...]}`` with the seed's camelCase keys (each
+  point also carries ``runId``); strict (no NaN/Infinity tokens; an unknown latency is ``null``).
+* MCAP (ROS 2 CDR, explicit message definitions): the data points on ``/arbiter/data_point``, the stats
+  on ``/arbiter/stats``, the run summaries on ``/arbiter/runs``, and the robot's pose and commanded twist
+  as standard ``nav_msgs/msg/Odometry`` on ``/arbiter/odom`` (frame ``odom``, child ``base_link``), so
+  Foxglove's 3D panel draws the path and PlotJuggler plots it without our message types.
 """
 
 from __future__ import annotations
@@ -16,9 +19,15 @@ import math
 from collections.abc import Sequence
 from typing import Any
 
-from .store import FIELDS, NUMERIC, STATS_FIELDS, AnalyticsStats, DataPoint, stats_of_points
+from .model import EXTRA_FIELDS, FIELDS, NUMERIC, STATS_FIELDS, AnalyticsStats, DataPoint, stats_of_points
+from .runs import RunSummary
 
-CSV_HEADER = ",".join(FIELDS)
+SEED_CSV_HEADER = ",".join(FIELDS)
+CSV_HEADER = ",".join(FIELDS + EXTRA_FIELDS)
+MCAP_RUNS_TOPIC = "/arbiter/runs"
+MCAP_ODOM_TOPIC = "/arbiter/odom"
+MCAP_RUN_TYPE = "arbiter_msgs/msg/RunSummary"
+MCAP_ODOM_TYPE = "nav_msgs/msg/Odometry"
 MCAP_POINT_TOPIC = "/arbiter/data_point"
 MCAP_STATS_TOPIC = "/arbiter/stats"
 MCAP_POINT_TYPE = "arbiter_msgs/msg/DataPoint"
@@ -36,6 +45,7 @@ MCAP_POINT_DEF = "\n".join(
         "string algorithm",
         "float64 latency_ms  # NaN when unknown",
         "bool has_latency",
+        "uint32 run_id  # 0 outside every run",
     ]
 )
 MCAP_STATS_DEF = "\n".join(
@@ -54,6 +64,70 @@ MCAP_STATS_DEF = "\n".join(
         )
     ]
 )
+
+_SEP = "=" * 80
+MCAP_RUN_DEF = "\n".join(
+    [
+        "uint32 id",
+        "string algorithm",
+        "string mission  # empty for manual driving",
+        "string outcome  # running, completed, aborted, overridden, ended",
+        "bool completed",
+        "float64 start_ms",
+        "float64 end_ms  # NaN while running",
+        "float64 time_s",
+        "float64 final_error_m  # NaN for manual driving",
+        "arbiter_msgs/AnalyticsStats stats  # over all of the run's samples",
+        _SEP,
+        "MSG: arbiter_msgs/AnalyticsStats",
+        MCAP_STATS_DEF,
+    ]
+)
+# nav_msgs/msg/Odometry with its dependencies, in the concatenated form ROS 2 bags store
+MCAP_ODOM_DEF = f"""std_msgs/Header header
+string child_frame_id
+geometry_msgs/PoseWithCovariance pose
+geometry_msgs/TwistWithCovariance twist
+{_SEP}
+MSG: std_msgs/Header
+builtin_interfaces/Time stamp
+string frame_id
+{_SEP}
+MSG: builtin_interfaces/Time
+int32 sec
+uint32 nanosec
+{_SEP}
+MSG: geometry_msgs/PoseWithCovariance
+geometry_msgs/Pose pose
+float64[36] covariance
+{_SEP}
+MSG: geometry_msgs/Pose
+geometry_msgs/Point position
+geometry_msgs/Quaternion orientation
+{_SEP}
+MSG: geometry_msgs/Point
+float64 x
+float64 y
+float64 z
+{_SEP}
+MSG: geometry_msgs/Quaternion
+float64 x
+float64 y
+float64 z
+float64 w
+{_SEP}
+MSG: geometry_msgs/TwistWithCovariance
+geometry_msgs/Twist twist
+float64[36] covariance
+{_SEP}
+MSG: geometry_msgs/Twist
+geometry_msgs/Vector3 linear
+geometry_msgs/Vector3 angular
+{_SEP}
+MSG: geometry_msgs/Vector3
+float64 x
+float64 y
+float64 z"""
 
 
 class ExportFormatError(ValueError):
@@ -81,36 +155,91 @@ def to_csv(points: Sequence[DataPoint]) -> str:
     writer = csv.writer(out, lineterminator="\n")
     out.write(CSV_HEADER + "\n")
     for p in points:
-        writer.writerow([p.algorithm if f == "algorithm" else js_number(getattr(p, f)) for f in FIELDS])
+        row = [p.algorithm if f == "algorithm" else js_number(getattr(p, f)) for f in FIELDS]
+        writer.writerow([*row, "" if p.runId is None else str(p.runId)])
     return out.getvalue()
 
 
-def to_json(points: Sequence[DataPoint], stats: AnalyticsStats | None = None) -> str:
+def to_json(
+    points: Sequence[DataPoint], stats: AnalyticsStats | None = None, runs: Sequence[RunSummary] = ()
+) -> str:
     if stats is None:
         stats = stats_of_points(points)
-    doc = {"dataPoints": [p.as_dict() for p in points], "stats": stats.as_dict()}
+    doc = {
+        "dataPoints": [p.as_dict() for p in points],
+        "stats": stats.as_dict(),
+        "runs": [r.as_dict() for r in runs],
+    }
     return json.dumps(doc, allow_nan=False, indent=1) + "\n"
 
 
-def to_mcap(points: Sequence[DataPoint], stats: AnalyticsStats | None = None) -> bytes:
+def to_mcap(
+    points: Sequence[DataPoint], stats: AnalyticsStats | None = None, runs: Sequence[RunSummary] = ()
+) -> bytes:
     from mcap_ros2.writer import Writer
 
     if stats is None:
         stats = stats_of_points(points)
     rows = [_mcap_point(p) for p in points]  # validate everything before writing a byte
     stats_row = _mcap_stats(stats)
+    run_rows = [_mcap_run(r) for r in runs]
     buf = io.BytesIO()
     writer = Writer(buf)
     point_schema = writer.register_msgdef(MCAP_POINT_TYPE, MCAP_POINT_DEF)
+    odom_schema = writer.register_msgdef(MCAP_ODOM_TYPE, MCAP_ODOM_DEF)
     stats_schema = writer.register_msgdef(MCAP_STATS_TYPE, MCAP_STATS_DEF)
+    run_schema = writer.register_msgdef(MCAP_RUN_TYPE, MCAP_RUN_DEF)
     last_ns = 0
     for p, row in zip(points, rows, strict=False):
         t_ns = max(0, int(p.timestamp * 1_000_000))
         last_ns = max(last_ns, t_ns)
         writer.write_message(MCAP_POINT_TOPIC, point_schema, row, log_time=t_ns, publish_time=t_ns)
+        writer.write_message(
+            MCAP_ODOM_TOPIC, odom_schema, _odometry(p, t_ns), log_time=t_ns, publish_time=t_ns
+        )
+    for r, row in zip(runs, run_rows, strict=True):
+        t_ns = max(0, int((r.end_ms if r.end_ms is not None else r.last_ms or r.start_ms) * 1_000_000))
+        writer.write_message(MCAP_RUNS_TOPIC, run_schema, row, log_time=t_ns, publish_time=t_ns)
     writer.write_message(MCAP_STATS_TOPIC, stats_schema, stats_row, log_time=last_ns, publish_time=last_ns)
     writer.finish()
     return buf.getvalue()
+
+
+def _odometry(p: DataPoint, t_ns: int) -> dict[str, Any]:
+    """The sample as nav_msgs/Odometry: pose from odometry, twist = the commanded twist (unknown
+    covariance: zeros, as most drivers publish)."""
+    zeros = [0.0] * 36
+    return {
+        "header": {"stamp": {"sec": t_ns // 10**9, "nanosec": t_ns % 10**9}, "frame_id": "odom"},
+        "child_frame_id": "base_link",
+        "pose": {
+            "pose": {
+                "position": {"x": p.x, "y": p.y, "z": 0.0},
+                "orientation": {"x": 0.0, "y": 0.0, "z": math.sin(p.theta / 2), "w": math.cos(p.theta / 2)},
+            },
+            "covariance": zeros,
+        },
+        "twist": {
+            "twist": {"linear": {"x": p.linearVel, "y": 0.0, "z": 0.0},
+                      "angular": {"x": 0.0, "y": 0.0, "z": p.angularVel}},
+            "covariance": zeros,
+        },
+    }  # fmt: skip
+
+
+def _mcap_run(r: RunSummary) -> dict[str, Any]:
+    return {
+        "id": r.id,
+        "algorithm": r.algorithm,
+        "mission": r.mission,
+        "outcome": r.outcome,
+        "completed": r.completed,
+        "start_ms": float(r.start_ms),
+        "end_ms": math.nan if r.end_ms is None else float(r.end_ms),
+        "time_s": float(r.time_s),
+        "final_error_m": math.nan if r.final_error_m is None else float(r.final_error_m),
+        "stats": _mcap_stats(r.stats),
+    }
 
 
 MCAP_MAGIC = b"\x89MCAP0\r\n"
@@ -140,6 +269,7 @@ def parse_mcap(data: bytes) -> list[DataPoint]:
                 "headingError": m.heading_error,
                 "algorithm": m.algorithm,
                 "latencyMs": m.latency_ms if m.has_latency else None,
+                "runId": getattr(m, "run_id", 0) or None,  # exports before runs had none
             }
             points.append(_point_from_mapping(row, where))
     except (McapError, AttributeError, ValueError, EOFError) as exc:
@@ -163,6 +293,7 @@ def _mcap_point(p: DataPoint) -> dict[str, Any]:
         "algorithm": p.algorithm,
         "latency_ms": math.nan if p.latencyMs is None else float(p.latencyMs),
         "has_latency": p.latencyMs is not None,
+        "run_id": p.runId or 0,
     }
 
 
@@ -203,20 +334,34 @@ def _point_from_mapping(row: dict[str, Any], where: str) -> DataPoint:
         if not math.isfinite(raw):
             raise ExportFormatError(f"{where}: {f} is not finite")
         values[f] = float(raw)
-    return DataPoint(**values)
+    return DataPoint(**values, runId=_run_id(row.get("runId"), where))
+
+
+def _run_id(raw: Any, where: str) -> int | None:
+    if raw is None or raw == "":
+        return None
+    if isinstance(raw, str):
+        if not raw.isdigit():
+            raise ExportFormatError(f"{where}: runId is not a positive integer: {raw[:40]!r}")
+        raw = int(raw)
+    if isinstance(raw, bool) or not isinstance(raw, int) or not 1 <= raw < 2**32:
+        raise ExportFormatError(f"{where}: runId must be a positive integer")
+    return raw
 
 
 def parse_csv(text: str) -> list[DataPoint]:
     lines = text.splitlines()
     if not lines:
         raise ExportFormatError("empty file")
-    if lines[0].strip().lstrip("\ufeff") != CSV_HEADER:
+    header = lines[0].strip().lstrip("\ufeff")
+    if header not in (CSV_HEADER, SEED_CSV_HEADER):
         raise ExportFormatError(f"not an arbiter analytics CSV: header must be {CSV_HEADER!r}")
+    columns = header.count(",") + 1
     reader = csv.DictReader(io.StringIO(text.lstrip("\ufeff")))
     points = []
     for i, row in enumerate(reader, start=2):
         if None in row or any(v is None for v in row.values()):
-            raise ExportFormatError(f"line {i}: expected {len(FIELDS)} columns")
+            raise ExportFormatError(f"line {i}: expected {columns} columns")
         points.append(_point_from_mapping(row, f"line {i}"))
     return points
 
@@ -248,6 +393,7 @@ def stats_json(stats: AnalyticsStats) -> str:
 __all__ = [
     "CSV_HEADER",
     "NUMERIC",
+    "SEED_CSV_HEADER",
     "ExportFormatError",
     "js_number",
     "parse_csv",

@@ -78,12 +78,13 @@ def export_store(
         raise ValueError(f"unknown export format {fmt!r}; choose from {', '.join(FORMATS)}")
     points = store.points()
     stats = store.stats()
+    runs = store.runs()
     if fmt == "csv":
         data = to_csv(points).encode()
     elif fmt == "json":
-        data = to_json(points, stats).encode()
+        data = to_json(points, stats, runs).encode()
     else:
-        data = to_mcap(points, stats)
+        data = to_mcap(points, stats, runs)
     try:
         return write_new_file(Path(directory), f"arbiter_analytics_{clock_ms()}", fmt, data)
     except ExportError:

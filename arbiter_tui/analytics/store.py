@@ -19,120 +19,27 @@ from __future__ import annotations
 
 import math
 import threading
-from collections.abc import Callable, Iterable, Iterator
-from dataclasses import asdict, dataclass, fields
+from collections.abc import Callable, Iterator
 
 import numpy as np
 
 from arbiter_core import stats as S
 
-FIELDS = (
-    "timestamp",
-    "x",
-    "y",
-    "theta",
-    "linearVel",
-    "angularVel",
-    "distanceError",
-    "headingError",
-    "algorithm",
-    "latencyMs",
+from .model import (
+    EMPTY_STATS,
+    FIELDS,
+    MAX_ALGORITHM_NAME,
+    NUMERIC,
+    STATS_FIELDS,
+    AnalyticsStats,
+    DataPoint,
+    compute_stats,
+    stats_of_points,
 )
-"""DataPoint fields in the seed's order -- also the CSV header."""
+from .runs import AlgorithmSummary, RunLog, RunSummary
 
-NUMERIC = tuple(f for f in FIELDS if f != "algorithm")
 _COL = {name: i for i, name in enumerate(NUMERIC)}
-MAX_ALGORITHM_NAME = 64
 MAX_CAPACITY = 10_000_000
-
-
-@dataclass(frozen=True)
-class DataPoint:
-    timestamp: float  # Date.now() ms
-    x: float  # m
-    y: float  # m
-    theta: float  # rad
-    linearVel: float  # commanded m/s
-    angularVel: float  # commanded rad/s
-    distanceError: float  # m
-    headingError: float  # rad
-    algorithm: str
-    latencyMs: float | None  # None when no latency is known (client-side simulation)
-
-    def validate(self) -> None:
-        for name in NUMERIC:
-            value = getattr(self, name)
-            if name == "latencyMs" and value is None:
-                continue
-            if isinstance(value, bool) or not isinstance(value, (int, float)):
-                raise ValueError(f"DataPoint.{name} must be a number, got {type(value).__name__}")
-            if not math.isfinite(value):
-                raise ValueError(f"DataPoint.{name} must be finite, got {value}")
-        if not isinstance(self.algorithm, str) or not self.algorithm:
-            raise ValueError("DataPoint.algorithm must be a non-empty string")
-        if len(self.algorithm) > MAX_ALGORITHM_NAME:
-            raise ValueError(f"DataPoint.algorithm longer than {MAX_ALGORITHM_NAME} characters")
-
-    def as_dict(self) -> dict[str, float | str | None]:
-        return asdict(self)
-
-
-@dataclass(frozen=True)
-class AnalyticsStats:
-    sampleCount: int
-    avgLinearVel: float  # mean |v|
-    avgAngularVel: float  # mean |omega|
-    maxLinearVel: float  # max |v|
-    avgDistanceError: float  # mean e_d
-    avgHeadingError: float  # mean |e_theta|
-    stdDevError: float  # population std of e_d
-    p95Error: float  # seed's p95 of e_d
-    totalPathLength: float  # sum of hypot between consecutive samples
-
-    def as_dict(self) -> dict[str, float | int]:
-        return asdict(self)
-
-
-STATS_FIELDS = tuple(f.name for f in fields(AnalyticsStats))
-EMPTY_STATS = AnalyticsStats(0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-
-
-def compute_stats(
-    x: np.ndarray,
-    y: np.ndarray,
-    v: np.ndarray,
-    w: np.ndarray,
-    e_d: np.ndarray,
-    e_th: np.ndarray,
-    path: float | None = None,
-) -> AnalyticsStats:
-    """AnalyticsStats of time-ordered columns (``path`` overrides the path length when given)."""
-    n = int(e_d.size)
-    if n == 0:
-        return EMPTY_STATS
-    abs_v = np.abs(v)
-    return AnalyticsStats(
-        sampleCount=n,
-        avgLinearVel=S.mean(abs_v),
-        avgAngularVel=S.mean(np.abs(w)),
-        maxLinearVel=S.maximum(abs_v),
-        avgDistanceError=S.mean(e_d),
-        avgHeadingError=S.mean(np.abs(e_th)),
-        stdDevError=S.pstdev(e_d),
-        p95Error=S.p95(e_d),
-        totalPathLength=S.path_length(x, y) if path is None else path,
-    )
-
-
-def stats_of_points(points: Iterable[DataPoint]) -> AnalyticsStats:
-    pts = list(points)
-
-    def col(name: str) -> np.ndarray:
-        return np.fromiter((getattr(p, name) for p in pts), dtype=np.float64, count=len(pts))
-
-    return compute_stats(
-        col("x"), col("y"), col("linearVel"), col("angularVel"), col("distanceError"), col("headingError")
-    )
 
 
 Observer = Callable[[str], None]
@@ -148,6 +55,7 @@ class AnalyticsStore:
         self._max = 1
         self._algos: list[str] = []
         self._algo_index: dict[str, int] = {}
+        self._runs = RunLog()
         self._reset_buffers(0)
         self._total_recorded = 0
         self.collection_rate = collection_rate
@@ -157,6 +65,7 @@ class AnalyticsStore:
     def _reset_buffers(self, alloc: int) -> None:
         self._num = np.empty((len(NUMERIC), alloc), dtype=np.float64)
         self._alg = np.empty(alloc, dtype=np.uint8)
+        self._run = np.empty(alloc, dtype=np.uint32)  # run id, 0 outside every run
         self._size = 0
         self._next = 0
 
@@ -175,9 +84,11 @@ class AnalyticsStore:
         new = min(self._max, max(1024, alloc * 2))
         num = np.empty((len(NUMERIC), new), dtype=np.float64)
         alg = np.empty(new, dtype=np.uint8)
+        run = np.empty(new, dtype=np.uint32)
         num[:, : self._size] = self._num[:, : self._size]
         alg[: self._size] = self._alg[: self._size]
-        self._num, self._alg = num, alg
+        run[: self._size] = self._run[: self._size]
+        self._num, self._alg, self._run = num, alg, run
 
     # -- settings ----------------------------------------------------------
     @property
@@ -213,11 +124,18 @@ class AnalyticsStore:
                 order = self._order()
                 keep_num = self._num[:, order][:, -n:] if self._size else self._num[:, :0]
                 keep_alg = self._alg[order][-n:] if self._size else self._alg[:0]
+                all_runs = self._run[order] if self._size else self._run[:0]
+                keep_run = all_runs[-n:]
+                dropped = all_runs[: max(0, all_runs.size - n)]
+                for run_id, count in zip(*np.unique(dropped, return_counts=True), strict=True):
+                    if run_id:
+                        self._runs.evicted(int(run_id), int(count))
                 self._max = n
                 k = keep_num.shape[1]
                 self._reset_buffers(min(n, max(1024, k)))
                 self._num[:, :k] = keep_num
                 self._alg[:k] = keep_alg
+                self._run[:k] = keep_run
                 self._size = k
                 self._next = k % self._num.shape[1] if k == n else k
                 self._version += 1
@@ -259,10 +177,47 @@ class AnalyticsStore:
         self._notify("collecting")
 
     def clear(self) -> None:
+        """Forget every point and every run (a run in progress goes on, from now)."""
         with self._lock:
             self._reset_buffers(0)
+            self._runs.clear()
             self._version += 1
         self._notify("cleared")
+
+    # -- runs ----------------------------------------------------------------------------------
+    def begin_run(self, algorithm: str, mission: str, t_ms: float) -> int:
+        """Start a run (an active one ends as aborted); points recorded with its id join it."""
+        with self._lock:
+            run_id = self._runs.begin(algorithm, mission, t_ms)
+            self._version += 1
+        self._notify("run")
+        return run_id
+
+    def end_run(self, outcome: str, t_ms: float, final_error_m: float | None = None) -> RunSummary | None:
+        with self._lock:
+            summary = self._runs.end(outcome, t_ms, final_error_m)
+            if summary is not None:
+                self._version += 1
+        if summary is not None:
+            self._notify("run")
+        return summary
+
+    @property
+    def active_run(self) -> int | None:
+        return self._runs.active
+
+    def runs(self) -> tuple[RunSummary, ...]:
+        """Every run with samples, oldest first: summaries over all their samples (not just the ring's)."""
+        with self._lock:
+            return self._runs.summaries()
+
+    def run(self, run_id: int) -> RunSummary | None:
+        with self._lock:
+            return self._runs.get(run_id)
+
+    def runs_by_algorithm(self) -> tuple[AlgorithmSummary, ...]:
+        with self._lock:
+            return self._runs.by_algorithm()
 
     def record(self, point: DataPoint) -> bool:
         """Store a point if collection is on; returns whether it was stored.
@@ -283,6 +238,16 @@ class AnalyticsStore:
             if self._size == self._num.shape[1] and self._size < self._max:
                 self._grow()
             i = self._next
+            if self._size == self._max:  # the ring is full: slot i holds the oldest point, dropped now
+                old = int(self._run[i])
+                if old:
+                    self._runs.evicted(old)
+            run_id = point.runId or 0
+            if run_id and not self._runs.add(
+                run_id, point.timestamp, point.x, point.y, point.linearVel, point.angularVel,
+                point.distanceError, point.headingError,
+            ):  # fmt: skip
+                run_id = 0  # not the active run: kept as a plain sample
             col = self._num[:, i]
             col[0] = point.timestamp
             col[1] = point.x
@@ -294,6 +259,7 @@ class AnalyticsStore:
             col[7] = point.headingError
             col[8] = math.nan if point.latencyMs is None else point.latencyMs
             self._alg[i] = code
+            self._run[i] = run_id
             self._next = (i + 1) % self._num.shape[1] if self._num.shape[1] == self._max else i + 1
             if self._size < self._num.shape[1]:
                 self._size += 1
@@ -330,6 +296,7 @@ class AnalyticsStore:
             order = self._order()
             num = self._num[:, order].copy()
             codes = self._alg[order].copy()
+            runs = self._run[order].copy()
             names = list(self._algos)
         out = []
         for j in range(num.shape[1]):
@@ -346,6 +313,7 @@ class AnalyticsStore:
                     float(num[7, j]),
                     names[codes[j]],
                     None if math.isnan(lat) else lat,
+                    int(runs[j]) or None,
                 )
             )
         return out
@@ -394,6 +362,11 @@ class AnalyticsStore:
         """Bytes held by the buffer arrays."""
         return int(self._num.nbytes + self._alg.nbytes)
 
+
+__all__ = [  # the data model lives in model.py; these names are read from here too
+    "EMPTY_STATS", "FIELDS", "MAX_ALGORITHM_NAME", "MAX_CAPACITY", "NUMERIC", "STATS_FIELDS",
+    "AnalyticsStats", "AnalyticsStore", "DataPoint", "compute_stats", "get_store", "stats_of_points",
+]  # fmt: skip
 
 STORE = AnalyticsStore()
 """The process-wide singleton every screen shares."""

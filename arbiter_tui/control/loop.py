@@ -2,6 +2,10 @@
 
 No Textual here: the app calls ``tick_control`` at the repeat rate and
 ``sample`` at the collection rate, with the current monotonic time.
+
+It also says where runs begin and end (``analytics/runs.py``): ``g`` starts a mission run that ends
+completed, aborted (stop, another algorithm or mission, the link lost) or overridden (a movement key);
+manual driving is a run from the first movement to ``MANUAL_IDLE_S`` without one.
 """
 
 from __future__ import annotations
@@ -14,6 +18,7 @@ from dataclasses import replace
 
 from arbiter_core.kinematics import Limits, Pose, clamp_twist, distance_error, heading_error
 
+from ..analytics.runs import ABORTED, COMPLETED, ENDED, MANUAL_IDLE_S, OVERRIDDEN
 from ..analytics.store import AnalyticsStore, DataPoint
 from ..link.base import Link
 from .algorithms import ALGORITHMS, MISSIONS, MissionProgress, make_controller
@@ -41,8 +46,11 @@ class ControlLoop:
         self.teleop = teleop
         self._wall_ms = wall_ms
         self.algorithm = "manual"
-        self.mission_name = "square"
+        self.mission_name = "square"  # the named mission ``n`` selects and ``g`` starts
         self.mission = MissionProgress.named(self.mission_name)
+        self.mission_label = self.mission_name  # what the current (or last) run drives: a name or a goal
+        self.interrupted: MissionProgress | None = None  # a mission stopped before its end: ``g`` resumes it
+        self._manual_at: tuple[float, float] | None = None  # (monotonic, wall ms) of the last manual move
         self.controller = make_controller(self.algorithm)
         self.running = False  # an autonomous controller is driving
         self.command = (0.0, 0.0)  # the last command sent
@@ -53,7 +61,7 @@ class ControlLoop:
     # -- selection ----------------------------------------------------------------------
     def set_algorithm(self, name: str) -> None:
         if name not in ALGORITHMS:
-            raise ValueError(f"unknown algorithm {name!r}")
+            raise ValueError(f"unknown algorithm {name!r}; choose from {', '.join(ALGORITHMS)}")
         self.stop()
         self.algorithm = name
         self.controller = make_controller(name)
@@ -62,29 +70,112 @@ class ControlLoop:
         self.set_algorithm(ALGORITHMS[(ALGORITHMS.index(self.algorithm) + 1) % len(ALGORITHMS)])
         return self.algorithm
 
+    def set_mission(self, name: str) -> None:
+        if name not in MISSIONS:
+            raise ValueError(f"unknown mission {name!r}; choose from {', '.join(MISSIONS)}")
+        self.stop()
+        self.mission_name = self.mission_label = name
+        self.mission = MissionProgress.named(name)
+        self.interrupted = None
+
     def cycle_mission(self) -> str:
         names = list(MISSIONS)
-        self.stop()
-        self.mission_name = names[(names.index(self.mission_name) + 1) % len(names)]
-        self.mission = MissionProgress.named(self.mission_name)
+        self.set_mission(names[(names.index(self.mission_name) + 1) % len(names)])
         return self.mission_name
 
+    def _autonomous(self) -> bool:
+        """Make sure an autonomous controller is selected (go_to_goal after manual); False if none can be."""
+        if self.algorithm == "manual":
+            self.set_algorithm("go_to_goal")
+        return self.algorithm != "manual"
+
+    def _run(self, mission: MissionProgress, label: str) -> None:
+        self.stop()
+        self.mission = mission
+        self.mission_label = label
+        self.interrupted = None
+        self.running = True
+        self.store.begin_run(self.algorithm, label, self._wall_ms())
+
     def start_autonomous(self) -> bool:
-        """Start the selected controller on the mission from the robot's current pose."""
+        """Start the selected controller on the named mission, from the robot's current pose."""
         if self.algorithm == "manual":
             return False
         pose = self.link.telemetry.snapshot()[0]
-        self.mission = MissionProgress.named(self.mission_name)
+        mission = MissionProgress.named(self.mission_name)
         # Missions are relative to where the robot stands when they start.
-        self.mission.waypoints = [(pose.x + x, pose.y + y) for x, y in self.mission.waypoints]
-        self.mission.start = (pose.x, pose.y)
-        self.running = True
+        mission.waypoints = [(pose.x + x, pose.y + y) for x, y in mission.waypoints]
+        mission.start = (pose.x, pose.y)
+        self._run(mission, self.mission_name)
         return True
 
-    def stop(self) -> None:
+    def go(self) -> bool:
+        """``g``: resume an interrupted mission from its current waypoint (with the selected controller,
+        or the one it ran with when manual is selected), else start the named mission afresh."""
+        interrupted = self.interrupted
+        if interrupted is None or interrupted.done:
+            return self.start_autonomous()
+        if self.algorithm == "manual":
+            self.set_algorithm(self._interrupted_algorithm)
+        pose = self.link.telemetry.snapshot()[0]
+        interrupted.start = (pose.x, pose.y)  # pure pursuit follows the segment from here
+        label = f"{self._interrupted_label} from {interrupted.index + 1}/{len(interrupted.waypoints)}"
+        self._run(interrupted, label)
+        return True
+
+    def restart(self) -> bool:
+        """Start the named mission from its first waypoint (an interrupted one is forgotten)."""
+        if self.algorithm == "manual" and self.interrupted is not None:
+            self.set_algorithm(self._interrupted_algorithm)
+        self.interrupted = None
+        return self.start_autonomous()
+
+    def go_to(self, x: float, y: float) -> None:
+        """Drive to the point (x, y) in the odometry frame: go_to_goal unless another controller is chosen."""
+        if not (math.isfinite(x) and math.isfinite(y)):
+            raise ValueError("a goal needs finite coordinates")
+        self._autonomous()
+        pose = self.link.telemetry.snapshot()[0]
+        mission = MissionProgress([(float(x), float(y))], start=(pose.x, pose.y))
+        self._run(mission, f"goal ({x:+.2f}, {y:+.2f})")
+
+    _interrupted_algorithm = "go_to_goal"
+    _interrupted_label = ""
+
+    def stop(self, outcome: str = ABORTED) -> None:
         """Stop the robot: teleop and any autonomous run; the next tick sends exactly one zero."""
-        self.running = False
+        if self.running:
+            self.running = False
+            if not self.mission.done:
+                self.interrupted = self.mission
+                self._interrupted_algorithm = self.algorithm
+                self._interrupted_label = self.mission_label.split(" from ")[0]
+            self.store.end_run(outcome, self._wall_ms(), self._final_error())
+        self._end_manual_run()
         self.teleop.stop()
+
+    def override(self) -> None:
+        """A movement key takes over from the controller: the run ends as overridden, manual selected."""
+        self.stop(OVERRIDDEN)
+        self.set_algorithm("manual")
+
+    def _final_error(self) -> float:
+        pose = self.link.telemetry.snapshot()[0]
+        return distance_error(pose, self.mission.waypoints[-1])
+
+    def _end_manual_run(self) -> None:
+        if self._manual_at is not None:
+            self.store.end_run(ENDED, self._manual_at[1])
+            self._manual_at = None
+
+    def _track_manual(self, now: float, v: float, w: float) -> None:
+        """Manual driving is a run from its first movement until ``MANUAL_IDLE_S`` without one."""
+        if self.algorithm == "manual" and (v, w) != (0.0, 0.0):
+            if self._manual_at is None:
+                self.store.begin_run("manual", "", self._wall_ms())
+            self._manual_at = (now, self._wall_ms())
+        elif self._manual_at is not None and now - self._manual_at[0] >= MANUAL_IDLE_S:
+            self._end_manual_run()
 
     # -- ticks ----------------------------------------------------------------------------
     def goal(self) -> tuple[float, float]:
@@ -113,7 +204,9 @@ class ControlLoop:
         limits = self.teleop.limits
         if self.running:
             if self.mission.done:
-                self.stop()
+                self.running = False
+                self.store.end_run(COMPLETED, self._wall_ms(), self._final_error())
+                self.teleop.stop()
                 cmd = self.teleop.tick(now)
             else:
                 limits = self.autonomy_limits()
@@ -122,8 +215,10 @@ class ControlLoop:
         else:
             cmd = self.teleop.tick(now)
         if cmd is None:
+            self._track_manual(now, 0.0, 0.0)
             return None
         v, w = clamp_twist(*cmd, limits)
+        self._track_manual(now, v, w)
         if self.link.send(v, w):
             self.command = (v, w)
         else:
@@ -142,6 +237,11 @@ class ControlLoop:
             return None
         pose, _v, _w, latency = self.link.telemetry.snapshot()
         goal = self.mission.goal
+        # A sample joins the active run while a controller drives, or while a manual key moves the robot;
+        # standing still outside a run (or in a manual pause) joins none.
+        run = self.store.active_run
+        if run is not None and not self.running and self.command == (0.0, 0.0):
+            run = None
         point = DataPoint(
             timestamp=float(int(self._wall_ms())),
             x=pose.x,
@@ -153,6 +253,7 @@ class ControlLoop:
             headingError=heading_error(pose, goal),
             algorithm=self.algorithm,
             latencyMs=latency,
+            runId=run,
         )
         return point if self.store.record(point) else None
 

@@ -9,11 +9,15 @@ import pytest
 
 from arbiter_tui.analytics.exports import (
     CSV_HEADER,
+    MCAP_ODOM_TOPIC,
     MCAP_POINT_TOPIC,
+    MCAP_RUNS_TOPIC,
     MCAP_STATS_TOPIC,
     ExportFormatError,
+    SEED_CSV_HEADER,
     js_number,
     parse_csv,
+    parse_mcap,
     parse_json,
     to_csv,
     to_json,
@@ -25,12 +29,26 @@ from arbiter_tui.analytics.store import FIELDS, AnalyticsStore, DataPoint, stats
 from ..support.points import random_points
 
 
-def test_csv_header_is_exactly_the_seeds():
-    assert (
-        CSV_HEADER
-        == "timestamp,x,y,theta,linearVel,angularVel,distanceError,headingError,algorithm,latencyMs"
-    )
+def test_csv_header_is_the_seeds_then_the_run_id():
+    seed = "timestamp,x,y,theta,linearVel,angularVel,distanceError,headingError,algorithm,latencyMs"
+    assert CSV_HEADER == seed + ",runId"
     assert to_csv([]).splitlines()[0] == CSV_HEADER
+
+
+def test_the_seeds_own_csv_reads_back_without_run_ids():
+    pts = random_points(5, seed=9)
+    seed_csv = "\n".join(line.rsplit(",", 1)[0] for line in to_csv(pts).splitlines()) + "\n"
+    assert seed_csv.splitlines()[0] == SEED_CSV_HEADER
+    assert parse_csv(seed_csv) == pts
+    with pytest.raises(ExportFormatError, match="line 2: expected 10 columns"):
+        parse_csv(SEED_CSV_HEADER + "\n1,2\n")
+
+
+@pytest.mark.parametrize("bad", ["0", "-3", "1.5", "x", str(2**32)])
+def test_a_bad_run_id_is_a_clear_error(bad):
+    text = to_csv(random_points(1, seed=1)).rstrip("\n") + bad + "\n"
+    with pytest.raises(ExportFormatError, match="line 2: runId"):
+        parse_csv(text)
 
 
 def test_js_number_formatting():
@@ -44,11 +62,12 @@ def test_js_number_formatting():
 
 
 def test_csv_round_trip_through_the_csv_module():
-    pts = random_points(50, seed=3)
+    pts = random_points(50, seed=3, runs=True)
     text = to_csv(pts)
     rows = list(csv.DictReader(io.StringIO(text)))
     assert len(rows) == 50
-    assert list(rows[0]) == list(FIELDS)
+    assert list(rows[0]) == [*FIELDS, "runId"]
+    assert {r["runId"] for r in rows} == {"", "1", "2", "70000"}
     for p, row in zip(pts, rows, strict=False):
         assert float(row["x"]) == p.x
         assert row["algorithm"] == p.algorithm
@@ -57,12 +76,12 @@ def test_csv_round_trip_through_the_csv_module():
 
 
 def test_json_is_strict_and_round_trips():
-    pts = random_points(30, seed=4)
+    pts = random_points(30, seed=4, runs=True)
     text = to_json(pts)
     assert "NaN" not in text and "Infinity" not in text
     doc = json.loads(text)
-    assert set(doc) == {"dataPoints", "stats"}
-    assert list(doc["dataPoints"][0]) == list(FIELDS)
+    assert set(doc) == {"dataPoints", "stats", "runs"}
+    assert list(doc["dataPoints"][0]) == [*FIELDS, "runId"]
     assert doc["stats"] == stats_of_points(pts).as_dict()
     assert parse_json(text) == pts
 
@@ -71,11 +90,13 @@ def test_mcap_reads_back_with_the_mcap_reader():
     from mcap.reader import make_reader
     from mcap_ros2.decoder import DecoderFactory
 
-    pts = random_points(20, seed=5)
+    pts = random_points(20, seed=5, runs=True)
     data = to_mcap(pts)
     reader = make_reader(io.BytesIO(data), decoder_factories=[DecoderFactory()])
     summary = reader.get_summary()
-    assert {c.topic for c in summary.channels.values()} == {MCAP_POINT_TOPIC, MCAP_STATS_TOPIC}
+    assert {c.topic for c in summary.channels.values()} == {
+        MCAP_POINT_TOPIC, MCAP_STATS_TOPIC, MCAP_ODOM_TOPIC, MCAP_RUNS_TOPIC,
+    } - {MCAP_RUNS_TOPIC}  # fmt: skip  (no runs given: no run messages, and no channel either)
     msgs = list(reader.iter_decoded_messages())
     points = [m for m in msgs if m.channel.topic == MCAP_POINT_TOPIC]
     assert len(points) == 20
@@ -83,7 +104,9 @@ def test_mcap_reads_back_with_the_mcap_reader():
         assert decoded.x == p.x and decoded.distance_error == p.distanceError
         assert decoded.algorithm == p.algorithm
         assert decoded.has_latency == (p.latencyMs is not None)
+        assert decoded.run_id == (p.runId or 0)
         assert message.log_time == int(p.timestamp * 1_000_000)
+    assert parse_mcap(data) == pts
     stats = next(d for _s, c, _m, d in msgs if c.topic == MCAP_STATS_TOPIC)
     assert stats.sample_count == 20
     assert stats.p95_error == stats_of_points(pts).p95Error
@@ -172,8 +195,9 @@ def test_full_disk_leaves_no_partial_file(tmp_path, monkeypatch):
         ("", "empty"),
         ("a,b,c\n1,2,3\n", "header"),
         (CSV_HEADER + "\n1,2,3\n", "columns"),
-        (CSV_HEADER + "\n1,2,3,4,5,6,7,8,manual,zz\n", "not a number"),
-        (CSV_HEADER + "\n1,2,3,4,5,6,7,nan,manual,1\n", "not finite"),
+        (CSV_HEADER + "\n1,2,3,4,5,6,7,8,manual,zz,\n", "not a number"),
+        (CSV_HEADER + "\n1,2,3,4,5,6,7,nan,manual,1,3\n", "not finite"),
+        (SEED_CSV_HEADER + "\n1,2,3,4,5,6,7,8,manual,zz\n", "not a number"),
         ('{"dataPoints": 5}', "dataPoints"),
         ('{"dataPoints": [{"x": 1}]}', "missing field"),
         ('{"dataPoints": [], "stats": NaN}', "non-standard"),

@@ -1,0 +1,293 @@
+"""Runs: what the comparison compares. Pure: numpy and the store's formulas, no I/O, no Textual.
+
+A run is one mission run (``g`` → completed / aborted / overridden) or one stretch of manual driving
+(first key press → 2 s without a movement key). Its samples are the DataPoints recorded while it was
+active; a sample recorded outside every run (the robot standing still, a manual pause) belongs to none,
+so it counts in the seed's whole-buffer AnalyticsStats but in no run's.
+
+A run keeps its own copy of the six columns the statistics need (48 bytes a sample), so its nine
+AnalyticsStats are the seed's formulas (``compute_stats``) over *all* of its samples, however small the
+ring buffer is: a run of 392 samples says 392 after the ring has dropped half of them, and says how many
+the ring still holds (``in_ring``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+from typing import Any, Protocol, TypeVar
+
+import numpy as np
+
+from .model import EMPTY_STATS, AnalyticsStats, compute_stats
+
+RUNNING = "running"
+COMPLETED = "completed"
+ABORTED = "aborted"  # stopped: space/k, a screen too small, the link lost, another algorithm or mission
+OVERRIDDEN = "overridden"  # a movement key took over from the controller
+ENDED = "ended"  # a manual run: 2 s without a movement key
+OUTCOMES = (RUNNING, COMPLETED, ABORTED, OVERRIDDEN, ENDED)
+MANUAL = "manual"
+MANUAL_IDLE_S = 2.0
+
+RULE = "best: lowest mean distance error (avg e_d) among completed runs"
+# Columns where lower is better and a "best" mark means something; the others (samples, speeds, path)
+# have no better direction and are never marked.
+LOWER_IS_BETTER = (
+    "time_s", "final_error_m", "avgDistanceError", "stdDevError", "p95Error", "avgHeadingError",
+)  # fmt: skip
+
+
+@dataclass(frozen=True, slots=True)
+class RunSummary:
+    """One run as the comparison shows it; frozen, so a view can hold it."""
+
+    id: int
+    algorithm: str
+    mission: str  # "" for manual driving
+    start_ms: float
+    end_ms: float | None  # None while running
+    outcome: str
+    final_error_m: float | None  # distance to the mission's last waypoint when it ended; None for manual
+    stats: AnalyticsStats
+    in_ring: int  # how many of its samples the ring buffer still holds
+    last_ms: float | None = None  # timestamp of its last sample
+
+    @property
+    def completed(self) -> bool:
+        return self.outcome == COMPLETED
+
+    @property
+    def time_s(self) -> float:
+        """From its start to its end (or to its last sample while it runs)."""
+        end = self.end_ms if self.end_ms is not None else (self.last_ms or self.start_ms)
+        return max(0.0, (end - self.start_ms) / 1000.0)
+
+    @property
+    def dropped(self) -> int:
+        """Samples of this run the ring buffer no longer holds (its summary still counts them)."""
+        return self.stats.sampleCount - self.in_ring
+
+    def as_dict(self) -> dict[str, Any]:
+        return {
+            "id": self.id,
+            "algorithm": self.algorithm,
+            "mission": self.mission,
+            "outcome": self.outcome,
+            "completed": self.completed,
+            "start_ms": self.start_ms,
+            "end_ms": self.end_ms,
+            "time_s": round(self.time_s, 3),
+            "final_error_m": None if self.final_error_m is None else round(self.final_error_m, 4),
+            "stats": self.stats.as_dict(),
+        }
+
+
+@dataclass(frozen=True, slots=True)
+class AlgorithmSummary:
+    """Every run of one algorithm together: its samples pooled, its completed runs averaged."""
+
+    algorithm: str
+    runs: int
+    completed: int
+    time_s: float | None  # mean over completed runs
+    final_error_m: float | None  # mean over completed runs
+    stats: AnalyticsStats  # over the pooled samples of all its runs; path = sum of the runs' paths
+
+
+class Ranked(Protocol):
+    @property
+    def completed(self) -> bool: ...
+
+    @property
+    def stats(self) -> AnalyticsStats: ...
+
+
+def rank_key(r: Ranked) -> tuple[bool, float]:
+    """The one ranking rule: completed first, then by mean distance error."""
+    return (not r.completed, r.stats.avgDistanceError)
+
+
+R = TypeVar("R", bound=Ranked)
+
+
+def best_of(items: Iterable[R]) -> R | None:
+    done = [r for r in items if r.completed]
+    return min(done, key=rank_key) if done else None
+
+
+def column_value(row: RunSummary | AlgorithmSummary, column: str) -> float | None:
+    if column in ("time_s", "final_error_m"):
+        value = getattr(row, column)
+        return None if value is None else float(value)
+    return float(getattr(row.stats, column))
+
+
+def best_in_columns(
+    rows: Sequence[RunSummary | AlgorithmSummary], columns: Iterable[str] = LOWER_IS_BETTER
+) -> dict[str, int]:
+    """Index of the best row per column, among rows with a completed run (ties: the first)."""
+
+    def eligible(row: RunSummary | AlgorithmSummary) -> bool:
+        return row.completed > 0 if isinstance(row, AlgorithmSummary) else row.completed
+
+    out: dict[str, int] = {}
+    for column in columns:
+        candidates = [
+            (v, i) for i, r in enumerate(rows) if eligible(r) and (v := column_value(r, column)) is not None
+        ]
+        if candidates:
+            out[column] = min(candidates)[1]
+    return out
+
+
+class _Run:
+    __slots__ = ("_summary", "algorithm", "cols", "end_ms", "final_error_m", "id", "in_ring", "last_ms",
+                 "mission", "n", "outcome", "start_ms")  # fmt: skip
+
+    def __init__(self, run_id: int, algorithm: str, mission: str, start_ms: float) -> None:
+        self.id = run_id
+        self.algorithm = algorithm
+        self.mission = mission
+        self.start_ms = start_ms
+        self.end_ms: float | None = None
+        self.outcome = RUNNING
+        self.final_error_m: float | None = None
+        self.cols = np.empty((6, 64), dtype=np.float64)  # x, y, v, w, e_d, e_th
+        self.n = 0
+        self.in_ring = 0
+        self.last_ms: float | None = None
+        self._summary: RunSummary | None = None
+
+    def add(self, t_ms: float, x: float, y: float, v: float, w: float, e_d: float, e_th: float) -> None:
+        if self.n == self.cols.shape[1]:
+            grown = np.empty((6, self.n * 2), dtype=np.float64)
+            grown[:, : self.n] = self.cols
+            self.cols = grown
+        self.cols[:, self.n] = (x, y, v, w, e_d, e_th)
+        self.n += 1
+        self.in_ring += 1
+        self.last_ms = t_ms
+        self._summary = None
+
+    def summary(self) -> RunSummary:
+        if self._summary is None:
+            c = self.cols[:, : self.n]
+            stats = compute_stats(c[0], c[1], c[2], c[3], c[4], c[5]) if self.n else EMPTY_STATS
+            self._summary = RunSummary(
+                self.id, self.algorithm, self.mission, self.start_ms, self.end_ms, self.outcome,
+                self.final_error_m, stats, self.in_ring, self.last_ms,
+            )  # fmt: skip
+        return self._summary
+
+
+class RunLog:
+    """Every run of the session, in order. Not thread-safe on its own: the store calls it under its lock."""
+
+    def __init__(self) -> None:
+        self._runs: list[_Run] = []
+        self._by_id: dict[int, _Run] = {}
+        self._active: _Run | None = None
+        self._next_id = 1
+        self._pooled: dict[str, tuple[tuple[int, ...], AlgorithmSummary]] = {}
+
+    @property
+    def active(self) -> int | None:
+        return None if self._active is None else self._active.id
+
+    def active_algorithm(self) -> str | None:
+        return None if self._active is None else self._active.algorithm
+
+    def begin(self, algorithm: str, mission: str, t_ms: float) -> int:
+        """Start a run (ending the active one as aborted); returns its id."""
+        if self._active is not None:
+            self.end(ABORTED, t_ms)
+        run = _Run(self._next_id, algorithm, mission, t_ms)
+        self._next_id += 1
+        self._runs.append(run)
+        self._by_id[run.id] = run
+        self._active = run
+        return run.id
+
+    def end(self, outcome: str, t_ms: float, final_error_m: float | None = None) -> RunSummary | None:
+        """End the active run; returns its summary (None when no run was active)."""
+        if outcome not in OUTCOMES or outcome == RUNNING:
+            raise ValueError(f"a run ends as one of {', '.join(OUTCOMES[1:])}, not {outcome!r}")
+        run = self._active
+        if run is None:
+            return None
+        self._active = None
+        run.end_ms = max(t_ms, run.start_ms)
+        run.outcome = outcome
+        run.final_error_m = final_error_m
+        run._summary = None
+        return run.summary()
+
+    def add(self, run_id: int, t_ms: float, x: float, y: float, v: float, w: float, e_d: float,
+            e_th: float) -> bool:  # fmt: skip
+        """A sample of the active run; False (and nothing kept) for any other id."""
+        run = self._active
+        if run is None or run.id != run_id:
+            return False
+        run.add(t_ms, x, y, v, w, e_d, e_th)
+        return True
+
+    def evicted(self, run_id: int, count: int = 1) -> None:
+        """The ring buffer dropped ``count`` samples of this run (its summary keeps them)."""
+        run = self._by_id.get(run_id)
+        if run is not None and run.in_ring > 0:
+            run.in_ring = max(0, run.in_ring - count)
+            run._summary = None
+
+    def summaries(self, with_samples_only: bool = True) -> tuple[RunSummary, ...]:
+        return tuple(r.summary() for r in self._runs if r.n or not with_samples_only)
+
+    def get(self, run_id: int) -> RunSummary | None:
+        run = self._by_id.get(run_id)
+        return None if run is None else run.summary()
+
+    def by_algorithm(self) -> tuple[AlgorithmSummary, ...]:
+        """One row per algorithm with samples, in first-run order; recomputed only for an algorithm
+        whose runs changed (a finished algorithm costs nothing while another one drives)."""
+        groups: dict[str, list[_Run]] = {}
+        for r in self._runs:
+            if r.n:
+                groups.setdefault(r.algorithm, []).append(r)
+        out = []
+        for algorithm, runs in groups.items():
+            key = tuple(x for r in runs for x in (r.id, r.n, hash(r.outcome)))
+            cached = self._pooled.get(algorithm)
+            if cached is None or cached[0] != key:
+                cached = (key, _pool(algorithm, runs))
+                self._pooled[algorithm] = cached
+            out.append(cached[1])
+        return tuple(out)
+
+    def clear(self) -> None:
+        """Forget every run; an active run goes on from now with no samples."""
+        active = self._active
+        self._runs.clear()
+        self._by_id.clear()
+        self._pooled.clear()
+        self._active = None
+        if active is not None:
+            fresh = _Run(active.id, active.algorithm, active.mission, active.start_ms)
+            self._runs.append(fresh)
+            self._by_id[fresh.id] = fresh
+            self._active = fresh
+
+
+def _pool(algorithm: str, runs: list[_Run]) -> AlgorithmSummary:
+    cols = np.concatenate([r.cols[:, : r.n] for r in runs], axis=1)
+    path = sum(r.summary().stats.totalPathLength for r in runs)  # no step between two runs
+    stats = compute_stats(cols[0], cols[1], cols[2], cols[3], cols[4], cols[5], path=path)
+    done = [r.summary() for r in runs if r.outcome == COMPLETED]
+    errors = [s.final_error_m for s in done if s.final_error_m is not None]
+    return AlgorithmSummary(
+        algorithm=algorithm,
+        runs=len(runs),
+        completed=len(done),
+        time_s=sum(s.time_s for s in done) / len(done) if done else None,
+        final_error_m=sum(errors) / len(errors) if errors else None,
+        stats=stats,
+    )
