@@ -125,9 +125,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="type of /cmd_vel_measured: twist (geometry_msgs/Twist, default) or twist_stamped "
         "(TwistStamped with the tracker's receive time, for Jazzy+ diff_drive_controller)",
     )
-    p.add_argument(
-        "--log-file", help="write logs to this file, rotated at 1 MB, 3 kept (default: stderr)"
-    )
+    p.add_argument("--log-file", help="write logs to this file, rotated at 1 MB, 3 kept (default: stderr)")
     add_log_level(p)
     add_version(p)
     p.epilog = (

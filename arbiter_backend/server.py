@@ -31,7 +31,6 @@ from .tracker import DEFAULT_MAX_COMMAND_AGE_MS, LatencyTracker
 log = logging.getLogger(__name__)
 
 
-
 @dataclass
 class BackendConfig:
     host: str = "127.0.0.1"

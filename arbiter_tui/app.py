@@ -26,6 +26,7 @@ from textual.screen import Screen
 from .analytics.files import ExportError, export_store
 from .analytics.store import STORE, AnalyticsStore
 from .config import save_theme
+from .control.algorithms import ALGORITHMS, MISSIONS
 from .control.loop import ControlLoop
 from .control.teleop import Teleop
 from .latency.tracker_client import LatencyView, TrackerClient
@@ -38,6 +39,7 @@ from .messages import (
     ExportFailed,
     ExportResult,
     ExportWritten,
+    GoalPicked,
     LatencyPolled,
     LinkStateChanged,
     RunFinished,
@@ -268,7 +270,7 @@ class ArbiterApp(App[None]):
             now = time.monotonic()
             if force or now - self._analytics_at >= 1.0 / self.settings.analytics_rate:
                 self._analytics_at = now
-                self.analytics = analytics_view(self.store, self.analytics)
+                self.analytics = analytics_view(self.store, self.analytics, self.loop)
         elif mode == "latency":
             self.latency = self._latency_snapshot()
 
@@ -371,12 +373,75 @@ class ArbiterApp(App[None]):
                 f"Screen: {name}", f"Switch to the {name} screen", lambda n=name: self.action_mode(n)
             )
         yield SystemCommand("Stop the robot", "Zero velocity now", lambda: self.stop_robot("palette"))
+        for algo in ALGORITHMS:
+            yield SystemCommand(
+                f"Algorithm: {algo}",
+                "Select the controller (g runs it)",
+                lambda a=algo: self.select_algorithm(a),
+            )
+        for mission in MISSIONS:
+            yield SystemCommand(
+                f"Mission: {mission}",
+                "Select the mission (g runs it)",
+                lambda m=mission: self.select_mission(m),
+            )
+        yield SystemCommand("Go", "Resume the interrupted mission, or start the selected one (g)", self.go)
+        yield SystemCommand(
+            "Restart the mission", "From its first waypoint (G)", lambda: self.go(restart=True)
+        )
+        yield SystemCommand("Set a goal x y…", "Type a go-to-goal target in metres (t)", self.ask_goal)
         yield SystemCommand("Start/pause collection", "Toggle analytics collection", self.toggle_collection)
         yield SystemCommand("Clear collected data", "Asks first", self.ask_clear)
         for fmt in FORMATS:
             yield SystemCommand(
                 f"Export {fmt.upper()}", f"Write the collected data as {fmt}", lambda f=fmt: self.export(f)
             )
+
+    # -- driving -------------------------------------------------------------------------------
+    def select_algorithm(self, name: str) -> None:
+        self.loop.set_algorithm(name)
+        self.publish_views(force=True)
+
+    def select_mission(self, name: str) -> None:
+        self.loop.set_mission(name)
+        self.publish_views(force=True)
+
+    def go(self, restart: bool = False) -> bool:
+        """``g``: resume an interrupted mission or start the selected one; ``restart``: from waypoint 1."""
+        if self.too_small:
+            return False  # nothing starts moving while the console cannot be seen
+        started = self.loop.restart() if restart else self.loop.go()
+        if not started:
+            self.notify("Select go_to_goal or pure_pursuit with [b]a[/b] first", severity="warning")
+        self.publish_views(force=True)
+        return started
+
+    def set_goal(self, x: float, y: float) -> None:
+        """Drive to (x, y) with go_to_goal (or the autonomous controller already selected)."""
+        if self.too_small:
+            return
+        try:
+            self.loop.go_to(x, y)
+        except ValueError as exc:
+            self.notify(str(exc), severity="error")
+            return
+        self.notify(f"{self.loop.algorithm} driving to ({x:+.2f}, {y:+.2f})", timeout=3)
+        self.publish_views(force=True)
+
+    def ask_goal(self) -> None:
+        from .screens.goal import GoalPrompt
+
+        pose = self.link.telemetry.snapshot()[0]
+
+        def chosen(goal: tuple[float, float] | None) -> None:
+            if goal is not None:
+                self.set_goal(*goal)
+
+        self.push_screen(GoalPrompt((pose.x, pose.y)), chosen)
+
+    @on(GoalPicked)
+    def _goal_picked(self, event: GoalPicked) -> None:
+        self.set_goal(event.x, event.y)
 
     # -- actions -------------------------------------------------------------------------------
     def action_mode(self, name: str) -> None:
@@ -440,9 +505,7 @@ class ArbiterApp(App[None]):
     @on(ExportFailed)
     def _export_failed(self, event: ExportFailed) -> None:
         r = event.result
-        self.notify(
-            f"EXPORT FAILED ({r.fmt}): {r.error} — collected data kept", severity="error", timeout=8
-        )
+        self.notify(f"EXPORT FAILED ({r.fmt}): {r.error} — collected data kept", severity="error", timeout=8)
 
     # -- shared views ------------------------------------------------------------------------------
     def latency_view(self) -> LatencyView | None:

@@ -83,3 +83,12 @@ class DataCleared(Message):
     def __init__(self, points: int) -> None:
         super().__init__()
         self.points = points
+
+
+class GoalPicked(Message):
+    """The user chose a go-to-goal target (a click on the map or a typed ``x y``), in metres, odom frame."""
+
+    def __init__(self, x: float, y: float) -> None:
+        super().__init__()
+        self.x = x
+        self.y = y

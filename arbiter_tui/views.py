@@ -9,9 +9,12 @@ screen would not change: Textual then calls no watcher and the widget does no wo
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
+import numpy as np
+
+from .analytics.runs import AlgorithmSummary, RunSummary
 from .analytics.store import EMPTY_STATS, AnalyticsStats, AnalyticsStore
 from .control.loop import ControlLoop
 from .latency.tracker_client import LatencyView
@@ -90,17 +93,42 @@ class MapView:
     waypoints: tuple[tuple[float, float], ...] = ()
 
 
+PLOT_ERRORS = 2000  # the error plot shows the newest samples, thinned to PLOT_MAX points
+PLOT_TRAIL = 6000  # the trajectory plot: the newest samples, thinned to PLOT_MAX points per algorithm
+PLOT_MAX = 600
+
+
+@dataclass(frozen=True, slots=True)
+class Track:
+    """One algorithm's part of the collected trajectory (thinned), for the trajectory plot."""
+
+    algorithm: str
+    x: tuple[float, ...]
+    y: tuple[float, ...]
+
+
 @dataclass(frozen=True, slots=True)
 class AnalyticsView:
-    """The analytics screen: the seed's nine stats, per algorithm, and what the plots draw."""
+    """The analytics screen: the seed's nine stats over the ring, runs and algorithms over all their
+    samples, and what the plots draw (compared by the store's version, not value by value)."""
 
     version: int = -1
     collecting: bool = False
     points: int = 0
+    ring: int = 0  # the ring buffer's size (max_data_points)
     stats: AnalyticsStats = EMPTY_STATS
-    by_algorithm: tuple[tuple[str, AnalyticsStats], ...] = ()
-    errors: tuple[float, ...] = field(default=(), compare=False)  # distance error, last 200
-    trail: tuple[tuple[float, float], ...] = field(default=(), compare=False)  # last 2000 x, y
+    runs: tuple[RunSummary, ...] = ()
+    by_algorithm: tuple[AlgorithmSummary, ...] = ()
+    error_t: tuple[float, ...] = field(default=(), compare=False)  # s since the first plotted sample
+    errors: tuple[float, ...] = field(default=(), compare=False)  # distance error, m
+    tracks: tuple[Track, ...] = field(default=(), compare=False)
+    waypoints: tuple[tuple[float, float], ...] = ()
+    goal: tuple[float, float] | None = None
+
+    @property
+    def dropped_runs(self) -> tuple[RunSummary, ...]:
+        """Runs whose samples the ring has partly or wholly dropped."""
+        return tuple(r for r in self.runs if r.dropped > 0)
 
 
 @dataclass(frozen=True, slots=True)
@@ -119,6 +147,7 @@ class LatencySnapshot:
     rejected: int = 0
     max_command_age_ms: float | None = None
     window: tuple[float, ...] = field(default=(), compare=False)
+    window_t: tuple[float, ...] = field(default=(), compare=False)  # receive times, epoch s
     records: tuple[Any, ...] = field(default=(), compare=False)  # LatencyRecord, newest first, <= 30
     link_state: str = STARTING
     link_down: bool = False
@@ -170,9 +199,7 @@ def odometry_warning(link: Link, now: float) -> str | None:
     return None
 
 
-def robot_view(
-    link: Link, loop: ControlLoop, too_small: bool = False, now: float | None = None
-) -> RobotView:
+def robot_view(link: Link, loop: ControlLoop, too_small: bool = False, now: float | None = None) -> RobotView:
     pose, v_odom, w_odom, _lat = link.telemetry.snapshot()
     manual = loop.algorithm == "manual"
     goal = None if manual else loop.goal()
@@ -221,20 +248,48 @@ def map_view(link: Link, loop: ControlLoop, previous: MapView | None = None) -> 
     )
 
 
-def analytics_view(store: AnalyticsStore, previous: AnalyticsView | None = None) -> AnalyticsView:
-    """Recomputed only when the store changed (its version), whatever the UI rate."""
+def thin(n: int, most: int) -> slice:
+    """Every k-th of ``n`` samples so that at most ``most`` remain, always ending with the newest."""
+    step = max(1, -(-n // most))
+    return slice((n - 1) % step, n, step)
+
+
+def analytics_view(
+    store: AnalyticsStore, previous: AnalyticsView | None = None, loop: ControlLoop | None = None
+) -> AnalyticsView:
+    """Recomputed only when the store changed (its version), whatever the UI rate. The plots' series
+    come from the newest samples only: the cost does not grow with the ring's size."""
     version = store.version
+    waypoints: tuple[tuple[float, float], ...] = ()
+    goal = None
+    if loop is not None and loop.algorithm != "manual":
+        waypoints, goal = tuple(loop.mission.waypoints), loop.goal()
     if previous is not None and previous.version == version:
-        return previous
-    xs, ys = store.column("x", last=2000), store.column("y", last=2000)
+        if (previous.waypoints, previous.goal) == (waypoints, goal):
+            return previous
+        return replace(previous, waypoints=waypoints, goal=goal)
+    cols, codes, names = store.tail(PLOT_TRAIL)
+    t, e_d = cols["timestamp"][-PLOT_ERRORS:], cols["distanceError"][-PLOT_ERRORS:]
+    pick = thin(t.size, PLOT_MAX)
+    t0 = float(t[0]) if t.size else 0.0
+    tracks = []
+    for code in dict.fromkeys(codes.tolist()):
+        idx = np.flatnonzero(codes == code)
+        idx = idx[thin(idx.size, PLOT_MAX)]
+        tracks.append(Track(names[code], tuple(cols["x"][idx].tolist()), tuple(cols["y"][idx].tolist())))
     return AnalyticsView(
         version=version,
         collecting=store.is_collecting,
         points=len(store),
+        ring=store.max_data_points,
         stats=store.stats(),
-        by_algorithm=tuple(store.stats_by_algorithm().items()),
-        errors=tuple(store.column("distanceError", last=200).tolist()),
-        trail=tuple(zip(xs.tolist(), ys.tolist(), strict=True)),
+        runs=store.runs(),
+        by_algorithm=store.runs_by_algorithm(),
+        error_t=tuple(((t[pick] - t0) / 1000.0).tolist()),
+        errors=tuple(e_d[pick].tolist()),
+        tracks=tuple(tracks),
+        waypoints=waypoints,
+        goal=goal,
     )
 
 
@@ -258,6 +313,7 @@ def latency_snapshot(
         rejected=view.rejected,
         max_command_age_ms=view.max_command_age_ms,
         window=tuple(view.window),
+        window_t=tuple(view.window_t),
         records=tuple(reversed(view.records))[:30],
         link_state=state,
         link_down=state in (DISCONNECTED, RECONNECTING),

@@ -9,9 +9,11 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Any, ClassVar
 
 from rich.text import Text
+from textual import events
 from textual.geometry import Size
 from textual.reactive import reactive
 from textual.widget import Widget
@@ -19,6 +21,7 @@ from textual.widget import Widget
 from .analytics.labels import STAT_LABELS, format_stat
 from .analytics.store import STATS_FIELDS
 from .control.teleop import legend_compact
+from .messages import GoalPicked
 from .views import AnalyticsView, LatencySnapshot, MapView, RobotView, StatusView
 
 ARROWS = "→↗↑↖←↙↓↘"
@@ -104,6 +107,44 @@ def heading_arrow(theta: float) -> str:
     return ARROWS[round(theta / (math.pi / 4)) % 8]
 
 
+@dataclass(frozen=True, slots=True)
+class MapFrame:
+    """Where the world sits on a character map: equal aspect, a cell twice as tall as it is wide."""
+
+    width: int
+    height: int
+    cx: float
+    cy: float
+    m_per_col: float
+
+    @classmethod
+    def around(cls, width: int, height: int, pts: Sequence[tuple[float, float]]) -> MapFrame:
+        pts = list(pts) or [(0.0, 0.0)]
+        xs = [p[0] for p in pts]
+        ys = [p[1] for p in pts]
+        span_x = max(max(xs) - min(xs), 1.0) * 1.15
+        span_y = max(max(ys) - min(ys), 1.0) * 1.15
+        return cls(
+            width, height, (min(xs) + max(xs)) / 2, (min(ys) + max(ys)) / 2,
+            max(span_x / width, span_y / (2 * height)),
+        )  # fmt: skip
+
+    def cell(self, x: float, y: float) -> tuple[int, int] | None:
+        """(row, column) of a world point, None when off the map."""
+        c = round((x - self.cx) / self.m_per_col + self.width / 2 - 0.5)
+        r = round(self.height / 2 - 0.5 - (y - self.cy) / (2 * self.m_per_col))
+        if 0 <= c < self.width and 0 <= r < self.height:
+            return r, c
+        return None
+
+    def world(self, row: int, col: int) -> tuple[float, float]:
+        """The world point at the centre of a cell (what a click there means)."""
+        return (
+            self.cx + (col + 0.5 - self.width / 2) * self.m_per_col,
+            self.cy + (self.height / 2 - 0.5 - row) * 2 * self.m_per_col,
+        )
+
+
 def render_map(
     width: int,
     height: int,
@@ -111,36 +152,20 @@ def render_map(
     pose: tuple[float, float, float] | None,
     goal: tuple[float, float] | None,
     waypoints: Sequence[tuple[float, float]] = (),
-) -> Text:
-    """A character map of the trajectory with equal aspect (a cell is twice as tall as it is wide)."""
+) -> tuple[Text, MapFrame]:
+    """A character map of the trajectory with equal aspect, and the frame it was drawn in."""
     width, height = max(width, 4), max(height, 3)
     pts = list(trail) + list(waypoints)
     if pose is not None:
         pts.append((pose[0], pose[1]))
     if goal is not None:
         pts.append(goal)
-    if not pts:
-        pts = [(0.0, 0.0)]
-    xs = [p[0] for p in pts]
-    ys = [p[1] for p in pts]
-    cx, cy = (min(xs) + max(xs)) / 2, (min(ys) + max(ys)) / 2
-    span_x = max(max(xs) - min(xs), 1.0) * 1.15
-    span_y = max(max(ys) - min(ys), 1.0) * 1.15
-    # metres per column / per row, with rows twice as tall as columns
-    m_per_col = max(span_x / width, span_y / (2 * height))
-    m_per_row = 2 * m_per_col
+    frame = MapFrame.around(width, height, pts)
     grid = [[" "] * width for _ in range(height)]
     styles: dict[tuple[int, int], str] = {}
 
-    def cell(x: float, y: float) -> tuple[int, int] | None:
-        c = round((x - cx) / m_per_col + width / 2 - 0.5)
-        r = round(height / 2 - 0.5 - (y - cy) / m_per_row)
-        if 0 <= c < width and 0 <= r < height:
-            return r, c
-        return None
-
     def put(x: float, y: float, ch: str, style: str) -> None:
-        rc = cell(x, y)
+        rc = frame.cell(x, y)
         if rc:
             grid[rc[0]][rc[1]] = ch
             styles[rc] = style
@@ -163,7 +188,7 @@ def render_map(
                 start = c
         if r < height - 1:
             text.append("\n")
-    return text
+    return text, frame
 
 
 class GridMap(Bound):
@@ -201,19 +226,20 @@ class TrajectoryMap(GridMap):
     SOURCE = "trajectory"
     view: reactive[MapView] = reactive(MapView, repaint=False)
 
+    frame: MapFrame | None = None
+
     def grid(self, width: int, height: int) -> Text:
         v = self.view
-        return render_map(width, height, v.trail, v.pose, v.goal, v.waypoints)
+        text, self.frame = render_map(width, height, v.trail, v.pose, v.goal, v.waypoints)
+        return text
 
-
-class AnalyticsTrail(GridMap):
-    """The analytics screen's trajectory: the collected points (not the live trail)."""
-
-    SOURCE = "analytics"
-    view: reactive[AnalyticsView] = reactive(AnalyticsView, repaint=False)
-
-    def grid(self, width: int, height: int) -> Text:
-        return render_map(width, height, self.view.trail, None, None)
+    def on_click(self, event: events.Click) -> None:
+        """A click on the map sets a go-to-goal target there."""
+        offset = event.get_content_offset(self)
+        if offset is None or self.frame is None:
+            return
+        x, y = self.frame.world(offset.y, offset.x)
+        self.post_message(GoalPicked(round(x, 2), round(y, 2)))
 
 
 class StatsCards(Bound):

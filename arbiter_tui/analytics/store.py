@@ -3,8 +3,8 @@
 The seed keeps its refs at module level so that data survives page
 navigation; we keep one :class:`AnalyticsStore` at module level (``STORE``)
 so that data survives screen switches. It is a circular buffer of
-:class:`DataPoint` held column-wise in numpy arrays (9 float64 columns plus a
-one-byte algorithm code: 73 bytes per point), grown on demand up to
+:class:`DataPoint` held column-wise in numpy arrays (9 float64 columns, a one-byte
+algorithm code and a four-byte run id: 77 bytes per point), grown on demand up to
 ``max_data_points``, so statistics over a million points take milliseconds.
 
 Who writes it: only the console's UI loop (the control loop samples odometry
@@ -277,12 +277,29 @@ class AnalyticsStore:
         """Points recorded since start, including those the ring buffer has dropped."""
         return self._total_recorded
 
+    def _last(self, n: int | None) -> np.ndarray | slice:
+        """Indices of the newest ``n`` stored points (all when None), oldest first: O(n), not O(ring)."""
+        size = self._size
+        k = size if n is None else max(0, min(n, size))
+        if not self._wrapped():
+            return slice(size - k, size)
+        h = self._next  # the oldest point; the newest is at h - 1
+        if k <= h:
+            return slice(h - k, h)
+        return np.r_[size - (k - h) : size, 0:h]
+
     def column(self, name: str, last: int | None = None) -> np.ndarray:
         """A copy of one numeric column, oldest first (optionally only the ``last`` points)."""
         with self._lock:
-            data = self._num[_COL[name], self._order()]
-        data = np.array(data, copy=True)
-        return data[-last:] if last else data
+            return np.array(self._num[_COL[name], self._last(last or None)], copy=True)
+
+    def tail(self, last: int) -> tuple[dict[str, np.ndarray], np.ndarray, list[str]]:
+        """The newest ``last`` points as columns (copies), their algorithm codes and the code names:
+        what the plots draw, at a cost that depends on ``last``, not on the ring's size."""
+        with self._lock:
+            idx = self._last(last)
+            cols = {name: np.array(self._num[i, idx], copy=True) for name, i in _COL.items()}
+            return cols, np.array(self._alg[idx], copy=True), list(self._algos)
 
     def algorithms(self) -> list[str]:
         """Algorithm of each stored point, oldest first."""

@@ -20,7 +20,7 @@ from ..link.errors import connect_failure, http_failure
 if TYPE_CHECKING:
     import httpx
 
-WINDOW = 120  # latencies kept for the sparkline
+WINDOW = 600  # latencies kept for the plot and the histogram
 RECENT = 50  # records kept for the table
 
 
@@ -34,6 +34,7 @@ class LatencyView:
     records: deque[LatencyRecord] = field(default_factory=lambda: deque(maxlen=RECENT))  # oldest first
     deploy_mode: str = "?"
     window: deque[float] = field(default_factory=lambda: deque(maxlen=WINDOW))
+    window_t: deque[float] = field(default_factory=lambda: deque(maxlen=WINDOW))  # receive times, epoch s
     polls: int = 0
     failures: int = 0
     stale: int = 0  # commands the tracker dropped as too old (never forwarded)
@@ -83,6 +84,7 @@ class LatencyView:
         if new:
             self.records.extend(new)
             self.window.extend(r.latency_ms for r in new)
+            self.window_t.extend(r.timestamp for r in new)
             self.version += 1
         self.reachable = True
         self.error = None

@@ -93,8 +93,6 @@ class Link(Protocol):
     def close(self) -> None: ...
 
 
-
-
 class PendingLink:
     """The link before the real one exists (the first frame is painted before the backend starts):
     it sends nothing and reports ``STARTING``."""

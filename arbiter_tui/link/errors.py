@@ -19,8 +19,11 @@ def connect_failure(kind: str, text: str) -> str:
         return TLS_HINT if "verif" in low or "certificate" in low else f"TLS failure: {text or kind}"
     if "refused" in low:
         return "connection refused"
-    if "dns" in low or "name or service not known" in low or "nodename nor servname" in low or (
-        "getaddrinfo" in low
+    if (
+        "dns" in low
+        or "name or service not known" in low
+        or "nodename nor servname" in low
+        or ("getaddrinfo" in low)
     ):
         return "DNS lookup failed (unknown host)"
     if "timeout" in low or "timed out" in low:

@@ -1,4 +1,5 @@
-"""Analytics screen: collection control, the nine AnalyticsStats, per-algorithm comparison, plots, export.
+"""Analytics screen: the seed's nine stats, the ranked comparison (per algorithm or per run), the
+ring-buffer warning, and plots of the trajectory and the distance error over time.
 
 None of its keys is a teleop letter: clearing asks first, exporting opens a chooser.
 """
@@ -6,73 +7,143 @@ None of its keys is a teleop letter: clearing asks first, exporting opens a choo
 from __future__ import annotations
 
 from rich.text import Text
+from textual import on
 from textual.app import ComposeResult
 from textual.binding import Binding
-from textual.containers import Horizontal, Vertical
+from textual.containers import Horizontal
 from textual.reactive import reactive
-from textual.widgets import Sparkline, Static
+from textual.widgets import DataTable
 
-from ..analytics.labels import STAT_LABELS, format_stat
+from ..analytics import table as T
+from ..plots import ErrorPlot, TrajectoryPlot
 from ..views import AnalyticsView
-from ..widgets import AnalyticsTrail, Bound, StatsCards
+from ..widgets import Bound, StatsCards
 from .base import BaseScreen
 
-COMPARE = ("sampleCount", "avgDistanceError", "stdDevError", "p95Error", "avgHeadingError", "totalPathLength")
+
+class CompareTable(DataTable[Text]):
+    """The comparison: refilled only when its rows, its mode or its order changed. Headers sort."""
+
+    can_focus = False
+    mode: reactive[str] = reactive(T.BY_ALGORITHM)
+    sort: reactive[str] = reactive(T.RANK)
+    descending: reactive[bool] = reactive(False)
+    fills = 0  # tests: how often the rows were rebuilt
+
+    def on_mount(self) -> None:
+        self._shown: tuple[object, ...] | None = None
+        self.table = T.build(self.mode, (), ())
+        self.watch(self.app, "analytics", self._refill, init=True)
+
+    def watch_mode(self) -> None:
+        self._refill()
+
+    def watch_sort(self) -> None:
+        self._refill()
+
+    def watch_descending(self) -> None:
+        self._refill()
+
+    def _refill(self, view: AnalyticsView | None = None) -> None:
+        if not self.is_mounted:
+            return
+        view = view or self.app.analytics  # type: ignore[attr-defined]
+        # built each time (a few rows), shown only when what it prints changed: a run whose samples the
+        # ring drops, or one sample more outside every run, changes nothing here
+        table = T.build(self.mode, view.runs, view.by_algorithm, self.sort, self.descending)
+        key = (self.sort, self.descending, table)
+        if key == self._shown:
+            return
+        self._shown = key
+        self.fills += 1
+        self.table = table
+        self.clear(columns=True)
+        for header, k in zip(self.table.headers, self.table.keys, strict=True):
+            arrow = (" ▼" if self.descending else " ▲") if k == self.sort else ""
+            self.add_column(Text(header + arrow, style="bold"), key=k)
+        for row in self.table.rows:
+            self.add_row(*(Text(c, style="bold" if T.BEST_CELL in c or T.BEST_ROW in c else "") for c in row))
+        for rule in self.screen.query(RuleLine):
+            rule.refresh()
+
+    def sort_by(self, key: str) -> None:
+        """Sort by a column; choosing it again reverses the order."""
+        if key == self.sort:
+            self.descending = not self.descending
+        else:
+            self.sort, self.descending = key, False
+
+    @on(DataTable.HeaderSelected)
+    def _header_clicked(self, event: DataTable.HeaderSelected) -> None:
+        self.sort_by(str(event.column_key.value))
 
 
-class CompareTable(Bound):
-    """Per-algorithm stats as aligned text: redrawn only when the per-algorithm figures changed."""
+class RuleLine(Bound):
+    """The rule that names the best, and the best it names."""
 
     SOURCE = "analytics"
-    view: reactive[AnalyticsView] = reactive(AnalyticsView, repaint=False)
-    _shown: tuple[object, ...] | None = None
-
-    def watch_view(self, view: AnalyticsView) -> None:
-        if view.by_algorithm != self._shown:
-            self._shown = view.by_algorithm
-            self.refresh()
+    view: reactive[AnalyticsView] = reactive(AnalyticsView)
 
     def draw(self) -> Text:
-        rows = [["algorithm", *(STAT_LABELS[n].short for n in COMPARE)]]
-        for algo, s in self.view.by_algorithm:
-            rows.append([algo, *(format_stat(n, getattr(s, n), decimals=3, unit=False) for n in COMPARE)])
-        widths = [max(len(r[c]) for r in rows) for c in range(len(rows[0]))]
-        t = Text(no_wrap=True, overflow="crop")
-        for k, row in enumerate(rows):
-            line = "  ".join(cell.ljust(w) for cell, w in zip(row, widths, strict=True))
-            t.append(line, "bold" if k == 0 else "")
-            if k < len(rows) - 1:
-                t.append("\n")
-        return t
+        table = self.screen.query_one(CompareTable).table if self.is_mounted else None
+        return Text(T.legend(table) if table else "")
 
 
-class ErrorSparkline(Sparkline):
-    def on_mount(self) -> None:
-        self.watch(self.app, "analytics", self._show)
+class RingWarning(Bound):
+    """Says when the ring buffer has dropped samples of a run: the cards and plots no longer show all of
+    it, the run and algorithm rows still do."""
 
-    def _show(self, view: AnalyticsView) -> None:
-        self.data = list(view.errors)
+    SOURCE = "analytics"
+    DEFAULT_CSS = "RingWarning { height: auto; color: $warning; text-style: bold; padding: 0 1; }"
+    view: reactive[AnalyticsView] = reactive(AnalyticsView)
+
+    def watch_view(self, view: AnalyticsView) -> None:
+        self.display = bool(view.dropped_runs)
+
+    def draw(self) -> Text:
+        dropped = self.view.dropped_runs
+        if not dropped:
+            return Text()
+        parts = ", ".join(f"run {r.id} {r.in_ring}/{r.stats.sampleCount}" for r in dropped[-3:])
+        more = f" and {len(dropped) - 3} more" if len(dropped) > 3 else ""
+        return Text(
+            f"⚠ ring buffer ({self.view.ring} points) dropped samples: {parts}{more} kept. "
+            "Rows count all samples; cards and plots only the ring's.",
+            no_wrap=False,
+        )
 
 
 class AnalyticsScreen(BaseScreen):
     CSS_PATH = ["base.tcss", "analytics.tcss"]
     BINDINGS = [
         Binding("r", "toggle_collect", "Rec"),
+        Binding("v", "toggle_view", "Runs"),
+        Binding("s", "cycle_sort", "Sort", show=False),  # in ? help; clicking a header sorts too
         Binding("ctrl+s", "export", "Export"),
-        Binding("delete", "clear", "Clear"),
+        Binding("delete", "clear", "Clear", show=False),  # in ? help and the palette (asks first)
     ]
 
     def compose_body(self) -> ComposeResult:
         yield StatsCards(id="cards")
-        yield CompareTable(id="compare")
+        yield RingWarning(id="ring-warning")
+        yield CompareTable(id="compare", show_cursor=False, zebra_stripes=True)
+        yield RuleLine(id="rule")
         with Horizontal(id="plots"):
-            yield AnalyticsTrail(id="traj")
-            with Vertical(id="err-box"):
-                yield Static("distance error over time", id="err-title")
-                yield ErrorSparkline([], id="err-spark")
+            yield TrajectoryPlot("trajectory: x, y in m (equal aspect)", id="traj")
+            yield ErrorPlot("distance error e_d (m) over time (s)", id="err-plot")
 
     def action_toggle_collect(self) -> None:
         self.arbiter.toggle_collection()
+
+    def action_toggle_view(self) -> None:
+        table = self.query_one(CompareTable)
+        table.mode = T.BY_RUN if table.mode == T.BY_ALGORITHM else T.BY_ALGORITHM
+
+    def action_cycle_sort(self) -> None:
+        table = self.query_one(CompareTable)
+        keys = [T.RANK, *table.table.keys]
+        table.sort_by(keys[(keys.index(table.sort) + 1) % len(keys)] if table.sort in keys else T.RANK)
+        table.descending = False
 
     def action_clear(self) -> None:
         self.arbiter.ask_clear()

@@ -1,4 +1,5 @@
-"""Control screen: keyboard teleop, algorithm and mission selection, pose/errors, trajectory map."""
+"""Control screen: keyboard teleop, algorithm and mission selection, goals (t, or a click on the map),
+pose/errors, trajectory map."""
 
 from __future__ import annotations
 
@@ -8,6 +9,7 @@ from textual.binding import Binding
 from textual.containers import Horizontal, Vertical
 from textual.widgets import Static
 
+from ..control.algorithms import ALGORITHMS
 from ..widgets import KEY_HELP, RobotPanel, TrajectoryMap
 from .base import BaseScreen
 
@@ -18,6 +20,8 @@ class ControlScreen(BaseScreen):
         Binding("a", "cycle_algorithm", "Algo"),
         Binding("n", "cycle_mission", "Mission"),
         Binding("g", "go", "Go"),
+        Binding("G", "restart", "Restart", show=False),
+        Binding("t", "goal", "Goal"),
     ]
 
     def compose_body(self) -> ComposeResult:
@@ -40,16 +44,19 @@ class ControlScreen(BaseScreen):
         self.arbiter.end_manual_hold("left the control screen")
 
     def action_cycle_algorithm(self) -> None:
-        self.arbiter.loop.cycle_algorithm()
-        self.arbiter.publish_views()
+        loop = self.arbiter.loop
+        self.arbiter.select_algorithm(ALGORITHMS[(ALGORITHMS.index(loop.algorithm) + 1) % len(ALGORITHMS)])
 
     def action_cycle_mission(self) -> None:
         self.arbiter.loop.cycle_mission()
         self.arbiter.publish_views()
 
     def action_go(self) -> None:
-        if self.arbiter.too_small:
-            return  # nothing starts moving while the console cannot be seen
-        if not self.arbiter.loop.start_autonomous():
-            self.app.notify("Select go_to_goal or pure_pursuit with [b]a[/b] first", severity="warning")
-        self.arbiter.publish_views()
+        self.arbiter.go()
+
+    def action_restart(self) -> None:
+        self.arbiter.go(restart=True)
+
+    def action_goal(self) -> None:
+        if not self.arbiter.too_small:
+            self.arbiter.ask_goal()

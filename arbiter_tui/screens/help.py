@@ -17,11 +17,14 @@ HELP = f"""[b]arbiter-tui[/b] — teleop console, analytics and latency monitor
 
 [b]Control[/b] (teleop_twist_keyboard keys; hold a key to keep moving)
 {legend_long()}
-  a algorithm (manual, go_to_goal, pure_pursuit)   n mission   g go
+  a algorithm (manual, go_to_goal, pure_pursuit)   n mission
+  g go (after a movement key took over: resume from the current waypoint)
+  G restart the mission   t type a goal x y   click the map: drive there
   A held key ends on leaving this screen; a mission run keeps driving on
   screens 2 and 3. Focus loss or a too-small window stops the robot.
 
-[b]Analytics[/b]  r record/pause  ctrl+s export  delete clear (asks first)
+[b]Analytics[/b]  r record/pause  v per algorithm / per run  s sort (or click
+  a header)  ctrl+s export  delete clear (asks first)
 
 [b]Latency[/b]    polls GET /api/latency at 2 Hz; one-way = receive - stamp
 

@@ -1,26 +1,16 @@
-"""Latency screen: the tracker's stats, a sparkline of its rolling window, recent records, and this
-console's own round trip, clock offset and loss."""
+"""Latency screen: the tracker's stats, its latencies over time (with the p95) and their histogram,
+recent records, and this console's own round trip, clock offset and loss."""
 
 from __future__ import annotations
 
 from textual.app import ComposeResult
-from textual.widgets import DataTable, Sparkline
+from textual.containers import Horizontal
+from textual.widgets import DataTable
 
+from ..plots import LatencyHistogram, LatencyPlot
 from ..views import LatencySnapshot
 from ..widgets import ClientLine, TrackerCards, TrackerLine, fmt_ms
 from .base import BaseScreen
-
-
-class LatencySparkline(Sparkline):
-    def on_mount(self) -> None:
-        self._shown: tuple[int, int] | None = None
-        self.watch(self.app, "latency", self._show)
-
-    def _show(self, view: LatencySnapshot) -> None:
-        key = (view.polled, view.failures)  # a poll brought something new (or failed)
-        if key != self._shown:
-            self._shown = key
-            self.data = list(view.window)
 
 
 class RecordsTable(DataTable[str]):
@@ -53,5 +43,7 @@ class LatencyScreen(BaseScreen):
         yield TrackerLine(id="lat-state")
         yield TrackerCards(id="lat-cards")
         yield ClientLine(id="lat-client")
-        yield LatencySparkline([], id="lat-spark")
+        with Horizontal(id="lat-plots"):
+            yield LatencyPlot("one-way latency (ms) over time (s)", id="lat-plot")
+            yield LatencyHistogram("histogram: commands per latency (ms)", id="lat-hist")
         yield RecordsTable(id="lat-records", show_cursor=False, zebra_stripes=True)

@@ -118,8 +118,13 @@ async def test_a_tracker_without_rx_seq_is_polled_by_limit():
         for _ in range(n):
             i = len(records)
             records.append(
-                {"latency_ms": 1.0 + i, "linear_x": 0.1, "angular_z": 0.0, "timestamp": 100.0 + i,
-                 "deploy_mode": "docker"}
+                {
+                    "latency_ms": 1.0 + i,
+                    "linear_x": 0.1,
+                    "angular_z": 0.0,
+                    "timestamp": 100.0 + i,
+                    "deploy_mode": "docker",
+                }
             )
 
     try:

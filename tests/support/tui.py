@@ -10,7 +10,33 @@ from arbiter_tui.latency.tracker_client import TrackerClient
 from arbiter_tui.link.base import CONNECTED, Telemetry
 from arbiter_tui.settings import Settings
 
-from .points import make_point
+SEEDED_POINTS = 300  # the seeded store's ring: smaller than its runs, so it has dropped samples of run 1
+
+
+def seeded_store() -> AnalyticsStore:
+    """Runs as the console records them, driven in simulated time (deterministic): go_to_goal completes
+    the square, pure_pursuit is stopped half-way round the figure eight; the ring (300) has dropped the
+    oldest samples of run 1, so the analytics screen warns."""
+    from dataclasses import replace
+
+    from arbiter_tui.analytics.compare import run_one
+    from arbiter_tui.analytics.runs import ABORTED, COMPLETED
+
+    store = AnalyticsStore(max_data_points=SEEDED_POINTS)
+    store.start_collection()
+    t0 = 1_800_000_000_000.0
+    for algorithm, mission, keep in (("go_to_goal", "square", None), ("pure_pursuit", "figure_eight", 150)):
+        result = run_one(algorithm, mission)
+        points = result.points[:keep]
+        run = store.begin_run(algorithm, mission, t0 + points[0].timestamp - 100)
+        for p in points:
+            store.record(replace(p, timestamp=t0 + p.timestamp, runId=run))
+        done = keep is None and result.completed
+        store.end_run(COMPLETED if done else ABORTED, t0 + points[-1].timestamp,
+                      result.final_error_m if done else 0.8)  # fmt: skip
+        t0 += points[-1].timestamp + 1000
+    store.stop_collection()
+    return store
 
 
 class FakeClock:
@@ -58,11 +84,8 @@ def still_app(tmp_path=None, link=None, store=None, tracker_view=True, mode="emb
         record = LatencyRecord(raw, 0.0, 0.0, (stamp + raw) / 1000.0, "native", seq=i)
         meter.on_report(record, 50.0 + i + 0.0005 + i * 1e-5)
     if store is None:
-        store = AnalyticsStore()
-        store.start_collection()
-        for i in range(120):
-            store.record(make_point(i, ("manual", "go_to_goal", "pure_pursuit")[i // 40]))
-        store.stop_collection()
+        store = seeded_store()
+    settings.max_points = store.max_data_points  # the app would resize the ring to its setting
     tracker = None
     if mode != "sim":
         tracker = TrackerClient("http://127.0.0.1:9")
@@ -70,7 +93,7 @@ def still_app(tmp_path=None, link=None, store=None, tracker_view=True, mode="emb
             tracker.view.apply(
                 {
                     "stats": {
-                        "count": 3,
+                        "count": 60,
                         "mean_ms": 0.31,
                         "min_ms": 0.2,
                         "max_ms": 0.45,
@@ -79,14 +102,14 @@ def still_app(tmp_path=None, link=None, store=None, tracker_view=True, mode="emb
                     },
                     "records": [
                         {
-                            "latency_ms": 0.2 + 0.1 * i,
+                            "latency_ms": round(0.3 + 0.05 * (i % 7) + (1.5 if i % 23 == 0 else 0.0), 3),
                             "linear_x": 0.5,
                             "angular_z": 0.0,
                             "timestamp": 1.0 + i,
                             "deploy_mode": "native",
                             "seq": i,
                         }
-                        for i in range(3)
+                        for i in range(60)
                     ],
                     "deploy_mode": "native",
                 }

@@ -14,7 +14,7 @@ from arbiter_tui.screens.control import ControlScreen
 from arbiter_tui.screens.help import HelpScreen
 from arbiter_tui.screens.latency import LatencyScreen
 
-from ..support.tui import RecordingLink, still_app, until
+from ..support.tui import SEEDED_POINTS, RecordingLink, still_app, until
 
 SIZE = (100, 30)
 
@@ -135,9 +135,9 @@ async def test_export_chooser_writes_files_with_the_data(tmp_path):
     assert files == [".csv", ".json", ".mcap"]
     csv_file = next(tmp_path.glob("arbiter_analytics_*.csv"))
     lines = csv_file.read_text().splitlines()
-    assert lines[0] == CSV_HEADER and len(lines) == 121
+    assert lines[0] == CSV_HEADER and len(lines) == SEEDED_POINTS + 1
     doc = json.loads(next(tmp_path.glob("*.json")).read_text())
-    assert doc["stats"]["sampleCount"] == 120
+    assert doc["stats"]["sampleCount"] == SEEDED_POINTS
     assert app.last_export is not None and app.last_export.error is None
 
 
@@ -157,7 +157,7 @@ async def test_export_failure_is_shown_and_data_kept(tmp_path):
         await pilot.press("2", "ctrl+s", "c")
         await pilot.pause()
         assert app.last_export.error is not None
-        assert len(app.store) == 120
+        assert len(app.store) == SEEDED_POINTS
         failed = [n for n in app._notifications if "EXPORT FAILED" in n.message]
         assert failed and "collected data kept" in failed[0].message and failed[0].severity == "error"
 
@@ -168,13 +168,13 @@ async def test_clearing_asks_first_and_keep_is_the_default(tmp_path):
         await pilot.press("2", "delete")
         assert isinstance(app.screen, ConfirmClear)
         await pilot.press("enter")  # the focused button keeps the data
-        assert isinstance(app.screen, AnalyticsScreen) and len(app.store) == 120
+        assert isinstance(app.screen, AnalyticsScreen) and len(app.store) == SEEDED_POINTS
         await pilot.press("delete", "n")
-        assert len(app.store) == 120
+        assert len(app.store) == SEEDED_POINTS
         await pilot.press("delete", "y")
         await pilot.pause()
         assert len(app.store) == 0
-        assert any("cleared 120 samples" in n.message for n in app._notifications)
+        assert any(f"cleared {SEEDED_POINTS} samples" in n.message for n in app._notifications)
 
 
 TELEOP_LETTERS = "uiojklm,.qzwxec"
@@ -192,7 +192,7 @@ async def test_no_teleop_letter_is_destructive_on_any_screen(tmp_path, screen):
         for key in keys:
             await pilot.press(key)
             assert type(app.screen) is kind, key  # no dialog, no screen change
-        assert len(app.store) == 120 and not app.store.is_collecting
+        assert len(app.store) == SEEDED_POINTS and not app.store.is_collecting
         assert list(tmp_path.iterdir()) == []
         if screen != "1":  # off the control screen, movement letters move nothing
             assert all(cmd == (0.0, 0.0) for cmd in app.link.sent)

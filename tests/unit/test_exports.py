@@ -13,12 +13,12 @@ from arbiter_tui.analytics.exports import (
     MCAP_POINT_TOPIC,
     MCAP_RUNS_TOPIC,
     MCAP_STATS_TOPIC,
-    ExportFormatError,
     SEED_CSV_HEADER,
+    ExportFormatError,
     js_number,
     parse_csv,
-    parse_mcap,
     parse_json,
+    parse_mcap,
     to_csv,
     to_json,
     to_mcap,
@@ -31,7 +31,7 @@ from ..support.points import random_points
 
 def test_csv_header_is_the_seeds_then_the_run_id():
     seed = "timestamp,x,y,theta,linearVel,angularVel,distanceError,headingError,algorithm,latencyMs"
-    assert CSV_HEADER == seed + ",runId"
+    assert seed + ",runId" == CSV_HEADER
     assert to_csv([]).splitlines()[0] == CSV_HEADER
 
 
@@ -95,7 +95,10 @@ def test_mcap_reads_back_with_the_mcap_reader():
     reader = make_reader(io.BytesIO(data), decoder_factories=[DecoderFactory()])
     summary = reader.get_summary()
     assert {c.topic for c in summary.channels.values()} == {
-        MCAP_POINT_TOPIC, MCAP_STATS_TOPIC, MCAP_ODOM_TOPIC, MCAP_RUNS_TOPIC,
+        MCAP_POINT_TOPIC,
+        MCAP_STATS_TOPIC,
+        MCAP_ODOM_TOPIC,
+        MCAP_RUNS_TOPIC,
     } - {MCAP_RUNS_TOPIC}  # fmt: skip  (no runs given: no run messages, and no channel either)
     msgs = list(reader.iter_decoded_messages())
     points = [m for m in msgs if m.channel.topic == MCAP_POINT_TOPIC]

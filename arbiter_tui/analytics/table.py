@@ -1,0 +1,139 @@
+"""The comparison as a table: columns with units, the best value per column marked, the best overall
+named by one rule, sortable. Pure (no Textual): the analytics screen shows it, tests read it.
+
+Marks are characters, not colour alone: ``◆`` after the best value of a column where lower is better
+(among rows with a completed run), ``★`` before the best overall (``runs.RULE``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+from .labels import format_stat
+from .runs import LOWER_IS_BETTER, RULE, AlgorithmSummary, RunSummary, best_in_columns, best_of, rank_key
+
+BEST_CELL = "◆"
+BEST_ROW = "★"
+BY_ALGORITHM = "algorithm"
+BY_RUN = "run"
+RANK = "rank"  # the default order: the rule's
+
+Row = RunSummary | AlgorithmSummary
+
+
+@dataclass(frozen=True, slots=True)
+class Column:
+    key: str  # a RunSummary/AlgorithmSummary attribute, or an AnalyticsStats field
+    header: str  # with its unit
+    text: Callable[[Row], str]
+
+
+def _stat(name: str) -> Callable[[Row], str]:
+    return lambda r: format_stat(name, getattr(r.stats, name), decimals=3, unit=False)
+
+
+def _opt(attr: str, fmt: str) -> Callable[[Row], str]:
+    def text(r: Row) -> str:
+        value = getattr(r, attr)
+        return "—" if value is None else format(value, fmt)
+
+    return text
+
+
+_AVG = Column("avgDistanceError", "avg e_d m", _stat("avgDistanceError"))
+_STD = Column("stdDevError", "std e_d m", _stat("stdDevError"))
+_TAIL = (
+    Column("p95Error", "p95 e_d m", _stat("p95Error")),
+    Column("avgHeadingError", "|e_θ| rad", _stat("avgHeadingError")),
+    Column("totalPathLength", "path m", lambda r: f"{r.stats.totalPathLength:.2f}"),
+    Column("sampleCount", "samples", lambda r: str(r.stats.sampleCount)),
+)
+ALGORITHM_COLUMNS = (
+    Column("algorithm", "algorithm", lambda r: r.algorithm),
+    Column("completed", "done", lambda r: f"{int(r.completed)}/{getattr(r, 'runs', 1)}"),
+    Column("time_s", "time s", _opt("time_s", ".1f")),
+    Column("final_error_m", "final m", _opt("final_error_m", ".3f")),
+    _AVG,
+    _STD,
+    *_TAIL,
+)
+RUN_COLUMNS = (
+    Column("id", "run", lambda r: str(getattr(r, "id", ""))),
+    Column("algorithm", "algorithm", lambda r: r.algorithm),
+    Column("mission", "mission", lambda r: getattr(r, "mission", "") or "—"),
+    Column("outcome", "outcome", lambda r: getattr(r, "outcome", "")),
+    Column("time_s", "time s", _opt("time_s", ".1f")),
+    Column("final_error_m", "final m", _opt("final_error_m", ".3f")),
+    _AVG,
+    *_TAIL,
+)  # std e_d left out: a run row is wide already (stats --by run prints all nine)
+SORTABLE = {c.key for c in RUN_COLUMNS + ALGORITHM_COLUMNS}
+
+
+@dataclass(frozen=True, slots=True)
+class Table:
+    headers: tuple[str, ...]
+    keys: tuple[str, ...]
+    rows: tuple[tuple[str, ...], ...]
+    best: str | None  # the best overall, named: "go_to_goal" or "run 3 (go_to_goal, square)"
+    rule: str
+
+
+def sort_value(row: Row, key: str) -> tuple[bool, float | str]:
+    """Missing values last; text columns alphabetically."""
+    if key == RANK:
+        done, err = rank_key(row)
+        return (done, err)
+    if hasattr(row.stats, key):
+        return (False, float(getattr(row.stats, key)))
+    value = getattr(row, key, None)
+    if value is None:
+        return (True, 0.0)
+    if isinstance(value, bool):
+        return (False, float(not value))  # completed first
+    return (False, value)
+
+
+def build(
+    mode: str,
+    runs: Sequence[RunSummary],
+    algorithms: Sequence[AlgorithmSummary],
+    sort: str = RANK,
+    descending: bool = False,
+) -> Table:
+    columns = ALGORITHM_COLUMNS if mode == BY_ALGORITHM else RUN_COLUMNS
+    items: list[Row] = list(algorithms if mode == BY_ALGORITHM else runs)
+    items.sort(key=lambda r: sort_value(r, sort), reverse=descending)
+    top = best_of(items)
+    marks = best_in_columns(items, LOWER_IS_BETTER)
+    rows = []
+    for i, item in enumerate(items):
+        cells = []
+        for c in columns:
+            text = c.text(item)
+            if marks.get(c.key) == i:
+                text = f"{text} {BEST_CELL}"
+            cells.append(text)
+        if item is top:
+            cells[0] = f"{BEST_ROW} {cells[0]}"
+        rows.append(tuple(cells))
+    if top is None:
+        best = None
+    elif isinstance(top, AlgorithmSummary):
+        best = top.algorithm
+    else:
+        best = f"run {top.id} ({top.algorithm}, {top.mission or 'manual'})"
+    return Table(
+        headers=tuple(c.header for c in columns),
+        keys=tuple(c.key for c in columns),
+        rows=tuple(rows),
+        best=best,
+        rule=RULE,
+    )
+
+
+def legend(table: Table) -> str:
+    """The rule in one line, as the screen shows it under the table."""
+    named = f"{table.best}" if table.best else "none yet"
+    return f"{BEST_ROW} {table.rule} → {named} · {BEST_CELL} best of its column (lower is better)"

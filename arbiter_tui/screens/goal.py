@@ -1,0 +1,41 @@
+"""Typing a go-to-goal target: ``x y`` in metres; enter drives there, escape cancels."""
+
+from __future__ import annotations
+
+from textual import on
+from textual.app import ComposeResult
+from textual.binding import Binding
+from textual.containers import Vertical
+from textual.screen import ModalScreen
+from textual.widgets import Input, Static
+
+from ..control.goals import GoalError, parse_goal
+
+
+class GoalPrompt(ModalScreen[tuple[float, float] | None]):
+    CSS_PATH = "modal.tcss"
+    BINDINGS = [Binding("escape", "cancel", "Cancel")]
+
+    def __init__(self, pose: tuple[float, float]) -> None:
+        super().__init__()
+        self.pose = pose
+
+    def compose(self) -> ComposeResult:
+        with Vertical(classes="dialog"):
+            yield Static(
+                f"Drive to x y (m, odometry frame). The robot is at {self.pose[0]:+.2f} {self.pose[1]:+.2f}."
+            )
+            yield Input(placeholder="x y, e.g. 1.5 -0.5", id="goal-input")
+            yield Static("", id="goal-error")
+
+    @on(Input.Submitted)
+    def _submitted(self, event: Input.Submitted) -> None:
+        try:
+            goal = parse_goal(event.value)
+        except GoalError as exc:
+            self.query_one("#goal-error", Static).update(f"[b red]{exc}[/]")
+            return
+        self.dismiss(goal)
+
+    def action_cancel(self) -> None:
+        self.dismiss(None)

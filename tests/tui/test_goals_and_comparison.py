@@ -1,0 +1,154 @@
+"""Pilot tests of goals from the console (a click on the map, a typed goal, the palette, g after an
+override) and of the ranked comparison (per algorithm / per run, sorting, marks, the ring warning)."""
+
+from arbiter_tui.analytics import table as T
+from arbiter_tui.analytics.runs import COMPLETED, OVERRIDDEN
+from arbiter_tui.analytics.store import AnalyticsStore
+from arbiter_tui.link.sim import SimLink
+from arbiter_tui.plots import ErrorPlot, TrajectoryPlot
+from arbiter_tui.screens.analytics import CompareTable, RingWarning, RuleLine
+from arbiter_tui.screens.goal import GoalPrompt
+from arbiter_tui.widgets import TrajectoryMap
+
+from ..support.tui import FakeClock, still_app, until
+
+SIZE = (100, 30)
+
+
+def sim_app(tmp_path):
+    clock = FakeClock(0.0)
+    store = AnalyticsStore()
+    store.start_collection()
+    app = still_app(tmp_path, link=SimLink(clock=clock), store=store)
+    app.fake_clock = clock  # the control loop and the simulator share one fake clock
+    app.link.step()
+    return app, clock
+
+
+def drive(app, clock, seconds: float) -> None:
+    """Simulated time: the simulator at 50 Hz, the control loop at 10 Hz, as the live console."""
+    for n in range(round(seconds * 50)):
+        clock.t = round(clock.t + 0.02, 6)
+        app.link.step()
+        if n % 5 == 4:
+            app._control_tick()
+
+
+async def test_a_click_on_the_map_drives_to_that_point(tmp_path):
+    app, clock = sim_app(tmp_path)
+    async with app.run_test(size=SIZE) as pilot:
+        app.publish_views(force=True)
+        await pilot.pause()
+        the_map = app.screen.query_one(TrajectoryMap)
+        assert await until(pilot, lambda: the_map.frame is not None)
+        row, col = the_map.frame.cell(1.0, 0.6)
+        await pilot.click(TrajectoryMap, offset=(col + 1, row + 1))  # +1: the map's border
+        goal = tuple(round(v, 2) for v in the_map.frame.world(row, col))
+        assert await until(pilot, lambda: app.loop.running)
+        run = app.store.active_run
+        assert app.loop.algorithm == "go_to_goal" and app.loop.mission.waypoints == [goal]
+        assert abs(goal[0] - 1.0) < 0.2 and abs(goal[1] - 0.6) < 0.3  # within a cell of where we aimed
+        drive(app, clock, 15.0)
+        pose = app.link.telemetry.snapshot()[0]
+        assert ((pose.x - goal[0]) ** 2 + (pose.y - goal[1]) ** 2) ** 0.5 <= app.loop.mission.tolerance
+        assert not app.loop.running
+        assert app.store.run(run).outcome == COMPLETED and app.store.active_run is None
+
+
+async def test_a_typed_goal_and_its_errors(tmp_path):
+    app, _clock = sim_app(tmp_path)
+    async with app.run_test(size=SIZE) as pilot:
+        await pilot.press("t")
+        assert isinstance(app.screen, GoalPrompt)
+        await pilot.press(*"one two", "enter")
+        assert isinstance(app.screen, GoalPrompt)  # stays open and says why
+        assert "not numbers" in str(app.screen.query_one("#goal-error").render())
+        for _ in range(7):
+            await pilot.press("backspace")
+        await pilot.press(*"0.5 -0.5", "enter")
+        assert not isinstance(app.screen, GoalPrompt)
+        assert app.loop.running and app.loop.mission.waypoints == [(0.5, -0.5)]
+        assert app.loop.mission_label == "goal (+0.50, -0.50)"
+        await pilot.press("space")
+        await pilot.press("t", "escape")
+        assert not isinstance(app.screen, GoalPrompt) and not app.loop.running
+
+
+async def test_the_palette_selects_algorithm_and_mission_and_goes(tmp_path):
+    app, _clock = sim_app(tmp_path)
+    async with app.run_test(size=SIZE) as pilot:
+        for text, check in (
+            ("Algorithm: pure_pursuit", lambda: app.loop.algorithm == "pure_pursuit"),
+            ("Mission: figure_eight", lambda: app.loop.mission_name == "figure_eight"),
+            ("Go", lambda: app.loop.running and app.loop.mission_label == "figure_eight"),
+        ):
+            await pilot.press("ctrl+p")
+            await pilot.press(*text)
+            await pilot.pause(0.3)
+            await pilot.press("enter")
+            assert await until(pilot, check), text
+
+
+async def test_g_after_an_override_resumes_and_capital_g_restarts(tmp_path):
+    app, clock = sim_app(tmp_path)
+    async with app.run_test(size=SIZE) as pilot:
+        await pilot.press("a", "g")  # go_to_goal on the square
+        run = app.store.active_run
+        drive(app, clock, 9.0)
+        reached = app.loop.mission.index
+        assert reached >= 1
+        await pilot.press("i")  # a movement key takes over
+        assert app.loop.algorithm == "manual" and app.store.run(run).outcome == OVERRIDDEN
+        await pilot.press("space")
+        await pilot.press("g")
+        assert app.loop.running and app.loop.algorithm == "go_to_goal"
+        assert app.loop.mission.index == reached and " from " in app.loop.mission_label
+        await pilot.press("G")
+        assert app.loop.running and app.loop.mission.index == 0 and app.loop.mission_label == "square"
+
+
+async def test_the_comparison_ranks_marks_sorts_and_warns(tmp_path):
+    app = still_app(tmp_path)
+    async with app.run_test(size=SIZE) as pilot:
+        await pilot.press("2")
+        table = app.screen.query_one(CompareTable)
+        assert await until(pilot, lambda: len(table.table.rows) == 2)
+        rows = table.table.rows
+        # go_to_goal completed the square: best overall (the only completed), best in its columns
+        assert rows[0][0] == f"{T.BEST_ROW} go_to_goal" and rows[0][1] == "1/1"
+        assert T.BEST_CELL in rows[0][table.table.keys.index("avgDistanceError")]
+        assert not any(T.BEST_CELL in c for c in rows[1])  # pure_pursuit never completed
+        assert "→ go_to_goal" in str(app.screen.query_one(RuleLine).render())
+        assert "avg e_d m" in table.table.headers and "time s" in table.table.headers
+        warning = str(app.screen.query_one(RingWarning).render())
+        assert "run 1 150/206" in warning and app.screen.query_one(RingWarning).display
+        await pilot.press("v")  # per run
+        assert await until(pilot, lambda: table.table.keys[0] == "id")
+        assert [r[table.table.keys.index("outcome")] for r in table.table.rows] == ["completed", "aborted"]
+        await pilot.press("s")  # sort by the next column: run id
+        assert table.sort == "id"
+        await pilot.click(CompareTable, offset=(2, 0))  # the header of the first column again: reversed
+        assert await until(pilot, lambda: table.descending)
+        assert [r[0].lstrip(f"{T.BEST_ROW} ") for r in table.table.rows] == ["2", "1"]
+
+
+async def test_unchanged_data_redraws_nothing(tmp_path):
+    app = still_app(tmp_path)
+    async with app.run_test(size=SIZE) as pilot:
+        await pilot.press("2")
+        await pilot.pause()
+        table = app.screen.query_one(CompareTable)
+        plots = [app.screen.query_one(TrajectoryPlot), app.screen.query_one(ErrorPlot)]
+        before = (table.fills, [p.draws for p in plots])
+        for _ in range(5):
+            app.publish_views(force=True)
+            await pilot.pause()
+        assert (table.fills, [p.draws for p in plots]) == before
+        app.store.start_collection()
+        app.publish_views(force=True)
+        await pilot.pause()
+        before = (table.fills, [p.draws for p in plots])
+        app.loop.sample()  # one new sample: the plots redraw; the run rows have not changed
+        app.publish_views(force=True)
+        await pilot.pause()
+        assert [p.draws for p in plots] == [d + 1 for d in before[1]] and table.fills == before[0]
