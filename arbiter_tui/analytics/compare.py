@@ -43,6 +43,7 @@ class RunResult:
 
     def as_dict(self) -> dict[str, Any]:
         return {
+            "run": None if self.summary is None else self.summary.id,  # the runId its exported points carry
             "algorithm": self.algorithm,
             "mission": self.mission,
             "completed": self.completed,

@@ -12,7 +12,7 @@ from arbiter_core.cliargs import OneLineParser
 from .exports import ExportFormatError
 from .files import load_points
 from .labels import format_stat
-from .store import STATS_FIELDS, AnalyticsStore, stats_of_points
+from .store import STATS_FIELDS, AnalyticsStats, AnalyticsStore, DataPoint, stats_of_points
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -25,11 +25,21 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print one JSON object with the seed's camelCase keys")
     p.add_argument(
         "--by",
-        choices=("algorithm",),
-        help="one set of stats per algorithm (with --json: an object keyed by algorithm); path length "
-        "counts only steps between consecutive samples of the same algorithm, as on the analytics screen",
+        choices=("algorithm", "run"),
+        help="one set of stats per group (with --json: an object keyed by group). algorithm: path length "
+        "counts only steps between consecutive samples of the same algorithm. run: by the runId exports "
+        "carry (key 'run N'; samples outside every run under 'no run'), each run's stats over the samples "
+        "the file holds",
     )
     return p
+
+
+def by_run(points: list[DataPoint]) -> dict[str, AnalyticsStats]:
+    """Stats per run id, in order of first appearance; samples without one under "no run"."""
+    grouped: dict[str, list[DataPoint]] = {}
+    for p in points:
+        grouped.setdefault("no run" if p.runId is None else f"run {p.runId}", []).append(p)
+    return {name: stats_of_points(pts) for name, pts in grouped.items()}
 
 
 def run(argv: list[str]) -> int:
@@ -47,6 +57,8 @@ def run(argv: list[str]) -> int:
         return 1
     if args.by is None:
         groups = {"": stats_of_points(points)}
+    elif args.by == "run":
+        groups = by_run(points)
     else:
         store = AnalyticsStore(max_data_points=max(1, len(points)))
         store.start_collection()

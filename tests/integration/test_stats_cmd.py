@@ -132,3 +132,26 @@ def test_by_algorithm_matches_the_analytics_screens_grouping(tmp_path):
             assert got[algo][k] == pytest.approx(want[algo][k], rel=1e-12)
     table = run(f, "--by", "algorithm").stdout.splitlines()
     assert [line for line in table if line.startswith("[")] == [f"[{a}]" for a in want]
+
+
+def test_by_run_reads_every_format_of_a_compare_export(tmp_path):
+    """`compare --export-dir` writes runs; `stats --by run` on each file gives each run's stats back."""
+    r = subprocess.run(
+        [sys.executable, "-m", "arbiter_tui.cli", "compare", "--mission", "square", "--json",
+         "--export-dir", str(tmp_path)],
+        capture_output=True, text=True, timeout=120,
+    )  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    body = json.loads(r.stdout)
+    want = {f"run {run['run']}": run["stats"] for run in body["runs"]}
+    assert len(want) == 2
+    for path in body["exports"]:
+        got = run(path, "--by", "run", "--json")
+        assert got.returncode == 0, got.stderr
+        stats = json.loads(got.stdout)
+        assert set(stats) == set(want), path
+        for name, expected in want.items():
+            for k in STATS_FIELDS:
+                assert stats[name][k] == pytest.approx(expected[k], rel=1e-9), (path, name, k)
+    table = run(body["exports"][0], "--by", "run").stdout.splitlines()
+    assert sorted(line for line in table if line.startswith("[")) == ["[run 1]", "[run 2]"]

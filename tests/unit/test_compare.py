@@ -26,6 +26,7 @@ def test_json_schema_ranking_and_best(capsys):
     }
     for r in runs:
         assert set(r) == {
+            "run",  # the runId its exported points carry
             "algorithm",
             "mission",
             "completed",
@@ -35,6 +36,7 @@ def test_json_schema_ranking_and_best(capsys):
             "stats",
         }
         assert tuple(r["stats"]) == STATS_FIELDS and r["completed"] and r["final_error_m"] <= 0.15
+    assert sorted(r["run"] for r in runs) == [1, 2, 3, 4]
     errors = [r["stats"]["avgDistanceError"] for r in runs]
     assert errors == sorted(errors)  # ranked by the rule
     assert body["best"] == {"algorithm": runs[0]["algorithm"], "mission": runs[0]["mission"]}
