@@ -218,3 +218,27 @@ def test_unwritable_directory_even_for_root():
     s = AnalyticsStore()
     with pytest.raises(ExportError, match="cannot write"):
         export_store(s, "csv", "/proc")
+
+
+def test_mcap_run_summaries_decode_with_the_mcap_reader():
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+
+    store = AnalyticsStore()
+    store.start_collection()
+    for outcome in ("completed", "overridden"):
+        run = store.begin_run("pure_pursuit", "figure_eight", 1_700_000_000_000.0)
+        for p in random_points(15, seed=run):
+            store.record(DataPoint(**{**p.as_dict(), "runId": run}))
+        store.end_run(outcome, 1_700_000_009_000.0, 0.12 if outcome == "completed" else None)
+    data = to_mcap(store.points(), store.stats(), store.runs())
+    reader = make_reader(io.BytesIO(data), decoder_factories=[DecoderFactory()])
+    runs = [d for _s, _c, _m, d in reader.iter_decoded_messages(topics=[MCAP_RUNS_TOPIC])]
+    assert [(r.id, r.outcome, r.completed) for r in runs] == [
+        (1, "completed", True),
+        (2, "overridden", False),
+    ]
+    assert runs[0].final_error_m == 0.12 and math.isnan(runs[1].final_error_m)
+    assert runs[0].time_s == 9.0 and runs[0].stats.sample_count == 15
+    assert runs[1].stats.p95_error == store.runs()[1].stats.p95Error
+    assert [p.runId for p in parse_mcap(data)] == [1] * 15 + [2] * 15
