@@ -9,8 +9,8 @@ They follow the seed exactly:
 * p95: sort ascending and take index ``floor(n * 0.95)``; ``0`` when empty
 
 Inputs are numpy float64 arrays (or anything ``np.asarray`` accepts). The p95
-uses ``np.partition``, which places exactly the element the seed's full sort
-would put at that index, in linear time.
+selects exactly the element the seed's full sort would put at that index, in
+linear time (``np.partition``, on a pre-filtered part of a large array).
 """
 
 from __future__ import annotations
@@ -84,6 +84,30 @@ def percentile(values: ArrayLike, q: float) -> float:
     if n == 0:
         return 0.0
     k = p95_index(n) if q == 0.95 else math.floor(n * q)
+    return float(_kth_smallest(a, k))
+
+
+_SELECT_MIN = 50_000  # below this a full np.partition is as fast
+
+
+def _kth_smallest(a: FloatArray, k: int) -> float:
+    """``sorted(a)[k]``, exactly. For a large array: a threshold a little below the answer, estimated
+    from an evenly strided sample, keeps the few values at or above it, and the k-th is selected among
+    those (one pass and a small partition instead of partitioning everything: ~10x faster at 1M). When
+    the estimate misses, the full partition decides."""
+    n = a.size
+    if n < _SELECT_MIN:
+        return float(np.partition(a, k)[k])
+    stride = max(1, n // 4096)
+    sample = np.sort(a[::stride])
+    guess = int(k / n * sample.size) - 2 * int(math.sqrt(sample.size)) - 1  # a margin below the estimate
+    if guess > 0:
+        threshold = sample[guess]
+        above = a[a >= threshold]
+        below = n - above.size  # values strictly smaller than the threshold
+        if below <= k:
+            j = k - below
+            return float(np.partition(above, j)[j])
     return float(np.partition(a, k)[k])
 
 
@@ -104,9 +128,12 @@ def step_lengths(xs: ArrayLike, ys: ArrayLike) -> FloatArray:
     """
     x = _arr(xs)
     y = _arr(ys)
-    dx = x[1:] - x[:-1]
-    dy = y[1:] - y[:-1]
-    return np.sqrt(dx * dx + dy * dy)
+    dx = np.subtract(x[1:], x[:-1])
+    dy = np.subtract(y[1:], y[:-1])
+    np.multiply(dx, dx, out=dx)  # in place: two temporaries instead of six (a million steps: 8 MB each)
+    np.multiply(dy, dy, out=dy)
+    np.add(dx, dy, out=dx)
+    return np.sqrt(dx, out=dx)
 
 
 @dataclass(frozen=True)

@@ -15,7 +15,7 @@ from textual_plot import HiResMode, PlotWidget
 
 from arbiter_core import stats as S
 
-from .views import AnalyticsView, LatencySnapshot
+from .views import AnalyticsView, LatencySnapshot, thin
 
 # one marker shape (and colour) per algorithm; later names reuse them in order
 ALGORITHM_STYLES: dict[str, tuple[str, str]] = {
@@ -106,11 +106,13 @@ class ErrorPlot(Plot):
     SOURCE = "analytics"
 
     def data_key(self, view: AnalyticsView) -> object:
-        return view.version
+        return view.plot_version
 
     def draw(self, view: AnalyticsView) -> None:
         if view.errors:
-            self.plot(view.error_t, view.errors, line_style="cyan", hires_mode=HiResMode.BRAILLE)
+            # braille: two dots a cell across; more points than that draw the same line, slower
+            pick = thin(len(view.errors), 2 * max(1, self.query_one("#plot").size.width))
+            self.plot(view.error_t[pick], view.errors[pick], line_style="cyan", hires_mode=HiResMode.BRAILLE)
             self.set_ylimits(0.0, max(max(view.errors) * 1.1, 0.1))
         else:
             self.set_ylimits(0.0, 1.0)
@@ -123,37 +125,48 @@ class TrajectoryPlot(Plot):
     SOURCE = "analytics"
 
     def data_key(self, view: AnalyticsView) -> object:
-        return (view.version, view.waypoints, view.goal)
+        return (view.plot_version, view.waypoints, view.goal)
 
     def draw(self, view: AnalyticsView) -> None:
-        xs: list[float] = []
-        ys: list[float] = []
-        legend = []
-        for i, track in enumerate(view.tracks):
-            marker, colour = algorithm_style(track.algorithm, i)
-            self.scatter(track.x, track.y, marker=marker, marker_style=colour)
-            legend.append(f"{marker} {track.algorithm}")
-            xs += track.x
-            ys += track.y
-        if view.waypoints:
-            wx, wy = zip(*view.waypoints, strict=True)
-            self.scatter(wx, wy, marker="o", marker_style="yellow")
-            legend.append("o waypoint")
-            xs += wx
-            ys += wy
-        if view.goal is not None:
-            self.scatter([view.goal[0]], [view.goal[1]], marker="G", marker_style="bold red")
-            legend.append("G goal")
-            xs.append(view.goal[0])
-            ys.append(view.goal[1])
-        # the legend is text in the bottom border: it never hides the path
-        self.border_subtitle = "  ".join(legend)
+        tracks = [(t, np.asarray(t.x), np.asarray(t.y)) for t in view.tracks]
+        xs = [float(v) for _t, x, _y in tracks for v in (x.min(), x.max())]
+        ys = [float(v) for _t, _x, y in tracks for v in (y.min(), y.max())]
+        for wx, wy in view.waypoints + ((view.goal,) if view.goal is not None else ()):
+            xs.append(wx)
+            ys.append(wy)
         size = self.query_one("#plot").size
         x0, x1, y0, y1 = equal_aspect(xs, ys, size.width, size.height)
         self.set_xlimits(x0, x1)
         self.set_ylimits(y0, y1)
+        legend = []
+        for i, (track, x, y) in enumerate(tracks):
+            marker, colour = algorithm_style(track.algorithm, i)
+            self.scatter(*self._one_per_cell(x, y), marker=marker, marker_style=colour)
+            legend.append(f"{marker} {track.algorithm}")
+        if view.waypoints:
+            wx, wy = zip(*view.waypoints, strict=True)
+            self.scatter(wx, wy, marker="o", marker_style="yellow")
+            legend.append("o waypoint")
+        if view.goal is not None:
+            self.scatter([view.goal[0]], [view.goal[1]], marker="G", marker_style="bold red")
+            legend.append("G goal")
+        # the legend is text in the bottom border: it never hides the path
+        self.border_subtitle = "  ".join(legend)
         self.set_xticks(nice_ticks(x0, x1, max(1, size.width // 7)))
         self.set_yticks(nice_ticks(y0, y1, max(1, size.height // 2)))
+
+
+    def _one_per_cell(self, x: np.ndarray, y: np.ndarray) -> tuple[list[float], list[float]]:
+        """The first point in each character cell (as the plot maps them): a marker drawn twice in a cell
+        looks the same, and the plot library pays for every point. Before the first paint the plot's
+        mapping is unknown: every point is kept."""
+        if not self._scale_rectangle.area:
+            return x.tolist(), y.tolist()
+        cells: dict[tuple[int, int], tuple[float, float]] = {}
+        for xi, yi in zip(x.tolist(), y.tolist(), strict=True):
+            cells.setdefault(self.get_pixel_from_coordinate(xi, yi), (xi, yi))
+        kept = list(cells.values())
+        return [p[0] for p in kept], [p[1] for p in kept]
 
 
 class LatencyPlot(Plot):

@@ -96,6 +96,7 @@ class MapView:
 PLOT_ERRORS = 2000  # the error plot shows the newest samples, thinned to PLOT_MAX points
 PLOT_TRAIL = 6000  # the trajectory plot: the newest samples, thinned to PLOT_MAX points per algorithm
 PLOT_MAX = 600
+PLOT_PERIOD_S = 1.0  # while samples stream in, the plots follow at most once a second (numbers: every update)
 
 
 @dataclass(frozen=True, slots=True)
@@ -122,6 +123,9 @@ class AnalyticsView:
     error_t: tuple[float, ...] = field(default=(), compare=False)  # s since the first plotted sample
     errors: tuple[float, ...] = field(default=(), compare=False)  # distance error, m
     tracks: tuple[Track, ...] = field(default=(), compare=False)
+    plot_version: int = 0  # advances when the plotted series were rebuilt
+    plotted_at: float = field(default=float("-inf"), compare=False)  # monotonic s
+    plotted_from: int = field(default=-1, compare=False)  # the store version the plots show
     waypoints: tuple[tuple[float, float], ...] = ()
     goal: tuple[float, float] | None = None
 
@@ -255,19 +259,51 @@ def thin(n: int, most: int) -> slice:
 
 
 def analytics_view(
-    store: AnalyticsStore, previous: AnalyticsView | None = None, loop: ControlLoop | None = None
+    store: AnalyticsStore,
+    previous: AnalyticsView | None = None,
+    loop: ControlLoop | None = None,
+    now: float | None = None,
 ) -> AnalyticsView:
     """Recomputed only when the store changed (its version), whatever the UI rate. The plots' series
-    come from the newest samples only: the cost does not grow with the ring's size."""
+    come from the newest samples only (the cost does not grow with the ring's size) and, while samples
+    stream in, are rebuilt at most every ``PLOT_PERIOD_S``: painting a plot costs more than the numbers."""
+    now = time.monotonic() if now is None else now
     version = store.version
     waypoints: tuple[tuple[float, float], ...] = ()
     goal = None
     if loop is not None and loop.algorithm != "manual":
         waypoints, goal = tuple(loop.mission.waypoints), loop.goal()
     if previous is not None and previous.version == version:
-        if (previous.waypoints, previous.goal) == (waypoints, goal):
-            return previous
-        return replace(previous, waypoints=waypoints, goal=goal)
+        plots_due = previous.plotted_from != version and now - previous.plotted_at >= PLOT_PERIOD_S
+        if not plots_due:
+            if (previous.waypoints, previous.goal) == (waypoints, goal):
+                return previous
+            return replace(previous, waypoints=waypoints, goal=goal)
+    runs = store.runs()
+    points = len(store)
+    replot = (
+        previous is None
+        or not store.is_collecting  # paused or cleared: show exactly what is held
+        or points < previous.points
+        or len(runs) != len(previous.runs)  # a run began: its first samples show at once
+        or now - previous.plotted_at >= PLOT_PERIOD_S
+    )
+    view = AnalyticsView(
+        version=version,
+        collecting=store.is_collecting,
+        points=points,
+        ring=store.max_data_points,
+        stats=store.stats(),
+        runs=runs,
+        by_algorithm=store.runs_by_algorithm(),
+        waypoints=waypoints,
+        goal=goal,
+    )
+    if not replot:
+        assert previous is not None
+        return replace(view, error_t=previous.error_t, errors=previous.errors, tracks=previous.tracks,
+                       plot_version=previous.plot_version, plotted_at=previous.plotted_at,
+                       plotted_from=previous.plotted_from)  # fmt: skip
     cols, codes, names = store.tail(PLOT_TRAIL)
     t, e_d = cols["timestamp"][-PLOT_ERRORS:], cols["distanceError"][-PLOT_ERRORS:]
     pick = thin(t.size, PLOT_MAX)
@@ -277,19 +313,14 @@ def analytics_view(
         idx = np.flatnonzero(codes == code)
         idx = idx[thin(idx.size, PLOT_MAX)]
         tracks.append(Track(names[code], tuple(cols["x"][idx].tolist()), tuple(cols["y"][idx].tolist())))
-    return AnalyticsView(
-        version=version,
-        collecting=store.is_collecting,
-        points=len(store),
-        ring=store.max_data_points,
-        stats=store.stats(),
-        runs=store.runs(),
-        by_algorithm=store.runs_by_algorithm(),
+    return replace(
+        view,
         error_t=tuple(((t[pick] - t0) / 1000.0).tolist()),
         errors=tuple(e_d[pick].tolist()),
         tracks=tuple(tracks),
-        waypoints=waypoints,
-        goal=goal,
+        plot_version=(previous.plot_version + 1) if previous is not None else 1,
+        plotted_at=now,
+        plotted_from=version,
     )
 
 

@@ -1,10 +1,12 @@
 """AnalyticsStats speed and memory at 1k / 100k / 1M points, against a plain-Python transcription of the seed.
 
-    python bench/bench_stats.py            # 1k, 100k, 1M
-    python bench/bench_stats.py --sizes 1000 100000 --repeat 51
+    python bench/bench_stats.py            # 1k, 100k, 1M; runs; the analytics screen at 10k and 1M
+    python bench/bench_stats.py --sizes 1000 100000 --repeat 51 --screen-sizes 1000000
 
-Prints one line per size and, last, one JSON object with every figure.
-Targets: 1k < 0.1 ms, 1M < 30 ms, <= 100 bytes/point, >= 50x the plain version at 100k.
+Prints one line per figure and, last, one JSON object with every figure.
+Targets: 1k < 0.1 ms, 1M < 30 ms, <= 100 bytes/point, >= 50x the plain version at 100k; the nine
+stats of 100 runs of 10,000 points each, from scratch, <= 50 ms; one analytics screen update (a new
+sample: view built, widgets repainted) with 1,000,000 points collected <= 20 ms.
 """
 
 from __future__ import annotations
@@ -103,10 +105,90 @@ def bench_size(n: int, repeat: int) -> dict[str, float]:
     }
 
 
+def fill_runs(store: AnalyticsStore, runs: int, per_run: int) -> None:
+    """``runs`` runs of ``per_run`` samples each, alternating two controllers, as the console records."""
+    pts = make_points(min(per_run, 20_000), seed=2)
+    for r in range(runs):
+        run = store.begin_run(("go_to_goal", "pure_pursuit")[r % 2], "square", 1.7e12 + r * 1e6)
+        for i in range(per_run):
+            p = pts[i % len(pts)]
+            store.record(
+                DataPoint(1.7e12 + r * 1e6 + i * 100.0, p.x, p.y, p.theta, p.linearVel, p.angularVel,
+                          p.distanceError, p.headingError, p.algorithm, p.latencyMs, run)
+            )  # fmt: skip
+        if r < runs - 1:
+            store.end_run("completed", 1.7e12 + r * 1e6 + per_run * 100.0, 0.1)
+
+
+def bench_runs(runs: int, per_run: int, repeat: int) -> dict[str, float]:
+    """The nine stats of every run and of every algorithm, from scratch (no cached summary)."""
+    from arbiter_tui.analytics.runs import RunLog
+
+    store = AnalyticsStore(max_data_points=1000)  # a small ring: the runs keep their samples anyway
+    store.start_collection()
+    fill_runs(store, runs, per_run)
+    log: RunLog = store._runs
+
+    def cold() -> None:
+        for run in log._runs:
+            run._summary = None
+        log._pooled.clear()
+        log.summaries()
+        log.by_algorithm()
+
+    summaries = store.runs()
+    return {
+        "runs": runs,
+        "per_run": per_run,
+        "all_runs_ms": median_seconds(cold, repeat) * 1e3,
+        "samples_kept": sum(r.stats.sampleCount for r in summaries),
+        "ring": len(store),
+    }
+
+
+def bench_screen(n: int, repeat: int) -> dict[str, float]:
+    """One analytics screen update with ``n`` points collected (in 100 runs): a new sample, the view
+    built (``publish_views``), the widgets repainted (the app run headless)."""
+    import asyncio
+
+    from arbiter_tui.app import make_app
+    from arbiter_tui.link.sim import SimLink
+    from arbiter_tui.settings import Settings
+
+    store = AnalyticsStore(max_data_points=n)
+    store.start_collection()
+    fill_runs(store, 100, n // 100)
+    app = make_app(
+        Settings(mode="sim", live=False, handle_signals=False, max_points=n), SimLink(), store=store
+    )
+    out: dict[str, float] = {"n": n}
+
+    async def run() -> None:
+        async with app.run_test(size=(100, 30)) as pilot:
+            await pilot.press("2")
+            await pilot.pause()
+            build, total = [], []
+            for i in range(repeat):
+                store.record(DataPoint(1.9e12 + i, 0.1 * i, 0.2, 0.0, 0.5, 0.0, 1.0, 0.0, "go_to_goal", None,
+                                       store.active_run))  # fmt: skip
+                t0 = time.perf_counter()
+                app.publish_views(force=True)
+                t1 = time.perf_counter()
+                await pilot.pause()  # Textual processes the changes and repaints
+                total.append(time.perf_counter() - t0)
+                build.append(t1 - t0)
+            out["publish_ms"] = statistics.median(build) * 1e3
+            out["update_ms"] = statistics.median(total) * 1e3
+
+    asyncio.run(run())
+    return out
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--sizes", type=int, nargs="+", default=[1_000, 100_000, 1_000_000])
     ap.add_argument("--repeat", type=int, default=31, help="timed runs per size (median reported)")
+    ap.add_argument("--screen-sizes", type=int, nargs="*", default=[10_000, 1_000_000])
     args = ap.parse_args()
     rows = []
     for n in args.sizes:
@@ -116,7 +198,19 @@ def main() -> None:
             f"n={n:>9,}  stats {row['stats_ms']:8.3f} ms  plain {row['plain_ms']:9.2f} ms  "
             f"x{row['speedup']:7.1f}  {row['bytes_per_point']:6.1f} B/point  agree={row['agrees_with_plain']}"
         )
-    print(json.dumps({"bench": "stats", "python": platform.python_version(), "results": rows}))
+    runs = bench_runs(100, 10_000, max(5, args.repeat // 3))
+    print(
+        f"runs: {runs['runs']} x {runs['per_run']:,} samples, every run and algorithm from scratch "
+        f"{runs['all_runs_ms']:.1f} ms (ring {runs['ring']}, samples kept {runs['samples_kept']:,})"
+    )
+    screens = []
+    for n in args.screen_sizes:
+        row = bench_screen(n, max(5, args.repeat // 3))
+        screens.append(row)
+        print(f"analytics screen, {n:>9,} points: update {row['update_ms']:.1f} ms "
+              f"(view built in {row['publish_ms']:.1f} ms)")  # fmt: skip
+    print(json.dumps({"bench": "stats", "python": platform.python_version(), "results": rows, "runs": runs,
+                      "screen": screens}))  # fmt: skip
 
 
 if __name__ == "__main__":

@@ -278,9 +278,11 @@ class RunLog:
 
 
 def _pool(algorithm: str, runs: list[_Run]) -> AlgorithmSummary:
-    cols = np.concatenate([r.cols[:, : r.n] for r in runs], axis=1)
-    path = sum(r.summary().stats.totalPathLength for r in runs)  # no step between two runs
-    stats = compute_stats(cols[0], cols[1], cols[2], cols[3], cols[4], cols[5], path=path)
+    # x and y only make the path, which is the sum of the runs' paths (no step between two runs)
+    cols = np.concatenate([r.cols[2:, : r.n] for r in runs], axis=1)
+    path = sum(r.summary().stats.totalPathLength for r in runs)
+    none = cols[0][:0]
+    stats = compute_stats(none, none, cols[0], cols[1], cols[2], cols[3], path=path)
     done = [r.summary() for r in runs if r.outcome == COMPLETED]
     errors = [s.final_error_m for s in done if s.final_error_m is not None]
     return AlgorithmSummary(

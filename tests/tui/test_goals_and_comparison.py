@@ -6,6 +6,7 @@ from arbiter_tui.analytics.runs import COMPLETED, OVERRIDDEN
 from arbiter_tui.analytics.store import AnalyticsStore
 from arbiter_tui.link.sim import SimLink
 from arbiter_tui.plots import ErrorPlot, TrajectoryPlot
+from arbiter_tui.views import PLOT_PERIOD_S
 from arbiter_tui.screens.analytics import CompareTable, RingWarning, RuleLine
 from arbiter_tui.screens.goal import GoalPrompt
 from arbiter_tui.widgets import TrajectoryMap
@@ -148,7 +149,17 @@ async def test_unchanged_data_redraws_nothing(tmp_path):
         app.publish_views(force=True)
         await pilot.pause()
         before = (table.fills, [p.draws for p in plots])
-        app.loop.sample()  # one new sample: the plots redraw; the run rows have not changed
+        stats = app.analytics.stats
+        app.loop.sample()  # one new sample: the numbers follow at once, the plots within PLOT_PERIOD_S
         app.publish_views(force=True)
         await pilot.pause()
+        assert app.analytics.stats != stats  # the ring is full: the oldest sample gave way to the new
+        assert table.fills == before[0]  # the run rows have not changed
+        assert [p.draws for p in plots] == before[1]  # plotted less than PLOT_PERIOD_S ago
+
+        def published_and_redrawn() -> bool:
+            app.publish_views(force=True)
+            return [p.draws for p in plots] != before[1]
+
+        assert await until(pilot, published_and_redrawn, timeout=PLOT_PERIOD_S + 2, step=0.1)
         assert [p.draws for p in plots] == [d + 1 for d in before[1]] and table.fills == before[0]

@@ -102,3 +102,26 @@ def test_numpy_arrays_are_accepted_without_copy_semantics_changing_results():
     a = np.array([5.0, 1.0, 3.0])
     assert S.p95(a) == 5.0
     assert list(a) == [5.0, 1.0, 3.0]  # p95 must not reorder the caller's array
+
+
+@pytest.mark.parametrize("n", [50_000, 100_003, 1_000_000])
+@pytest.mark.parametrize(
+    "shape", ["random", "ascending", "descending", "constant", "two_values", "top_tied", "sawtooth", "spike"]
+)
+def test_large_percentiles_are_exactly_the_seeds_sorted_index(n, shape):
+    """The pre-filtered selection for large arrays gives exactly sorted(values)[floor(n q)], whatever the
+    order or the ties (orders that defeat a strided sample included)."""
+    rng = np.random.default_rng(n)
+    i = np.arange(n, dtype=np.float64)
+    a = {
+        "random": rng.normal(1.0, 0.5, n),
+        "ascending": i,
+        "descending": i[::-1].copy(),
+        "constant": np.full(n, 0.25),
+        "two_values": np.where(rng.random(n) < 0.96, 0.0, 1.0),
+        "top_tied": np.where(i >= 0.9 * n, 7.0, i),
+        "sawtooth": i % 4097,
+        "spike": np.where(i % 4096 == 0, 1e6, rng.random(n)),
+    }[shape]
+    for q in (0.5, 0.95, 0.99):
+        assert S.percentile(a, q) == float(np.sort(a)[math.floor(n * q)]), q
