@@ -81,7 +81,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--collection-rate", type=positive_float, default=10.0, help="analytics samples per second (10)"
     )
-    p.add_argument("--max-points", type=count, default=1000, help="analytics ring buffer size (1000)")
+    p.add_argument(
+        "--max-points", type=count, default=1000,
+        help="analytics ring buffer size (1000); run summaries keep all their samples regardless",
+    )  # fmt: skip
     p.add_argument("--speed", type=positive_float, default=0.5, help="teleop start speed, m/s (0.5)")
     p.add_argument("--turn", type=positive_float, default=1.0, help="teleop start turn rate, rad/s (1.0)")
     p.add_argument(

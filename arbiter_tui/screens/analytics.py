@@ -21,6 +21,10 @@ from ..widgets import Bound, StatsCards
 from .base import BaseScreen
 
 
+def _cell(text: str) -> Text:
+    return Text(text, style="bold" if T.BEST_CELL in text or T.BEST_ROW in text else "")
+
+
 class CompareTable(DataTable[Text]):
     """The comparison: refilled only when its rows, its mode or its order changed. Headers sort."""
 
@@ -28,7 +32,7 @@ class CompareTable(DataTable[Text]):
     mode: reactive[str] = reactive(T.BY_ALGORITHM)
     sort: reactive[str] = reactive(T.RANK)
     descending: reactive[bool] = reactive(False)
-    fills = 0  # tests: how often the rows were rebuilt
+    fills = 0  # tests: how often the table was rebuilt (a changed cell is updated in place)
 
     def on_mount(self) -> None:
         self._shown: tuple[object, ...] | None = None
@@ -54,17 +58,25 @@ class CompareTable(DataTable[Text]):
         key = (self.sort, self.descending, table)
         if key == self._shown:
             return
+        same_shape = self._shown is not None and self._shown[:2] == key[:2] and self.row_count > 0
         self._shown = key
-        self.fills += 1
-        self.table = table
-        self.clear(columns=True)
-        for header, k in zip(self.table.headers, self.table.keys, strict=True):
-            arrow = (" ▼" if self.descending else " ▲") if k == self.sort else ""
-            self.add_column(Text(header + arrow, style="bold"), key=k)
-        for row in self.table.rows:
-            self.add_row(*(Text(c, style="bold" if T.BEST_CELL in c or T.BEST_ROW in c else "") for c in row))
+        old, self.table = self.table, table
         for rule in self.screen.query(RuleLine):
             rule.refresh()
+        if same_shape and (old.keys, len(old.rows)) == (table.keys, len(table.rows)):
+            # same columns, order and row count: change only the cells that differ (cheaper than a refill)
+            for i, (before, after) in enumerate(zip(old.rows, table.rows, strict=True)):
+                for k, a, b in zip(table.keys, before, after, strict=True):
+                    if a != b:
+                        self.update_cell(str(i), k, _cell(b), update_width=True)
+            return
+        self.fills += 1
+        self.clear(columns=True)
+        for header, k in zip(table.headers, table.keys, strict=True):
+            arrow = (" ▼" if self.descending else " ▲") if k == self.sort else ""
+            self.add_column(Text(header + arrow, style="bold"), key=k)
+        for i, row in enumerate(table.rows):
+            self.add_row(*(_cell(c) for c in row), key=str(i))
 
     def sort_by(self, key: str) -> None:
         """Sort by a column; choosing it again reverses the order."""

@@ -163,3 +163,25 @@ async def test_unchanged_data_redraws_nothing(tmp_path):
 
         assert await until(pilot, published_and_redrawn, timeout=PLOT_PERIOD_S + 2, step=0.1)
         assert [p.draws for p in plots] == [d + 1 for d in before[1]] and table.fills == before[0]
+
+
+async def test_a_running_mission_updates_its_row_in_place(tmp_path):
+    app, clock = sim_app(tmp_path)
+    async with app.run_test(size=SIZE) as pilot:
+        await pilot.press("a", "g", "2")
+        table = app.screen.query_one(CompareTable)
+        for _ in range(3):
+            drive(app, clock, 1.0)
+            for _ in range(10):
+                app.loop.sample()
+            app.publish_views(force=True)
+            await pilot.pause()
+        fills, shown = table.fills, table.table.rows
+        drive(app, clock, 2.0)
+        for _ in range(20):
+            app.loop.sample()
+        app.publish_views(force=True)
+        await pilot.pause()
+        assert table.table.rows != shown and table.fills == fills  # new figures, no rebuild
+        on_screen = [str(c) for c in table.get_row("0")]
+        assert on_screen == list(table.table.rows[0])  # the cells show the new row exactly
