@@ -155,7 +155,6 @@ class TrajectoryPlot(Plot):
         self.set_xticks(nice_ticks(x0, x1, max(1, size.width // 7)))
         self.set_yticks(nice_ticks(y0, y1, max(1, size.height // 2)))
 
-
     def _one_per_cell(self, x: np.ndarray, y: np.ndarray) -> tuple[list[float], list[float]]:
         """The first point in each character cell (as the plot maps them): a marker drawn twice in a cell
         looks the same, and the plot library pays for every point. Before the first paint the plot's

@@ -6,9 +6,9 @@ from arbiter_tui.analytics.runs import COMPLETED, OVERRIDDEN
 from arbiter_tui.analytics.store import AnalyticsStore
 from arbiter_tui.link.sim import SimLink
 from arbiter_tui.plots import ErrorPlot, TrajectoryPlot
-from arbiter_tui.views import PLOT_PERIOD_S
 from arbiter_tui.screens.analytics import CompareTable, RingWarning, RuleLine
 from arbiter_tui.screens.goal import GoalPrompt
+from arbiter_tui.views import PLOT_PERIOD_S
 from arbiter_tui.widgets import TrajectoryMap
 
 from ..support.tui import FakeClock, still_app, until
