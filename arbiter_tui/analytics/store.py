@@ -377,7 +377,7 @@ class AnalyticsStore:
 
     def nbytes(self) -> int:
         """Bytes held by the buffer arrays."""
-        return int(self._num.nbytes + self._alg.nbytes)
+        return int(self._num.nbytes + self._alg.nbytes + self._run.nbytes)
 
 
 __all__ = [  # the data model lives in model.py; these names are read from here too

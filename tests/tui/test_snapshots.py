@@ -51,3 +51,19 @@ def test_export_chooser(snap_compare):
 @pytest.mark.parametrize("keys", [["a", "g"], ["a", "g", "2"]], ids=["control", "analytics"])
 def test_a_mission_run_on_screen(snap_compare, keys):
     assert snap_compare(still_app(), terminal_size=(80, 24), press=keys)
+
+
+@pytest.mark.parametrize("size", SIZES, ids=["100x30", "80x24"])
+def test_comparison_per_run_sorted(snap_compare, size):
+    """The comparison per run (v), sorted by time to complete (clicked twice: longest first)."""
+
+    async def per_run_by_time(pilot):
+        from arbiter_tui.screens.analytics import CompareTable
+
+        await pilot.press("2", "v")
+        table = pilot.app.screen.query_one(CompareTable)
+        table.sort_by("time_s")
+        table.sort_by("time_s")
+        await pilot.pause()
+
+    assert snap_compare(still_app(), terminal_size=size, run_before=per_run_by_time)
