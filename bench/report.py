@@ -22,6 +22,18 @@ def rows(results: list[dict]) -> list[str]:
         out.append(
             f"| bench_stats | memory per point | {s['results'][-1]['buffer_bytes_per_point']} B | ≤ 100 B |"
         )
+        if runs := s.get("runs"):
+            out.append(
+                f"| bench_stats | nine stats of every run and algorithm, {runs['runs']} runs x "
+                f"{runs['per_run']:,} samples, from scratch | {runs['all_runs_ms']:.1f} ms | ≤ 50 ms |"
+            )
+        for sc in s.get("screen", []):
+            target = "≤ 20 ms (view)" if sc["n"] >= 1_000_000 else ""
+            out.append(
+                f"| bench_stats | analytics screen, {sc['n']:,} points: view built / update CPU / plots "
+                f"redraw CPU (≤ 1/s) | {sc['view_ms']:.1f} / {sc['update_cpu_ms']:.1f} / "
+                f"+{sc['plots_cpu_ms']:.1f} ms | {target} |"
+            )
     for lat in (r for r in results if r["bench"] == "latency"):
         tr = lat["transport"]
         out += [
