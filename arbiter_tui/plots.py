@@ -168,13 +168,17 @@ class TrajectoryPlot(Plot):
         return [p[0] for p in kept], [p[1] for p in kept]
 
 
-class LatencyPlot(Plot):
-    """The tracker's latencies over time (seconds before the newest), with their p95 as a line."""
+class _LatencyWindow(Plot):
+    """A plot of the tracker's latency window: redrawn when a poll brought new records."""
 
     SOURCE = "latency"
 
     def data_key(self, view: LatencySnapshot) -> object:
         return (view.polled, view.simulated)
+
+
+class LatencyPlot(_LatencyWindow):
+    """The tracker's latencies over time (seconds before the newest), with their p95 as a line."""
 
     def draw(self, view: LatencySnapshot) -> None:
         if not view.window:
@@ -193,14 +197,10 @@ class LatencyPlot(Plot):
         self.border_subtitle = f"⠒ latency  ─ p95 {p95:.2f} ms"
 
 
-class LatencyHistogram(Plot):
+class LatencyHistogram(_LatencyWindow):
     """How the window's latencies are distributed (commands per bin)."""
 
-    SOURCE = "latency"
     BINS = 12
-
-    def data_key(self, view: LatencySnapshot) -> object:
-        return (view.polled, view.simulated)
 
     def draw(self, view: LatencySnapshot) -> None:
         if not view.window:
