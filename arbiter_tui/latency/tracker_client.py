@@ -21,6 +21,7 @@ if TYPE_CHECKING:
     import httpx
 
 WINDOW = 600  # latencies kept for the plot and the histogram
+PAGE = 120  # records asked for per poll (a tracker started with a small --max-records refuses more)
 RECENT = 50  # records kept for the table
 
 
@@ -49,7 +50,7 @@ class LatencyView:
     def params(self, limit: int) -> dict[str, int]:
         """The query for the next poll."""
         if self.pages_by_rx_seq and self.last_rx_seq is not None:
-            return {"since": self.last_rx_seq, "limit": max(limit, WINDOW)}
+            return {"since": self.last_rx_seq, "limit": max(limit, PAGE)}
         return {"limit": limit}
 
     def apply(self, body: Any) -> None:
@@ -102,7 +103,7 @@ class LatencyView:
         elif self.last_rx_seq is None:
             seen = head  # nothing to take in yet: carry on from the tracker's newest
         if more:  # further behind than one page: what lies between would only scroll past
-            seen = max(seen, head - WINDOW)
+            seen = max(seen, head - PAGE)
         self.last_rx_seq = seen
         return new
 
