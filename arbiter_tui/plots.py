@@ -93,6 +93,15 @@ class Plot(PlotWidget, can_focus=False):
         self._key = None  # limits that keep an aspect depend on the size
         self._receive(getattr(self.app, self.SOURCE))
 
+    def canvas_size(self) -> tuple[int, int]:
+        """Columns and rows of the data area, from this widget's own size (known when it is resized,
+        before the library has laid out its inner canvas)."""
+        size = self.content_size
+        return (
+            max(1, size.width - self.margin_left),
+            max(1, size.height - self.margin_top - self.margin_bottom),
+        )
+
     def data_key(self, view: Any) -> object:
         raise NotImplementedError
 
@@ -111,7 +120,7 @@ class ErrorPlot(Plot):
     def draw(self, view: AnalyticsView) -> None:
         if view.errors:
             # braille: two dots a cell across; more points than that draw the same line, slower
-            pick = thin(len(view.errors), 2 * max(1, self.query_one("#plot").size.width))
+            pick = thin(len(view.errors), 2 * self.canvas_size()[0])
             self.plot(view.error_t[pick], view.errors[pick], line_style="cyan", hires_mode=HiResMode.BRAILLE)
             self.set_ylimits(0.0, max(max(view.errors) * 1.1, 0.1))
         else:
@@ -134,8 +143,8 @@ class TrajectoryPlot(Plot):
         for wx, wy in view.waypoints + ((view.goal,) if view.goal is not None else ()):
             xs.append(wx)
             ys.append(wy)
-        size = self.query_one("#plot").size
-        x0, x1, y0, y1 = equal_aspect(xs, ys, size.width, size.height)
+        cols, rows = self.canvas_size()
+        x0, x1, y0, y1 = equal_aspect(xs, ys, cols, rows)
         self.set_xlimits(x0, x1)
         self.set_ylimits(y0, y1)
         legend = []
@@ -152,8 +161,8 @@ class TrajectoryPlot(Plot):
             legend.append("G goal")
         # the legend is text in the bottom border: it never hides the path
         self.border_subtitle = "  ".join(legend)
-        self.set_xticks(nice_ticks(x0, x1, max(1, size.width // 7)))
-        self.set_yticks(nice_ticks(y0, y1, max(1, size.height // 2)))
+        self.set_xticks(nice_ticks(x0, x1, max(1, cols // 7)))
+        self.set_yticks(nice_ticks(y0, y1, max(1, rows // 2)))
 
     def _one_per_cell(self, x: np.ndarray, y: np.ndarray) -> tuple[list[float], list[float]]:
         """The first point in each character cell (as the plot maps them): a marker drawn twice in a cell
@@ -190,7 +199,7 @@ class LatencyPlot(_LatencyWindow):
         self.plot(t, lat, line_style="cyan", hires_mode=HiResMode.BRAILLE)
         left = float(t[0]) if t.size > 1 else -1.0
         # the p95 as a row of "─" characters: told apart from the braille trace by shape, not colour
-        cols = max(2, self.query_one("#plot").size.width)
+        cols = max(2, self.canvas_size()[0])
         self.scatter(np.linspace(left, 0.0, cols), np.full(cols, p95), marker="─", marker_style="red")
         self.set_xlimits(left, 0.0)
         self.set_ylimits(0.0, max(float(lat.max()) * 1.15, 0.1))
@@ -214,4 +223,4 @@ class LatencyHistogram(_LatencyWindow):
         self.bar(centres, counts, width=float(edges[1] - edges[0]) * 0.9, bar_style="cyan")
         self.set_xlimits(lo, hi)
         self.set_ylimits(0.0, float(counts.max()) * 1.15)
-        self.set_xticks(nice_ticks(lo, hi, max(1, self.query_one("#plot").size.width // 7)))
+        self.set_xticks(nice_ticks(lo, hi, max(1, self.canvas_size()[0] // 7)))

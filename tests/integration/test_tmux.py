@@ -58,7 +58,7 @@ def test_drive_and_quit_in_a_real_terminal(tmp_path, mode):
         assert "v +0.50 m/s" in screen
         screen_until(session, "(stopped)", timeout=5)  # let go: the robot stops by itself
         tmux("send-keys", "-t", session, "2")
-        screen_until(session, "r Rec ^s Export del Clear")
+        screen_until(session, "r Rec v Runs ^s Export")
         tmux("send-keys", "-t", session, "C-c")
         assert exit_status(done) == "0"
     finally:
