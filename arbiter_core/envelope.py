@@ -77,6 +77,9 @@ def _reject_constant(token: str) -> Any:
     raise EnvelopeError("non_finite", f"non-finite number {token} in envelope")
 
 
+_DECODER = json.JSONDecoder(parse_constant=_reject_constant)  # made once: json.loads(kw) makes one per call
+
+
 def _get(obj: Any, path: tuple[str, ...]) -> Any:
     cur = obj
     walked: list[str] = []
@@ -117,7 +120,7 @@ def parse(text: str | bytes) -> StampedCommand:
     if len(text) > MAX_ENVELOPE_BYTES or len(text.encode("utf-8", "surrogatepass")) > MAX_ENVELOPE_BYTES:
         raise EnvelopeError("too_large", f"envelope exceeds {MAX_ENVELOPE_BYTES} bytes")
     try:
-        obj = json.loads(text, parse_constant=_reject_constant)
+        obj = _DECODER.decode(text)
     except EnvelopeError:
         raise
     except (ValueError, RecursionError) as exc:
