@@ -34,7 +34,8 @@ def rows(results: list[dict]) -> list[str]:
                 f"redraw CPU (≤ 1/s) | {sc['view_ms']:.1f} / {sc['update_cpu_ms']:.1f} / "
                 f"+{sc['plots_cpu_ms']:.1f} ms | {target} |"
             )
-    for lat in (r for r in results if r["bench"] == "latency"):
+    latest = {r["transport"]: r for r in results if r["bench"] == "latency"}  # the newest run of each
+    for lat in latest.values():
         tr = lat["transport"]
         out += [
             f"| latency ({tr}) | one-way p50 / p95 / p99 / max (ms) | {lat['one_way_p50_ms']} / "
