@@ -209,3 +209,23 @@ def test_one_million_points_fit_under_100_bytes_each():
     assert s.nbytes() / len(s) <= 100
     assert s.stats().sampleCount == 1_000_000
     assert np.all(s.column("x") == p.x)
+
+
+@pytest.mark.parametrize("ring", [1, 7, 64])
+@pytest.mark.parametrize("recorded", [0, 5, 7, 64, 150])
+def test_the_newest_points_are_read_without_the_whole_ring(ring, recorded):
+    """``column(last=k)`` and ``tail(k)`` (what the plots read) give the newest k points, oldest first,
+    whether the ring has wrapped or not."""
+    from ..support.points import make_point
+
+    s = AnalyticsStore(max_data_points=ring)
+    s.start_collection()
+    for i in range(recorded):
+        s.record(make_point(i, ("manual", "go_to_goal")[i % 2]))
+    everything = s.points()
+    for k in (1, 3, ring, ring + 5):
+        want = everything[-k:] if everything else []
+        assert s.column("x", last=k).tolist() == [p.x for p in want]
+        cols, codes, names = s.tail(k)
+        assert cols["timestamp"].tolist() == [p.timestamp for p in want]
+        assert [names[c] for c in codes.tolist()] == [p.algorithm for p in want]
