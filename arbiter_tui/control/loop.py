@@ -119,7 +119,7 @@ class ControlLoop:
             self.set_algorithm(self._interrupted_algorithm)
         pose = self.link.telemetry.snapshot()[0]
         interrupted.start = (pose.x, pose.y)  # pure pursuit follows the segment from here
-        label = f"{self._interrupted_label} from {interrupted.index + 1}/{len(interrupted.waypoints)}"
+        label = f"{self._interrupted_label}, resumed"  # the panel shows which waypoint it is at
         self._run(interrupted, label)
         return True
 
@@ -149,7 +149,7 @@ class ControlLoop:
             if not self.mission.done:
                 self.interrupted = self.mission
                 self._interrupted_algorithm = self.algorithm
-                self._interrupted_label = self.mission_label.split(" from ")[0]
+                self._interrupted_label = self.mission_label.removesuffix(", resumed")
             self.store.end_run(outcome, self._wall_ms(), self._final_error())
         self._end_manual_run()
         self.teleop.stop()

@@ -103,7 +103,7 @@ async def test_g_after_an_override_resumes_and_capital_g_restarts(tmp_path):
         await pilot.press("space")
         await pilot.press("g")
         assert app.loop.running and app.loop.algorithm == "go_to_goal"
-        assert app.loop.mission.index == reached and " from " in app.loop.mission_label
+        assert app.loop.mission.index == reached and app.loop.mission_label == "square, resumed"
         await pilot.press("G")
         assert app.loop.running and app.loop.mission.index == 0 and app.loop.mission_label == "square"
 

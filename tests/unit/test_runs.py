@@ -210,7 +210,7 @@ def test_override_then_g_resumes_from_the_current_waypoint():
     assert loop.algorithm == "pure_pursuit" and loop.mission.index == reached
     assert loop.mission.waypoints[0] == first_goal  # the same mission, not one re-anchored here
     resumed = store.active_run
-    assert resumed is not None and "from" in loop.mission_label
+    assert resumed is not None and loop.mission_label == "square, resumed"
     assert loop.restart()  # the separate action starts again from waypoint 0, from here
     assert loop.mission.index == 0 and loop.mission_label == "square"
     assert store.run(resumed).outcome == ABORTED and store.active_run == resumed + 1
