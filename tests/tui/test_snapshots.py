@@ -67,3 +67,8 @@ def test_comparison_per_run_sorted(snap_compare, size):
         await pilot.pause()
 
     assert snap_compare(still_app(), terminal_size=size, run_before=per_run_by_time)
+
+
+def test_goal_prompt_with_an_error(snap_compare):
+    """t: the goal prompt, after a bad entry (the error says what to type)."""
+    assert snap_compare(still_app(), terminal_size=(80, 24), press=["t", *"1 x", "enter"])
