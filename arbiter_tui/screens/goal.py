@@ -23,8 +23,9 @@ class GoalPrompt(ModalScreen[tuple[float, float] | None]):
     def compose(self) -> ComposeResult:
         with Vertical(classes="dialog"):
             yield Static(
-                f"Drive to x y (m, odometry frame). The robot is at {self.pose[0]:+.2f} {self.pose[1]:+.2f}.\n"
-                "enter: go_to_goal drives there · escape: cancel"
+                "Drive to x y (m, odometry frame). "
+                f"The robot is at {self.pose[0]:+.2f} {self.pose[1]:+.2f}.\n"
+                "enter: drive there (go_to_goal unless pure_pursuit is selected) · escape: cancel"
             )
             yield Input(placeholder="x y, e.g. 1.5 -0.5", id="goal-input")
             yield Static("", id="goal-error")
