@@ -255,7 +255,7 @@ class RunLog:
                 groups.setdefault(r.algorithm, []).append(r)
         out = []
         for algorithm, runs in groups.items():
-            key = tuple(x for r in runs for x in (r.id, r.n, hash(r.outcome)))
+            key = tuple((r.id, r.n, r.outcome) for r in runs)
             cached = self._pooled.get(algorithm)
             if cached is None or cached[0] != key:
                 cached = (key, _pool(algorithm, runs))

@@ -50,6 +50,8 @@ class ControlLoop:
         self.mission = MissionProgress.named(self.mission_name)
         self.mission_label = self.mission_name  # what the current (or last) run drives: a name or a goal
         self.interrupted: MissionProgress | None = None  # a mission stopped before its end: ``g`` resumes it
+        self._interrupted_algorithm = "go_to_goal"  # the controller and label it ran with
+        self._interrupted_label = ""
         self._manual_at: tuple[float, float] | None = None  # (monotonic, wall ms) of the last manual move
         self.controller = make_controller(self.algorithm)
         self.running = False  # an autonomous controller is driving
@@ -138,9 +140,6 @@ class ControlLoop:
         pose = self.link.telemetry.snapshot()[0]
         mission = MissionProgress([(float(x), float(y))], start=(pose.x, pose.y))
         self._run(mission, f"goal ({x:+.2f}, {y:+.2f})")
-
-    _interrupted_algorithm = "go_to_goal"
-    _interrupted_label = ""
 
     def stop(self, outcome: str = ABORTED) -> None:
         """Stop the robot: teleop and any autonomous run; the next tick sends exactly one zero."""
