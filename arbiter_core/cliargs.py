@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import math
+from collections.abc import Callable
 from typing import NoReturn
 
 
@@ -37,6 +38,22 @@ def positive_float(text: str) -> float:
     if not (math.isfinite(value) and value > 0):
         raise argparse.ArgumentTypeError(f"must be a positive finite number, got {text}")
     return value
+
+
+def bounded_float(low: float, high: float, unit: str = "", low_open: bool = False) -> Callable[[str], float]:
+    """An argparse type for a finite number in [low, high] (or (low, high] with ``low_open``); the error
+    names the bounds, so a flag and the same key in a config file say the same thing."""
+    left = "(" if low_open else "["
+    where = f"{left}{low:g}, {high:g}]" + (f" {unit}" if unit else "")
+
+    def parse(text: str) -> float:
+        value = _float(text)
+        if not math.isfinite(value) or value > high or value < low or (low_open and value == low):
+            raise argparse.ArgumentTypeError(f"must be in {where}, got {text}")
+        return value
+
+    parse.__name__ = f"number in {where}"  # argparse names the type in some errors
+    return parse
 
 
 def non_negative_float(text: str) -> float:

@@ -23,7 +23,7 @@ from textual.binding import Binding
 from textual.reactive import var
 from textual.screen import Screen
 
-from .analytics.files import ExportError, export_store
+from .analytics.files import FORMATS, ExportError, NothingToExport, export_stem, export_store
 from .analytics.store import STORE, AnalyticsStore
 from .config import save_theme
 from .control.algorithms import ALGORITHMS, MISSIONS
@@ -64,7 +64,6 @@ from .views import (
 
 log = logging.getLogger(__name__)
 EXIT_DEADLINE_S = 2.0  # after SIGHUP/SIGTERM the process is gone by then, whatever the terminal does
-FORMATS = ("csv", "json", "mcap")
 
 Connector = Callable[[], tuple[Link, "TrackerClient | None", Callable[[], None]]]
 
@@ -116,7 +115,7 @@ class ArbiterApp(App[None]):
         self._connector = connector
         self._cleanup: Callable[[], None] | None = None
         self.teleop = Teleop(speed=settings.speed, turn=settings.turn, key_timeout=settings.key_timeout)
-        self.loop = ControlLoop(link, store, self.teleop)
+        self.loop = ControlLoop(link, store, self.teleop, max_rate=settings.repeat_rate)
         self.last_export: ExportResult | None = None
         self.stop_reason: str | None = None
         self.start_error: str | None = None
@@ -128,12 +127,16 @@ class ArbiterApp(App[None]):
         store.collection_rate = settings.collection_rate
         if store.max_data_points != settings.max_points:
             store.max_data_points = settings.max_points
+        if not settings.start_paused and not store.is_collecting and len(store) == 0:
+            store.start_collection()  # recording is on unless asked otherwise (r pauses it)
 
     # -- lifecycle -------------------------------------------------------------------------
     def on_mount(self) -> None:
         if self.settings.theme:
             self.theme = self.settings.theme
         self._theme_loaded = True
+        for note in self.settings.notes:
+            self.notify(note, severity="warning", timeout=8)
         self.publish_views(force=True)
         if self.settings.live:
             self.set_interval(1.0 / self.settings.repeat_rate, self._control_tick)
@@ -345,6 +348,7 @@ class ArbiterApp(App[None]):
         if self.loop.running and key in ("k", " ", "space"):
             self.loop.stop()
         was_manual = self.loop.algorithm == "manual"
+        before = (self.teleop.moving, self.teleop.target)
         result = self.teleop.press(key, self.clock())
         if result is None:
             return False
@@ -354,7 +358,10 @@ class ArbiterApp(App[None]):
             self.teleop.press(key, self.clock())
         if result == "move":
             self.loop.running = False
-            self._control_tick()  # respond to the first press at once, not at the next tick
+            if (self.teleop.moving, self.teleop.target) != before:
+                # a new key (or direction) is answered at once; a key's auto-repeats only keep it held,
+                # and the control tick sends at --repeat-rate
+                self._control_tick()
         if (self.loop.command, self.teleop.speed, self.teleop.turn) != self._shown_command:
             # a new command or limit shows at once; a held key's repeats wait for the UI tick
             self.publish_views()
@@ -484,18 +491,28 @@ class ArbiterApp(App[None]):
         self.notify(f"cleared {event.points} samples", timeout=3)
         self.publish_views(force=True)
 
-    def export(self, fmt: str) -> ExportResult:
+    def export(self, *formats: str) -> list[ExportResult]:
+        """Write the collected data in each format, all under one file stem; nothing when there is none."""
         n = len(self.store)
-        try:
-            path = export_store(self.store, fmt, self.settings.export_dir)
-        except (ExportError, OSError, ValueError) as exc:
-            result = ExportResult(fmt, None, n, str(exc))
-            self.post_message(ExportFailed(result))
-        else:
-            result = ExportResult(fmt, path, n)
-            self.post_message(ExportWritten(result))
-        self.last_export = result
-        return result
+        stem = export_stem()
+        results = []
+        for fmt in formats:
+            try:
+                path = export_store(self.store, fmt, self.settings.export_dir, stem=stem)
+            except NothingToExport as exc:
+                result = ExportResult(fmt, None, n, str(exc))
+                self.notify(str(exc), severity="warning", timeout=6)
+                self.last_export = result
+                return [result]  # said once, whatever the number of formats
+            except (ExportError, OSError, ValueError) as exc:
+                result = ExportResult(fmt, None, n, str(exc))
+                self.post_message(ExportFailed(result))
+            else:
+                result = ExportResult(fmt, path, n)
+                self.post_message(ExportWritten(result))
+            self.last_export = result
+            results.append(result)
+        return results
 
     @on(ExportWritten)
     def _export_written(self, event: ExportWritten) -> None:

@@ -10,7 +10,16 @@ from typing import Any
 
 from arbiter_core import topics
 from arbiter_core.auth import AuthConfigError, load_token
-from arbiter_core.cliargs import OneLineParser, add_log_level, add_version, count, port, positive_float
+from arbiter_core.cliargs import (
+    OneLineParser,
+    add_log_level,
+    add_version,
+    bounded_float,
+    count,
+    port,
+    positive_float,
+)
+from arbiter_core.kinematics import DEFAULT_LIMITS
 from arbiter_core.logs import default_log_path, log_to_file
 from arbiter_core.urls import (
     DEFAULT_ROSBRIDGE,
@@ -22,7 +31,17 @@ from arbiter_core.urls import (
 )
 
 from . import config
-from .settings import CONNECT, EMBEDDED, SIM, Settings
+from .control.teleop import cap_setting
+from .settings import (
+    COLLECTION_RATE_HZ,
+    CONNECT,
+    EMBEDDED,
+    KEY_TIMEOUT_S,
+    OFFSET_WARN_MS,
+    REPEAT_RATE_HZ,
+    SIM,
+    Settings,
+)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -30,7 +49,9 @@ def build_parser() -> argparse.ArgumentParser:
         prog="arbiter-tui",
         description="Teleop console and analytics/latency monitor for ROS 2 robots. With no mode flag it "
         "starts the bundled backend (rosbridge endpoint, latency tracker, simulated robot) on 127.0.0.1 and "
-        "drives it. 'arbiter-tui stats FILE' prints the statistics of an export.",
+        "drives it. Subcommands: 'arbiter-tui compare [--help]' runs every controller on every mission in "
+        "simulated time and ranks them per mission; 'arbiter-tui stats FILE [--help]' prints the "
+        "statistics of an export.",
     )
     m = p.add_mutually_exclusive_group()
     m.add_argument(
@@ -79,28 +100,53 @@ def build_parser() -> argparse.ArgumentParser:
         "--export-dir", type=Path, default=Path("."), help="where exports are written (default: .)"
     )
     p.add_argument(
-        "--collection-rate", type=positive_float, default=10.0, help="analytics samples per second (10)"
+        "--collection-rate",
+        type=bounded_float(*COLLECTION_RATE_HZ, "Hz", low_open=True),
+        default=10.0,
+        help=f"analytics samples per second, up to {COLLECTION_RATE_HZ[1]:g} (10)",
+    )
+    p.add_argument(
+        "--start-paused",
+        action="store_true",
+        help="do not record analytics until r is pressed (default: recording from the start; a robot "
+        "standing still outside a run adds no samples)",
     )
     p.add_argument(
         "--max-points", type=count, default=1000,
         help="analytics ring buffer size (1000); run summaries keep all their samples regardless",
     )  # fmt: skip
-    p.add_argument("--speed", type=positive_float, default=0.5, help="teleop start speed, m/s (0.5)")
-    p.add_argument("--turn", type=positive_float, default=1.0, help="teleop start turn rate, rad/s (1.0)")
     p.add_argument(
-        "--repeat-rate",
+        "--speed",
         type=positive_float,
-        default=10.0,
-        help="commands per second while a key is held (10)",
+        default=0.5,
+        help=f"start max speed of teleop and the controllers, m/s (0.5; above the robot's "
+        f"{DEFAULT_LIMITS.max_linear:g} it is capped, and said)",
     )
     p.add_argument(
-        "--key-timeout", type=positive_float, default=0.6, help="stop this long after the last key, s (0.6)"
+        "--turn",
+        type=positive_float,
+        default=1.0,
+        help=f"start max turn rate, rad/s (1.0; capped at {DEFAULT_LIMITS.max_angular:g})",
+    )
+    p.add_argument(
+        "--repeat-rate",
+        type=bounded_float(*REPEAT_RATE_HZ, "Hz"),
+        default=10.0,
+        help=f"commands per second while a key is held or a mission drives, a ceiling "
+        f"({REPEAT_RATE_HZ[0]:g}-{REPEAT_RATE_HZ[1]:g}; 10)",
+    )
+    p.add_argument(
+        "--key-timeout",
+        type=bounded_float(*KEY_TIMEOUT_S, "s"),
+        default=0.6,
+        help=f"stop this long after the last key, s ({KEY_TIMEOUT_S[0]:g}-{KEY_TIMEOUT_S[1]:g}; 0.6)",
     )
     p.add_argument(
         "--offset-warn-ms",
-        type=positive_float,
+        type=bounded_float(*OFFSET_WARN_MS, "ms", low_open=True),
         default=10.0,
-        help="warn when the clock offset to the tracker exceeds this, ms (10, the seed's chrony rule)",
+        help="warn when the clock offset to the tracker is surely beyond this, ms (10, the seed's chrony "
+        "rule)",
     )
     p.add_argument(
         "--token-file",
@@ -165,7 +211,11 @@ def run_app(argv: list[str]) -> int:
         return parsed
     args, loaded, _cli = parsed
     # roslibpy/twisted/autobahn must never write to the terminal the TUI owns.
-    log_file = str(log_to_file(args.log_file or default_log_path("arbiter-tui"), args.log_level))
+    try:
+        log_file = str(log_to_file(args.log_file or default_log_path("arbiter-tui"), args.log_level))
+    except OSError as exc:
+        print(f"arbiter-tui: --log-file {args.log_file}: {exc.strerror or exc}", file=sys.stderr)
+        return 2
     if not args.export_dir.is_dir():
         print(f"arbiter-tui: --export-dir {args.export_dir} is not a directory", file=sys.stderr)
         return 2
@@ -194,19 +244,23 @@ def run_app(argv: list[str]) -> int:
         except (AuthConfigError, UrlError) as exc:
             print(f"arbiter-tui: {exc}", file=sys.stderr)
             return 2
+    speed, speed_note = cap_setting("speed", args.speed, DEFAULT_LIMITS.max_linear, "m/s")
+    turn, turn_note = cap_setting("turn", args.turn, DEFAULT_LIMITS.max_angular, "rad/s")
     settings = Settings(
         mode=mode,
         transport=args.transport,
         export_dir=args.export_dir,
         collection_rate=args.collection_rate,
         max_points=args.max_points,
-        speed=args.speed,
-        turn=args.turn,
+        speed=speed,
+        turn=turn,
         repeat_rate=args.repeat_rate,
         key_timeout=args.key_timeout,
         offset_warn_ms=args.offset_warn_ms,
         config_path=loaded.path,
         theme=loaded.theme,
+        start_paused=args.start_paused,
+        notes=tuple(n for n in (speed_note, turn_note) if n),
     )
     if mode == CONNECT:
         settings.rosbridge_url, settings.tracker_url = bridge.url, tracker.url

@@ -9,6 +9,13 @@ EMBEDDED = "embedded"
 CONNECT = "connect"
 SIM = "sim"
 
+# Bounds of the console's numeric settings (flags and config keys alike), checked at start with a one-line
+# error. A key held within --key-timeout repeats at --repeat-rate; the rate is a ceiling on commands sent.
+COLLECTION_RATE_HZ = (0.0, 100.0)  # (low exclusive, high]: more than 100 samples/s says nothing new
+REPEAT_RATE_HZ = (2.0, 50.0)  # at least 2 Hz, so a held key refreshes the 0.5 s deadman in time
+KEY_TIMEOUT_S = (0.1, 2.0)  # more than a few seconds would drive on long after the finger left the key
+OFFSET_WARN_MS = (0.0, 60_000.0)  # (low exclusive, high]
+
 
 @dataclass
 class Settings:
@@ -32,3 +39,5 @@ class Settings:
     offset_warn_ms: float = 10.0  # warn when the estimated clock offset to the tracker exceeds this
     config_path: Path | None = None  # where a theme chosen in the palette is kept (None: nowhere)
     theme: str | None = None  # from the config file
+    start_paused: bool = False  # analytics recording starts at once unless this is set (``r`` toggles it)
+    notes: tuple[str, ...] = ()  # settings the command line asked for and the console changed, said once

@@ -7,6 +7,7 @@ figure-eight run that takes 40 s on the robot takes a fraction of a second here.
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -16,13 +17,15 @@ from ..control.algorithms import ALGORITHMS, MISSIONS
 from ..control.loop import ControlLoop
 from ..control.teleop import Teleop
 from ..link.sim import SimLink
-from .runs import RULE, RunSummary, best_of, rank_key
+from . import ranking
+from .runs import RunSummary
 from .store import AnalyticsStats, AnalyticsStore, DataPoint
 
 AUTONOMOUS = tuple(a for a in ALGORITHMS if a != "manual")
 SIM_HZ = 50.0
 CONTROL_HZ = 10.0
 TIME_LIMIT_S = 600.0  # a run that has not finished by then counts as not completed
+GAP_MS = 1000.0  # between two runs' time spans in an export
 
 
 class CompareError(ValueError):
@@ -68,12 +71,16 @@ def run_one(
     turn: float = 1.0,
     collection_rate: float = 10.0,
     run_id: int = 1,
+    t0_ms: float = 0.0,
 ) -> RunResult:
-    """One mission run from the origin, in simulated time; its points carry ``run_id``."""
+    """One mission run from the origin, in simulated time starting at ``t0_ms`` (epoch ms, what its
+    points' timestamps count from); its points carry ``run_id``."""
     clock = _Clock()
     link = SimLink(clock=clock)
     store = AnalyticsStore(max_data_points=1_000_000, collection_rate=collection_rate)
-    loop = ControlLoop(link, store, Teleop(speed=speed, turn=turn), wall_ms=lambda: clock.t * 1000.0)
+    loop = ControlLoop(
+        link, store, Teleop(speed=speed, turn=turn), wall_ms=lambda: t0_ms + clock.t * 1000.0
+    )
     loop.set_algorithm(algorithm)
     loop.set_mission(mission)
     store.start_collection()
@@ -122,20 +129,27 @@ def parse_names(text: str, valid: tuple[str, ...], what: str) -> list[str]:
 
 
 def compare(
-    missions: list[str], algorithms: list[str], speed: float = 0.5, turn: float = 1.0
+    missions: list[str],
+    algorithms: list[str],
+    speed: float = 0.5,
+    turn: float = 1.0,
+    t0_ms: float | None = None,
 ) -> list[RunResult]:
-    pairs = [(a, m) for m in missions for a in algorithms]
-    return [run_one(a, m, speed, turn, run_id=i) for i, (a, m) in enumerate(pairs, 1)]
+    """Every algorithm on every mission. Each run has its own time span: the first starts at ``t0_ms``
+    (default: now), each next one ``GAP_MS`` after the previous one ended, as if driven one after another."""
+    start = time.time_ns() / 1e6 if t0_ms is None else t0_ms
+    out = []
+    for i, (a, m) in enumerate(((a, m) for m in missions for a in algorithms), 1):
+        result = run_one(a, m, speed, turn, run_id=i, t0_ms=start)
+        out.append(result)
+        start += result.time_s * 1000.0 + GAP_MS
+    return out
 
 
-def ranked(results: list[RunResult]) -> list[RunResult]:
-    """Completed runs first, by mean distance error; then the others, by the same."""
-    return sorted(results, key=rank_key)
-
-
-def best(results: list[RunResult]) -> RunResult | None:
-    return best_of(results)
+def ranking_of(results: list[RunResult]) -> ranking.Ranking:
+    """Per-mission rankings and the overall answer (``ranking.RULE``)."""
+    return ranking.rank(results)
 
 
 MISSION_NAMES = tuple(MISSIONS)
-__all__ = ["AUTONOMOUS", "MISSION_NAMES", "RULE", "CompareError", "RunResult", "best", "compare", "ranked"]
+__all__ = ["AUTONOMOUS", "MISSION_NAMES", "CompareError", "RunResult", "compare", "ranking_of"]

@@ -17,14 +17,17 @@ import io
 import json
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Any
 
 from .model import EXTRA_FIELDS, FIELDS, NUMERIC, STATS_FIELDS, AnalyticsStats, DataPoint, stats_of_points
-from .runs import RunSummary
+from .runs import OUTCOMES, AlgorithmSummary, RunSummary
 
 SEED_CSV_HEADER = ",".join(FIELDS)
 CSV_HEADER = ",".join(FIELDS + EXTRA_FIELDS)
 MCAP_RUNS_TOPIC = "/arbiter/runs"
+MCAP_ALGORITHMS_TOPIC = "/arbiter/algorithms"
+MCAP_ALGORITHM_TYPE = "arbiter_msgs/msg/AlgorithmSummary"
 MCAP_ODOM_TOPIC = "/arbiter/odom"
 MCAP_RUN_TYPE = "arbiter_msgs/msg/RunSummary"
 MCAP_ODOM_TYPE = "nav_msgs/msg/Odometry"
@@ -78,6 +81,20 @@ MCAP_RUN_DEF = "\n".join(
         "float64 time_s",
         "float64 final_error_m  # NaN for manual driving",
         "arbiter_msgs/AnalyticsStats stats  # over all of the run's samples",
+        _SEP,
+        "MSG: arbiter_msgs/AnalyticsStats",
+        MCAP_STATS_DEF,
+    ]
+)
+MCAP_ALGORITHM_DEF = "\n".join(
+    [
+        "string algorithm",
+        "string mission  # empty for manual driving",
+        "uint32 runs",
+        "uint32 completed",
+        "float64 time_s  # mean over completed runs; NaN when none completed",
+        "float64 final_error_m  # likewise",
+        "arbiter_msgs/AnalyticsStats stats  # over the pooled samples of all its runs on this mission",
         _SEP,
         "MSG: arbiter_msgs/AnalyticsStats",
         MCAP_STATS_DEF,
@@ -161,7 +178,10 @@ def to_csv(points: Sequence[DataPoint]) -> str:
 
 
 def to_json(
-    points: Sequence[DataPoint], stats: AnalyticsStats | None = None, runs: Sequence[RunSummary] = ()
+    points: Sequence[DataPoint],
+    stats: AnalyticsStats | None = None,
+    runs: Sequence[RunSummary] = (),
+    algorithms: Sequence[AlgorithmSummary] = (),
 ) -> str:
     if stats is None:
         stats = stats_of_points(points)
@@ -169,12 +189,16 @@ def to_json(
         "dataPoints": [p.as_dict() for p in points],
         "stats": stats.as_dict(),
         "runs": [r.as_dict() for r in runs],
+        "algorithms": [a.as_dict() for a in algorithms],
     }
     return json.dumps(doc, allow_nan=False, indent=1) + "\n"
 
 
 def to_mcap(
-    points: Sequence[DataPoint], stats: AnalyticsStats | None = None, runs: Sequence[RunSummary] = ()
+    points: Sequence[DataPoint],
+    stats: AnalyticsStats | None = None,
+    runs: Sequence[RunSummary] = (),
+    algorithms: Sequence[AlgorithmSummary] = (),
 ) -> bytes:
     from mcap_ros2.writer import Writer
 
@@ -183,12 +207,14 @@ def to_mcap(
     rows = [_mcap_point(p) for p in points]  # validate everything before writing a byte
     stats_row = _mcap_stats(stats)
     run_rows = [_mcap_run(r) for r in runs]
+    algorithm_rows = [_mcap_algorithm(a) for a in algorithms]
     buf = io.BytesIO()
     writer = Writer(buf)
     point_schema = writer.register_msgdef(MCAP_POINT_TYPE, MCAP_POINT_DEF)
     odom_schema = writer.register_msgdef(MCAP_ODOM_TYPE, MCAP_ODOM_DEF)
     stats_schema = writer.register_msgdef(MCAP_STATS_TYPE, MCAP_STATS_DEF)
     run_schema = writer.register_msgdef(MCAP_RUN_TYPE, MCAP_RUN_DEF)
+    algorithm_schema = writer.register_msgdef(MCAP_ALGORITHM_TYPE, MCAP_ALGORITHM_DEF)
     last_ns = 0
     for p, row in zip(points, rows, strict=False):
         t_ns = max(0, int(p.timestamp * 1_000_000))
@@ -200,6 +226,10 @@ def to_mcap(
     for r, row in zip(runs, run_rows, strict=True):
         t_ns = max(0, int((r.end_ms if r.end_ms is not None else r.last_ms or r.start_ms) * 1_000_000))
         writer.write_message(MCAP_RUNS_TOPIC, run_schema, row, log_time=t_ns, publish_time=t_ns)
+    for row in algorithm_rows:
+        writer.write_message(
+            MCAP_ALGORITHMS_TOPIC, algorithm_schema, row, log_time=last_ns, publish_time=last_ns
+        )
     writer.write_message(MCAP_STATS_TOPIC, stats_schema, stats_row, log_time=last_ns, publish_time=last_ns)
     writer.finish()
     return buf.getvalue()
@@ -242,11 +272,137 @@ def _mcap_run(r: RunSummary) -> dict[str, Any]:
     }
 
 
+def _mcap_algorithm(a: AlgorithmSummary) -> dict[str, Any]:
+    return {
+        "algorithm": a.algorithm,
+        "mission": a.mission,
+        "runs": int(a.runs),
+        "completed": int(a.completed),
+        "time_s": math.nan if a.time_s is None else float(a.time_s),
+        "final_error_m": math.nan if a.final_error_m is None else float(a.final_error_m),
+        "stats": _mcap_stats(a.stats),
+    }
+
+
 MCAP_MAGIC = b"\x89MCAP0\r\n"
+
+
+@dataclass(frozen=True)
+class Export:
+    """What an export file holds: its points and, where the file carries them (JSON and MCAP exports
+    since runs exist), the run summaries and per-(mission, algorithm) rows as the console computed them
+    over all of their samples, however many of those the file holds."""
+
+    points: list[DataPoint]
+    runs: tuple[RunSummary, ...] | None = None
+    algorithms: tuple[AlgorithmSummary, ...] | None = None
+
+
+def _opt_number(raw: Any, where: str) -> float | None:
+    if raw is None or (isinstance(raw, float) and math.isnan(raw)):
+        return None
+    if isinstance(raw, bool) or not isinstance(raw, (int, float)) or not math.isfinite(raw):
+        raise ExportFormatError(f"{where}: must be a finite number or null")
+    return float(raw)
+
+
+def _stats_from(raw: Any, where: str) -> AnalyticsStats:
+    if not isinstance(raw, dict):
+        raise ExportFormatError(f"{where}: stats must be an object")
+    values = []
+    for name in STATS_FIELDS:
+        v = _opt_number(raw.get(name), f"{where}.stats.{name}")
+        if v is None:
+            raise ExportFormatError(f"{where}: stats.{name} missing")
+        values.append(int(v) if name == "sampleCount" else v)
+    return AnalyticsStats(*values)
+
+
+def _text(raw: Any, where: str) -> str:
+    if not isinstance(raw, str):
+        raise ExportFormatError(f"{where}: must be a string")
+    return raw
+
+
+def _count(raw: Any, where: str) -> int:
+    if isinstance(raw, bool) or not isinstance(raw, int) or raw < 0:
+        raise ExportFormatError(f"{where}: must be a whole number")
+    return raw
+
+
+def runs_from(rows: Any, in_file: dict[int, int]) -> tuple[RunSummary, ...]:
+    """Run summaries from their JSON form (``RunSummary.as_dict``); ``in_ring`` = samples in the file."""
+    if not isinstance(rows, list):
+        raise ExportFormatError("runs must be a list")
+    out = []
+    for i, row in enumerate(rows):
+        where = f"runs[{i}]"
+        if not isinstance(row, dict):
+            raise ExportFormatError(f"{where} must be an object")
+        run_id = _run_id(row.get("id"), where)
+        if run_id is None:
+            raise ExportFormatError(f"{where}: id missing")
+        outcome = _text(row.get("outcome"), f"{where}.outcome")
+        if outcome not in OUTCOMES:
+            raise ExportFormatError(f"{where}: unknown outcome {outcome[:20]!r}")
+        start = _opt_number(row.get("start_ms"), f"{where}.start_ms") or 0.0
+        end = _opt_number(row.get("end_ms"), f"{where}.end_ms")
+        time_s = _opt_number(row.get("time_s"), f"{where}.time_s") or 0.0
+        algorithm = _text(row.get("algorithm"), f"{where}.algorithm")
+        mission = _text(row.get("mission"), f"{where}.mission")
+        final = _opt_number(row.get("final_error_m"), f"{where}.final_error_m")
+        stats = _stats_from(row.get("stats"), where)
+        last = start + time_s * 1000.0
+        in_ring = in_file.get(run_id, 0)
+        out.append(RunSummary(run_id, algorithm, mission, start, end, outcome, final, stats, in_ring, last))
+    return tuple(out)
+
+
+def algorithms_from(rows: Any) -> tuple[AlgorithmSummary, ...]:
+    """Per-(mission, algorithm) rows from their JSON form (``AlgorithmSummary.as_dict``)."""
+    if not isinstance(rows, list):
+        raise ExportFormatError("algorithms must be a list")
+    out = []
+    for i, row in enumerate(rows):
+        where = f"algorithms[{i}]"
+        if not isinstance(row, dict):
+            raise ExportFormatError(f"{where} must be an object")
+        out.append(
+            AlgorithmSummary(
+                algorithm=_text(row.get("algorithm"), f"{where}.algorithm"),
+                mission=_text(row.get("mission"), f"{where}.mission"),
+                runs=_count(row.get("runs"), f"{where}.runs"),
+                completed=_count(row.get("completed"), f"{where}.completed"),
+                time_s=_opt_number(row.get("time_s"), f"{where}.time_s"),
+                final_error_m=_opt_number(row.get("final_error_m"), f"{where}.final_error_m"),
+                stats=_stats_from(row.get("stats"), where),
+            )
+        )
+    return tuple(out)
+
+
+def samples_per_run(points: Sequence[DataPoint]) -> dict[int, int]:
+    counts: dict[int, int] = {}
+    for p in points:
+        if p.runId is not None:
+            counts[p.runId] = counts.get(p.runId, 0) + 1
+    return counts
+
+
+_MCAP_STATS_NAMES = ("sample_count", *(line.split()[1] for line in MCAP_STATS_DEF.split("\n")[1:]))
+
+
+def _mcap_stats_dict(m: Any) -> dict[str, Any]:
+    return {name: getattr(m, mcap) for name, mcap in zip(STATS_FIELDS, _MCAP_STATS_NAMES, strict=True)}
 
 
 def parse_mcap(data: bytes) -> list[DataPoint]:
     """The DataPoints of an MCAP export (the ``/arbiter/data_point`` channel; other channels ignored)."""
+    return read_mcap(data).points
+
+
+def read_mcap(data: bytes) -> Export:
+    """An MCAP export: its DataPoints, and the run and algorithm summaries where it has those channels."""
     from mcap.exceptions import McapError
     from mcap.reader import make_reader
     from mcap_ros2.decoder import DecoderFactory
@@ -254,9 +410,27 @@ def parse_mcap(data: bytes) -> list[DataPoint]:
     if not data.startswith(MCAP_MAGIC):
         raise ExportFormatError("not an MCAP file")
     points: list[DataPoint] = []
+    runs: list[dict[str, Any]] = []
+    algorithms: list[dict[str, Any]] = []
+    topics = {MCAP_POINT_TOPIC, MCAP_RUNS_TOPIC, MCAP_ALGORITHMS_TOPIC}
+    seen: set[str] = set()
     try:
         reader = make_reader(io.BytesIO(data), decoder_factories=[DecoderFactory()])
-        for _schema, _channel, _message, m in reader.iter_decoded_messages(topics=[MCAP_POINT_TOPIC]):
+        for _schema, channel, _message, m in reader.iter_decoded_messages(topics=list(topics)):
+            seen.add(channel.topic)
+            if channel.topic == MCAP_RUNS_TOPIC:
+                runs.append({
+                    "id": m.id, "algorithm": m.algorithm, "mission": m.mission, "outcome": m.outcome,
+                    "start_ms": m.start_ms, "end_ms": m.end_ms, "time_s": m.time_s,
+                    "final_error_m": m.final_error_m, "stats": _mcap_stats_dict(m.stats),
+                })  # fmt: skip
+                continue
+            if channel.topic == MCAP_ALGORITHMS_TOPIC:
+                algorithms.append({
+                    "algorithm": m.algorithm, "mission": m.mission, "runs": m.runs, "completed": m.completed,
+                    "time_s": m.time_s, "final_error_m": m.final_error_m, "stats": _mcap_stats_dict(m.stats),
+                })  # fmt: skip
+                continue
             where = f"MCAP message {len(points) + 1}"
             row = {
                 "timestamp": m.timestamp,
@@ -276,7 +450,11 @@ def parse_mcap(data: bytes) -> list[DataPoint]:
         if isinstance(exc, ExportFormatError):
             raise
         raise ExportFormatError(f"not an arbiter MCAP export: {exc}") from None
-    return points
+    return Export(
+        points,
+        runs_from(runs, samples_per_run(points)) if MCAP_RUNS_TOPIC in seen else None,
+        algorithms_from(algorithms) if MCAP_ALGORITHMS_TOPIC in seen else None,
+    )
 
 
 def _mcap_point(p: DataPoint) -> dict[str, Any]:
@@ -367,6 +545,10 @@ def parse_csv(text: str) -> list[DataPoint]:
 
 
 def parse_json(text: str) -> list[DataPoint]:
+    return read_json(text).points
+
+
+def read_json(text: str) -> Export:
     def reject(token: str) -> Any:
         raise ExportFormatError(f"non-standard JSON token {token}")
 
@@ -383,7 +565,9 @@ def parse_json(text: str) -> list[DataPoint]:
         if not isinstance(row, dict):
             raise ExportFormatError(f"dataPoints[{i}] must be an object")
         out.append(_point_from_mapping(row, f"dataPoints[{i}]"))
-    return out
+    runs = runs_from(doc["runs"], samples_per_run(out)) if "runs" in doc else None
+    algorithms = algorithms_from(doc["algorithms"]) if "algorithms" in doc else None
+    return Export(out, runs, algorithms)
 
 
 def stats_json(stats: AnalyticsStats) -> str:

@@ -12,10 +12,11 @@ from pathlib import Path
 
 from .exports import (
     MCAP_MAGIC,
+    Export,
     ExportFormatError,
     parse_csv,
-    parse_json,
-    parse_mcap,
+    read_json,
+    read_mcap,
     to_csv,
     to_json,
     to_mcap,
@@ -30,6 +31,20 @@ class ExportError(OSError):
     """Writing an export failed; nothing partial was left behind."""
 
 
+def _umask() -> int:
+    """The process's umask, read without changing it (Linux), else by setting and restoring it."""
+    try:
+        with open("/proc/self/status", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except (OSError, ValueError):
+        pass
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
 def write_new_file(directory: Path, stem: str, suffix: str, data: bytes) -> Path:
     """Write ``data`` to ``directory/stem.suffix`` atomically and without overwriting.
 
@@ -42,6 +57,8 @@ def write_new_file(directory: Path, stem: str, suffix: str, data: bytes) -> Path
         raise ExportError(f"export directory {directory} does not exist")
     fd, tmp = tempfile.mkstemp(prefix=f".{stem}.", suffix=".tmp", dir=directory)
     try:
+        # mkstemp makes the file 0600; an export is an ordinary file: 0666 less the umask, as open() gives
+        os.fchmod(fd, 0o666 & ~_umask())
         with os.fdopen(fd, "wb") as fh:
             fh.write(data)
             fh.flush()
@@ -67,26 +84,40 @@ def write_new_file(directory: Path, stem: str, suffix: str, data: bytes) -> Path
             os.unlink(tmp)
 
 
+class NothingToExport(ExportError):
+    """The store holds no samples: an export would be a header and nothing else."""
+
+
+def export_stem(clock_ms: Callable[[], int] = lambda: time.time_ns() // 1_000_000) -> str:
+    return f"arbiter_analytics_{clock_ms()}"
+
+
 def export_store(
     store: AnalyticsStore,
     fmt: str,
     directory: Path,
     clock_ms: Callable[[], int] = lambda: time.time_ns() // 1_000_000,
+    stem: str | None = None,
 ) -> Path:
-    """Export the store's points as ``arbiter_analytics_<epoch ms>.<fmt>``; the store is untouched."""
+    """Export the store's points as ``arbiter_analytics_<epoch ms>.<fmt>`` (or ``stem.<fmt>``: one stem
+    for the formats written together); the store is untouched. Refuses (``NothingToExport``) when the
+    store holds no samples."""
     if fmt not in FORMATS:
         raise ValueError(f"unknown export format {fmt!r}; choose from {', '.join(FORMATS)}")
     points = store.points()
+    if not points:
+        raise NothingToExport("nothing to export: 0 samples (drive, or start a mission with g, first)")
     stats = store.stats()
     runs = store.runs()
+    algorithms = store.runs_by_algorithm()
     if fmt == "csv":
         data = to_csv(points).encode()
     elif fmt == "json":
-        data = to_json(points, stats, runs).encode()
+        data = to_json(points, stats, runs, algorithms).encode()
     else:
-        data = to_mcap(points, stats, runs)
+        data = to_mcap(points, stats, runs, algorithms)
     try:
-        return write_new_file(Path(directory), f"arbiter_analytics_{clock_ms()}", fmt, data)
+        return write_new_file(Path(directory), stem or export_stem(clock_ms), fmt, data)
     except ExportError:
         raise
     except OSError as exc:
@@ -95,6 +126,11 @@ def export_store(
 
 def load_points(path: Path) -> list[DataPoint]:
     """Read a CSV, JSON or MCAP export (chosen by content, not by name)."""
+    return load_export(path).points
+
+
+def load_export(path: Path) -> Export:
+    """Read a CSV, JSON or MCAP export (chosen by content, not by name), with its summaries if any."""
     path = Path(path)
     try:
         st = path.stat()
@@ -109,12 +145,12 @@ def load_points(path: Path) -> list[DataPoint]:
     except IsADirectoryError:
         raise ExportFormatError(f"{path} is a directory") from None
     if raw.startswith(MCAP_MAGIC):
-        return parse_mcap(raw)
+        return read_mcap(raw)
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError:
         raise ExportFormatError("not a CSV, JSON or MCAP export") from None
     stripped = text.lstrip("\ufeff \t\r\n")
     if stripped.startswith("{"):
-        return parse_json(text)
-    return parse_csv(text)
+        return read_json(text)
+    return Export(parse_csv(text))

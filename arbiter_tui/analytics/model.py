@@ -7,7 +7,7 @@ compares) and the exports all build on these definitions.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
+from collections.abc import Hashable, Iterable, Sequence
 from dataclasses import asdict, dataclass, fields
 
 import numpy as np
@@ -128,3 +128,42 @@ def stats_of_points(points: Iterable[DataPoint]) -> AnalyticsStats:
     return compute_stats(
         col("x"), col("y"), col("linearVel"), col("angularVel"), col("distanceError"), col("headingError")
     )
+
+
+def grouped_stats(
+    cols: dict[str, np.ndarray], labels: Sequence[Hashable], stretch: np.ndarray | None = None
+) -> dict[Hashable, AnalyticsStats]:
+    """AnalyticsStats per label over time-ordered columns (first-seen order of the labels).
+
+    A group's path length counts only steps between two samples that are next to each other in the
+    recording, carry the same label and (when ``stretch`` is given, e.g. the run ids) the same stretch: a
+    path never spans a gap between separate stretches, such as idle samples before and after a run.
+    """
+    x, y = cols["x"], cols["y"]
+    steps = S.step_lengths(x, y)  # once, shared by every group
+    order = list(dict.fromkeys(labels))
+    index = {label: i for i, label in enumerate(order)}
+    codes = np.fromiter((index[label] for label in labels), dtype=np.int64, count=len(labels))
+    joined = codes[1:] == codes[:-1]
+    if stretch is not None:
+        joined &= stretch[1:] == stretch[:-1]
+    out: dict[Hashable, AnalyticsStats] = {}
+    for i, label in enumerate(order):
+        mask = codes == i
+        path = float(steps[joined & mask[1:]].sum())
+        out[label] = compute_stats(
+            x[mask], y[mask], cols["linearVel"][mask], cols["angularVel"][mask],
+            cols["distanceError"][mask], cols["headingError"][mask], path=path,
+        )  # fmt: skip
+    return out
+
+
+def columns_of(points: Sequence[DataPoint]) -> dict[str, np.ndarray]:
+    """The numeric columns of a list of points (latency: NaN where unknown)."""
+    out = {}
+    for name in NUMERIC:
+        out[name] = np.fromiter(
+            (math.nan if (v := getattr(p, name)) is None else v for p in points), dtype=np.float64,
+            count=len(points),
+        )  # fmt: skip
+    return out

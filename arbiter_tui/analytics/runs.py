@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
-from typing import Any, Protocol, TypeVar
+from typing import Any
 
 import numpy as np
 
@@ -30,7 +30,6 @@ OUTCOMES = (RUNNING, COMPLETED, ABORTED, OVERRIDDEN, ENDED)
 MANUAL = "manual"
 MANUAL_IDLE_S = 2.0
 
-RULE = "best: lowest mean distance error (avg e_d) among completed runs"
 # Columns where lower is better and a "best" mark means something; the others (samples, speeds, path)
 # have no better direction and are never marked.
 LOWER_IS_BETTER = (
@@ -85,35 +84,27 @@ class RunSummary:
 
 @dataclass(frozen=True, slots=True)
 class AlgorithmSummary:
-    """Every run of one algorithm together: its samples pooled, its completed runs averaged."""
+    """Every run of one algorithm on one mission together: its samples pooled, its completed runs
+    averaged. Runs of different missions are never pooled (their distance errors do not compare)."""
 
     algorithm: str
+    mission: str  # "" for manual driving
     runs: int
     completed: int
     time_s: float | None  # mean over completed runs
     final_error_m: float | None  # mean over completed runs
     stats: AnalyticsStats  # over the pooled samples of all its runs; path = sum of the runs' paths
 
-
-class Ranked(Protocol):
-    @property
-    def completed(self) -> bool: ...
-
-    @property
-    def stats(self) -> AnalyticsStats: ...
-
-
-def rank_key(r: Ranked) -> tuple[bool, float]:
-    """The one ranking rule: completed first, then by mean distance error."""
-    return (not r.completed, r.stats.avgDistanceError)
-
-
-R = TypeVar("R", bound=Ranked)
-
-
-def best_of(items: Iterable[R]) -> R | None:
-    done = [r for r in items if r.completed]
-    return min(done, key=rank_key) if done else None
+    def as_dict(self) -> dict[str, Any]:
+        return {
+            "algorithm": self.algorithm,
+            "mission": self.mission,
+            "runs": self.runs,
+            "completed": self.completed,
+            "time_s": None if self.time_s is None else round(self.time_s, 3),
+            "final_error_m": None if self.final_error_m is None else round(self.final_error_m, 4),
+            "stats": self.stats.as_dict(),
+        }
 
 
 def column_value(row: RunSummary | AlgorithmSummary, column: str) -> float | None:
@@ -125,19 +116,20 @@ def column_value(row: RunSummary | AlgorithmSummary, column: str) -> float | Non
 
 def best_in_columns(
     rows: Sequence[RunSummary | AlgorithmSummary], columns: Iterable[str] = LOWER_IS_BETTER
-) -> dict[str, int]:
-    """Index of the best row per column, among rows with a completed run (ties: the first)."""
-
-    def eligible(row: RunSummary | AlgorithmSummary) -> bool:
-        return row.completed > 0 if isinstance(row, AlgorithmSummary) else row.completed
-
-    out: dict[str, int] = {}
+) -> dict[str, set[int]]:
+    """Indices of the best row per column within each mission (one per mission and column), among rows
+    with a completed run (ties: the first). Manual driving is never marked."""
+    out: dict[str, set[int]] = {}
     for column in columns:
-        candidates = [
-            (v, i) for i, r in enumerate(rows) if eligible(r) and (v := column_value(r, column)) is not None
-        ]
-        if candidates:
-            out[column] = min(candidates)[1]
+        best: dict[str, tuple[float, int]] = {}
+        for i, r in enumerate(rows):
+            if not r.completed or r.algorithm == MANUAL:
+                continue
+            v = column_value(r, column)
+            if v is not None and (r.mission not in best or (v, i) < best[r.mission]):
+                best[r.mission] = (v, i)
+        if best:
+            out[column] = {i for _v, i in best.values()}
     return out
 
 
@@ -189,7 +181,7 @@ class RunLog:
         self._by_id: dict[int, _Run] = {}
         self._active: _Run | None = None
         self._next_id = 1
-        self._pooled: dict[str, tuple[tuple[int, ...], AlgorithmSummary]] = {}
+        self._pooled: dict[tuple[str, str], tuple[tuple[tuple[int, int, str], ...], AlgorithmSummary]] = {}
 
     @property
     def active(self) -> int | None:
@@ -217,6 +209,13 @@ class RunLog:
         if run is None:
             return None
         self._active = None
+        if run.n == 0:
+            # A run that recorded nothing (collection paused) is forgotten, and so is its number: the
+            # numbers a user sees are 1, 2, 3... with every numbered run listed.
+            self._runs.remove(run)
+            del self._by_id[run.id]
+            self._next_id = run.id
+            return None
         run.end_ms = max(t_ms, run.start_ms)
         run.outcome = outcome
         run.final_error_m = final_error_m
@@ -247,37 +246,35 @@ class RunLog:
         return None if run is None else run.summary()
 
     def by_algorithm(self) -> tuple[AlgorithmSummary, ...]:
-        """One row per algorithm with samples, in first-run order; recomputed only for an algorithm
-        whose runs changed (a finished algorithm costs nothing while another one drives)."""
-        groups: dict[str, list[_Run]] = {}
+        """One row per (mission, algorithm) with samples, in first-run order; recomputed only for a row
+        whose runs changed (a finished row costs nothing while another one drives)."""
+        groups: dict[tuple[str, str], list[_Run]] = {}
         for r in self._runs:
             if r.n:
-                groups.setdefault(r.algorithm, []).append(r)
+                groups.setdefault((r.mission, r.algorithm), []).append(r)
         out = []
-        for algorithm, runs in groups.items():
+        for (mission, algorithm), runs in groups.items():
             key = tuple((r.id, r.n, r.outcome) for r in runs)
-            cached = self._pooled.get(algorithm)
+            cached = self._pooled.get((mission, algorithm))
             if cached is None or cached[0] != key:
-                cached = (key, _pool(algorithm, runs))
-                self._pooled[algorithm] = cached
+                cached = (key, _pool(algorithm, mission, runs))
+                self._pooled[(mission, algorithm)] = cached
             out.append(cached[1])
         return tuple(out)
 
     def clear(self) -> None:
-        """Forget every run; an active run goes on from now with no samples."""
+        """Forget every run and start numbering again at 1; an active run goes on from now, as run 1."""
         active = self._active
         self._runs.clear()
         self._by_id.clear()
         self._pooled.clear()
         self._active = None
+        self._next_id = 1
         if active is not None:
-            fresh = _Run(active.id, active.algorithm, active.mission, active.start_ms)
-            self._runs.append(fresh)
-            self._by_id[fresh.id] = fresh
-            self._active = fresh
+            self.begin(active.algorithm, active.mission, active.start_ms)
 
 
-def _pool(algorithm: str, runs: list[_Run]) -> AlgorithmSummary:
+def _pool(algorithm: str, mission: str, runs: list[_Run]) -> AlgorithmSummary:
     # x and y only make the path, which is the sum of the runs' paths (no step between two runs)
     cols = np.concatenate([r.cols[2:, : r.n] for r in runs], axis=1)
     path = sum(r.summary().stats.totalPathLength for r in runs)
@@ -287,6 +284,7 @@ def _pool(algorithm: str, runs: list[_Run]) -> AlgorithmSummary:
     errors = [s.final_error_m for s in done if s.final_error_m is not None]
     return AlgorithmSummary(
         algorithm=algorithm,
+        mission=mission,
         runs=len(runs),
         completed=len(done),
         time_s=sum(s.time_s for s in done) / len(done) if done else None,

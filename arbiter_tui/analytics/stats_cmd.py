@@ -7,12 +7,15 @@ import json
 import sys
 from pathlib import Path
 
+import numpy as np
+
 from arbiter_core.cliargs import OneLineParser
 
-from .exports import ExportFormatError
-from .files import load_points
+from .exports import Export, ExportFormatError
+from .files import load_export
 from .labels import format_stat
-from .store import STATS_FIELDS, AnalyticsStats, AnalyticsStore, DataPoint, stats_of_points
+from .model import STATS_FIELDS, AnalyticsStats, DataPoint, columns_of, grouped_stats, stats_of_points
+from .runs import MANUAL
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -26,26 +29,71 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--by",
         choices=("algorithm", "run"),
-        help="one set of stats per group (with --json: an object keyed by group). algorithm: path length "
-        "counts only steps between consecutive samples of the same algorithm. run: by the runId exports "
-        "carry (key 'run N'; samples outside every run under 'no run'), each run's stats over the samples "
-        "the file holds",
+        help="one set of stats per group (with --json: an object keyed by group). run: key 'run N'; where "
+        "the file carries run summaries (JSON and MCAP exports) each run's stats over all of its samples, "
+        "as the analytics screen shows them, with 'in file K/N' when the file holds only part of the run; "
+        "otherwise over the file's samples, with samples outside every run under 'no run'. algorithm: as "
+        "the screen groups them, 'ALGORITHM on MISSION' from the file's summaries, else per algorithm over "
+        "the file's run samples (samples outside every run belong to no algorithm). A path length never "
+        "spans a gap between separate stretches",
     )
     return p
 
 
-def by_run(points: list[DataPoint]) -> dict[str, AnalyticsStats]:
-    """Stats per run id, in order of first appearance; samples without one under "no run"."""
-    grouped: dict[str, list[DataPoint]] = {}
-    for p in points:
-        grouped.setdefault("no run" if p.runId is None else f"run {p.runId}", []).append(p)
-    return {name: stats_of_points(pts) for name, pts in grouped.items()}
+Groups = dict[str, tuple[AnalyticsStats, int | None]]  # name -> (stats, samples in the file when partial)
+
+
+def by_run(export: Export) -> Groups:
+    """Per run: the file's summaries where it has them (all samples, partial runs marked), else the
+    file's samples per run id, samples without one under "no run"."""
+    points = export.points
+    if export.runs is not None:
+        out: Groups = {}
+        for r in export.runs:
+            out[f"run {r.id}"] = (r.stats, _partial(r.in_ring, r.stats))
+        labels = ["no run" if p.runId is None else "" for p in points]
+        if "no run" in labels:
+            out["no run"] = (_grouped(points, labels)["no run"], None)
+        return out
+    labels = ["no run" if p.runId is None else f"run {p.runId}" for p in points]
+    return {k: (v, None) for k, v in _grouped(points, labels).items()}
+
+
+def _in_file(part: int | None) -> dict[str, int]:
+    return {} if part is None else {"samplesInFile": part}
+
+
+def _partial(in_file: int, stats: AnalyticsStats) -> int | None:
+    return in_file if in_file < stats.sampleCount else None
+
+
+def by_algorithm(export: Export) -> Groups:
+    """As the analytics screen groups them where the file says so, else from the file's run samples."""
+    if export.algorithms is not None:
+        out: Groups = {}
+        for a in export.algorithms:
+            name = a.algorithm if a.algorithm == MANUAL or not a.mission else f"{a.algorithm} on {a.mission}"
+            mine = [r for r in export.runs or () if (r.algorithm, r.mission) == (a.algorithm, a.mission)]
+            out[name] = (a.stats, _partial(sum(r.in_ring for r in mine), a.stats) if mine else None)
+        return out
+    points = export.points
+    if any(p.runId is not None for p in points):
+        points = [p for p in points if p.runId is not None]  # idle samples belong to no algorithm
+    return {k: (v, None) for k, v in _grouped(points, [p.algorithm for p in points]).items()}
+
+
+def _grouped(points: list[DataPoint], labels: list[str]) -> dict[str, AnalyticsStats]:
+    """``grouped_stats`` over the file's order: a group's path has no step across another group's samples."""
+    if not points:
+        return {}
+    runs = np.fromiter((p.runId or 0 for p in points), dtype=np.int64, count=len(points))
+    return grouped_stats(columns_of(points), labels, runs)  # type: ignore[return-value]
 
 
 def run(argv: list[str]) -> int:
     args = build_parser().parse_args(argv)
     try:
-        points = load_points(args.file)
+        export = load_export(args.file)
     except FileNotFoundError:
         print(f"arbiter-tui stats: {args.file}: no such file", file=sys.stderr)
         return 1
@@ -56,23 +104,23 @@ def run(argv: list[str]) -> int:
         print(f"arbiter-tui stats: {args.file}: {exc}", file=sys.stderr)
         return 1
     if args.by is None:
-        groups = {"": stats_of_points(points)}
+        groups: Groups = {"": (stats_of_points(export.points), None)}
     elif args.by == "run":
-        groups = by_run(points)
+        groups = by_run(export)
     else:
-        store = AnalyticsStore(max_data_points=max(1, len(points)))
-        store.start_collection()
-        for point in points:
-            store.record(point)
-        groups = store.stats_by_algorithm()
+        groups = by_algorithm(export)
     if args.json:
-        body = groups[""].as_dict() if args.by is None else {k: v.as_dict() for k, v in groups.items()}
+        if args.by is None:
+            body: dict[str, object] = groups[""][0].as_dict()
+        else:
+            body = {k: v.as_dict() | _in_file(part) for k, (v, part) in groups.items()}
         print(json.dumps(body, allow_nan=False))
         return 0
     width = max(len(f) for f in STATS_FIELDS)
-    for group, stats in groups.items():
+    for group, (stats, part) in groups.items():
         if group:
-            print(f"[{group}]")
+            note = "" if part is None else f"  in file {part}/{stats.sampleCount} (stats: all its samples)"
+            print(f"[{group}]{note}")
         for name in STATS_FIELDS:
             print(f"{name:<{width}}  {format_stat(name, getattr(stats, name), decimals=6)}")
     return 0

@@ -34,6 +34,7 @@ from .model import (
     AnalyticsStats,
     DataPoint,
     compute_stats,
+    grouped_stats,
     stats_of_points,
 )
 from .runs import AlgorithmSummary, RunLog, RunSummary
@@ -356,24 +357,16 @@ class AnalyticsStore:
             return compute_stats(x, y, num[4], num[5], num[6], num[7], path=max(path, 0.0))
 
     def stats_by_algorithm(self) -> dict[str, AnalyticsStats]:
-        """AnalyticsStats per algorithm, in first-seen order; path length counts only steps
-        between two consecutive samples of the same algorithm."""
+        """AnalyticsStats per algorithm over the ring, in first-seen order; path length counts only steps
+        between two consecutive samples of the same algorithm and the same run (``grouped_stats``)."""
         with self._lock:
             order = self._order()
             num = self._num[:, order]
             codes = self._alg[order]
+            runs = self._run[order]
             names = list(self._algos)
-        out: dict[str, AnalyticsStats] = {}
-        x, y = num[1], num[2]
-        steps = S.step_lengths(x, y)  # once, shared by every algorithm
-        for code in dict.fromkeys(codes.tolist()):
-            mask = codes == code
-            same = mask[1:] & mask[:-1]
-            path = float(steps[same].sum())
-            out[names[code]] = compute_stats(
-                x[mask], y[mask], num[4][mask], num[5][mask], num[6][mask], num[7][mask], path=path
-            )
-        return out
+        cols = {name: num[i] for name, i in _COL.items()}
+        return grouped_stats(cols, [names[c] for c in codes.tolist()], runs)  # type: ignore[return-value]
 
     def nbytes(self) -> int:
         """Bytes held by the buffer arrays."""

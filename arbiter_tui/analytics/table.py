@@ -1,8 +1,9 @@
-"""The comparison as a table: columns with units, the best value per column marked, the best overall
-named by one rule, sortable. Pure (no Textual): the analytics screen shows it, tests read it.
+"""The comparison as a table: columns with units, rows grouped by mission, the best value per column
+and mission marked, the best of each mission and overall named by one rule (``ranking.py``), sortable
+within each mission. Pure (no Textual): the analytics screen shows it, tests read it.
 
 Marks are characters, not colour alone: ``◆`` after the best value of a column where lower is better
-(among rows with a completed run), ``★`` before the best overall (``runs.RULE``).
+(within a mission, among rows with a completed run), ``★`` before the best of each mission.
 """
 
 from __future__ import annotations
@@ -10,8 +11,9 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
+from . import ranking
 from .labels import format_stat
-from .runs import LOWER_IS_BETTER, RULE, AlgorithmSummary, RunSummary, best_in_columns, best_of, rank_key
+from .runs import LOWER_IS_BETTER, AlgorithmSummary, RunSummary, best_in_columns
 
 BEST_CELL = "◆"
 BEST_ROW = "★"
@@ -49,7 +51,9 @@ _TAIL = (
     Column("totalPathLength", "path m", lambda r: f"{r.stats.totalPathLength:.2f}"),
     Column("sampleCount", "samples", lambda r: str(r.stats.sampleCount)),
 )
+_MISSION = Column("mission", "mission", lambda r: r.mission or "—")
 ALGORITHM_COLUMNS = (
+    _MISSION,
     Column("algorithm", "algorithm", lambda r: r.algorithm),
     Column("completed", "done", lambda r: f"{int(r.completed)}/{getattr(r, 'runs', 1)}"),
     Column("time_s", "time s", _opt("time_s", ".1f")),
@@ -61,7 +65,7 @@ ALGORITHM_COLUMNS = (
 RUN_COLUMNS = (
     Column("id", "run", lambda r: str(getattr(r, "id", ""))),
     Column("algorithm", "algorithm", lambda r: r.algorithm),
-    Column("mission", "mission", lambda r: getattr(r, "mission", "") or "—"),
+    _MISSION,
     Column("outcome", "outcome", lambda r: getattr(r, "outcome", "")),
     Column("time_s", "time s", _opt("time_s", ".1f")),
     Column("final_error_m", "final m", _opt("final_error_m", ".3f")),
@@ -76,15 +80,15 @@ class Table:
     headers: tuple[str, ...]
     keys: tuple[str, ...]
     rows: tuple[tuple[str, ...], ...]
-    best: str | None  # the best overall, named: "go_to_goal" or "run 3 (go_to_goal, square)"
+    best: str | None  # the best overall by ranking.RULE_OVERALL, or None (then ``overall`` says why)
+    overall: str  # the overall answer in words
     rule: str
 
 
 def sort_value(row: Row, key: str) -> tuple[bool, float | str]:
     """Missing values last; text columns alphabetically."""
     if key == RANK:
-        done, err = rank_key(row)
-        return (done, err)
+        return ranking.rank_key(row)
     if hasattr(row.stats, key):
         return (False, float(getattr(row.stats, key)))
     value = getattr(row, key, None)
@@ -102,38 +106,43 @@ def build(
     sort: str = RANK,
     descending: bool = False,
 ) -> Table:
+    """Rows grouped by mission (in the order missions were first driven; manual driving last), sorted
+    within each mission; ``★`` on each mission's best, the overall best by ``ranking.RULE_OVERALL``."""
     columns = ALGORITHM_COLUMNS if mode == BY_ALGORITHM else RUN_COLUMNS
-    items: list[Row] = list(algorithms if mode == BY_ALGORITHM else runs)
-    items.sort(key=lambda r: sort_value(r, sort), reverse=descending)
-    top = best_of(items)
+    source: list[Row] = list(algorithms if mode == BY_ALGORITHM else runs)
+    groups: dict[tuple[bool, str], list[Row]] = {}
+    for item in source:
+        groups.setdefault((item.algorithm == ranking.MANUAL, item.mission), []).append(item)
+    items: list[Row] = []
+    for key in sorted(groups, key=lambda k: k[0]):  # stable: first-seen order, manual last
+        items.extend(sorted(groups[key], key=lambda r: sort_value(r, sort), reverse=descending))
+    tops = {id(b) for g in ranking.by_mission(items).values() if (b := ranking.best_in(g)) is not None}
     marks = best_in_columns(items, LOWER_IS_BETTER)
     rows = []
     for i, item in enumerate(items):
         cells = []
         for c in columns:
             text = c.text(item)
-            if marks.get(c.key) == i:
+            if i in marks.get(c.key, ()):
                 text = f"{text} {BEST_CELL}"
             cells.append(text)
-        if item is top:
-            cells[0] = f"{BEST_ROW} {cells[0]}"
+        if id(item) in tops:  # on the algorithm, the second column in both views
+            cells[1] = f"{BEST_ROW} {cells[1]}"
         rows.append(tuple(cells))
-    if top is None:
-        best = None
-    elif isinstance(top, AlgorithmSummary):
-        best = top.algorithm
-    else:
-        best = f"run {top.id} ({top.algorithm}, {top.mission or 'manual'})"
+    overall = ranking.rank(algorithms if algorithms else runs).overall
     return Table(
         headers=tuple(c.header for c in columns),
         keys=tuple(c.key for c in columns),
         rows=tuple(rows),
-        best=best,
-        rule=RULE,
+        best=overall.best,
+        overall=overall.reason,
+        rule=ranking.RULE_MISSION,
     )
 
 
 def legend(table: Table) -> str:
     """The rule in one line, as the screen shows it under the table."""
-    named = f"{table.best}" if table.best else "none yet"
-    return f"{BEST_ROW} {table.rule} → {named} · {BEST_CELL} best of its column (lower is better)"
+    return (
+        f"{BEST_ROW} best of its mission ({table.rule.removeprefix('per mission: ')}) · overall: "
+        f"{table.overall} · {BEST_CELL} best of its column in its mission"
+    )

@@ -121,11 +121,11 @@ class PurePursuitController:
     """Pure pursuit along the segment from the previous waypoint to the current one.
 
     The target is the point ``lookahead`` metres ahead of the robot's projection
-    on the segment (the goal itself when closer); curvature ``2 sin(alpha) / L``.
+    on the segment (the goal itself when closer); curvature ``2 sin(alpha) / L``. It cruises at the
+    speed cap (``limits.max_linear``, the max speed on the control screen or ``--speed``).
     """
 
     lookahead: float = 0.4
-    speed: float = 0.5
     limits: Limits = field(default_factory=lambda: DEFAULT_LIMITS)
     name: str = "pure_pursuit"
 
@@ -153,7 +153,7 @@ class PurePursuitController:
             return 0.0, clamp(2.0 * alpha, self.limits.max_angular)
         ld = max(dist, 1e-3)
         curvature = 2.0 * math.sin(alpha) / ld
-        v = min(self.speed, self.limits.max_linear)
+        v = self.limits.max_linear
         # Slow down approaching the goal so the tolerance circle is not overshot.
         v = min(v, 0.8 * distance_error(pose, mission.goal) + 0.05)
         w = v * curvature

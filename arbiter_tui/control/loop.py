@@ -26,6 +26,9 @@ from .teleop import Teleop
 
 TRAIL_POINTS = 2000
 TRAIL_STEP_M = 0.01  # the trail gets a point when the robot has moved this far: standing still adds nothing
+STILL_V = 0.005  # m/s: odometry slower than this (and STILL_W) with no command is a robot standing still
+STILL_W = 0.01  # rad/s
+BURST = 2.0  # commands the rate ceiling lets through at once (a key press answered between two ticks)
 
 
 class ControlLoop:
@@ -40,6 +43,7 @@ class ControlLoop:
         store: AnalyticsStore,
         teleop: Teleop,
         wall_ms: Callable[[], float] = lambda: time.time_ns() / 1e6,
+        max_rate: float | None = None,
     ) -> None:
         self.link = link
         self.store = store
@@ -59,6 +63,13 @@ class ControlLoop:
         self.unsent = 0  # commands refused by the link (disconnected)
         self.trail: deque[tuple[float, float]] = deque(maxlen=TRAIL_POINTS)
         self.trail_version = 0  # bumped with every trail point: the map redraws only then
+        # The command rate is a ceiling (--repeat-rate): a token bucket of BURST commands, refilled at
+        # max_rate. Only moving commands take tokens: a stop always goes out at once.
+        self.max_rate = max_rate
+        self._tokens = BURST
+        self._tokens_at: float | None = None
+        self.held_back = 0  # moving commands the ceiling did not send
+        self._still_sampled = False  # one sample of a robot standing still outside a run, then none
 
     # -- selection ----------------------------------------------------------------------
     def set_algorithm(self, name: str) -> None:
@@ -218,6 +229,9 @@ class ControlLoop:
             return None
         v, w = clamp_twist(*cmd, limits)
         self._track_manual(now, v, w)
+        if (v, w) != (0.0, 0.0) and not self._take_token(now):
+            self.held_back += 1
+            return None
         if self.link.send(v, w):
             self.command = (v, w)
         else:
@@ -230,17 +244,41 @@ class ControlLoop:
                 self.stop()
         return (v, w)
 
+    def _take_token(self, now: float) -> bool:
+        if self.max_rate is None:
+            return True
+        if self._tokens_at is not None:
+            self._tokens = min(BURST, self._tokens + (now - self._tokens_at) * self.max_rate)
+        self._tokens_at = now
+        if self._tokens < 1.0:
+            return False
+        self._tokens -= 1.0
+        return True
+
     def sample(self) -> DataPoint | None:
-        """Record one DataPoint if collecting (at the collection rate, driven by the caller)."""
+        """Record one DataPoint if collecting (at the collection rate, driven by the caller).
+
+        A sample joins the active run while a controller drives, or while a manual key moves the robot.
+        A robot standing still outside every run (no command, odometry below ``STILL_V``/``STILL_W``)
+        is sampled once, where it stopped, and then not again until it moves: idle time never pushes
+        run samples out of the ring buffer, and adds nothing to any statistic."""
         if not self.store.is_collecting:
             return None
-        pose, _v, _w, latency = self.link.telemetry.snapshot()
+        pose, v_odom, w_odom, latency = self.link.telemetry.snapshot()
         goal = self.mission.goal
-        # A sample joins the active run while a controller drives, or while a manual key moves the robot;
-        # standing still outside a run (or in a manual pause) joins none.
         run = self.store.active_run
         if run is not None and not self.running and self.command == (0.0, 0.0):
             run = None
+        still = (
+            run is None
+            and not self.running
+            and self.command == (0.0, 0.0)
+            and abs(v_odom) < STILL_V
+            and abs(w_odom) < STILL_W
+        )
+        if still and self._still_sampled:
+            return None
+        self._still_sampled = still
         point = DataPoint(
             timestamp=float(int(self._wall_ms())),
             x=pose.x,

@@ -43,6 +43,8 @@ SCALE_KEYS: dict[str, tuple[float, float]] = {
     "c": (1.0, 0.9),
 }
 STOP_KEYS = frozenset({"k", " ", "space"})
+MIN_SPEED = 0.05  # m/s: z/x never scale the max speed below this (a robot that cannot move says nothing)
+MIN_TURN = 0.05  # rad/s: likewise for c/z and the turn rate
 # Where the movement keys sit on the keyboard (teleop_twist_keyboard's picture; k in the middle stops).
 GRID = (("u", "i", "o"), ("j", "k", "l"), ("m", ",", "."))
 AXIS_NAMES = {(True, True): ("both", "speed and turn"), (True, False): ("lin", "linear only"),
@@ -51,6 +53,17 @@ MODIFIER_KEYS = frozenset(
     {"shift", "left_shift", "right_shift", "ctrl", "left_ctrl", "right_ctrl", "alt", "left_alt", "right_alt",
      "meta", "left_meta", "right_meta", "super", "left_super", "right_super", "hyper", "caps_lock"}
 )  # fmt: skip
+
+
+def bounded(value: float, low: float, high: float) -> float:
+    return max(low, min(value, high))
+
+
+def cap_setting(name: str, value: float, limit: float, unit: str) -> tuple[float, str | None]:
+    """A start speed or turn rate above the robot's limit is capped, and said once in words."""
+    if value > limit:
+        return limit, f"{name} {value:g} → {limit:g} {unit}, the robot's limit"
+    return value, None
 
 
 @dataclass
@@ -65,8 +78,8 @@ class Teleop:
     _axes: tuple[int, int, int] = (0, 0, 0)
 
     def __post_init__(self) -> None:
-        self.speed = min(self.speed, self.limits.max_linear)
-        self.turn = min(self.turn, self.limits.max_angular)
+        self.speed = bounded(self.speed, MIN_SPEED, self.limits.max_linear)
+        self.turn = bounded(self.turn, MIN_TURN, self.limits.max_angular)
 
     @property
     def moving(self) -> bool:
@@ -84,8 +97,8 @@ class Teleop:
             return "move"
         if key in SCALE_KEYS:
             fs, ft = SCALE_KEYS[key]
-            self.speed = min(self.speed * fs, self.limits.max_linear)
-            self.turn = min(self.turn * ft, self.limits.max_angular)
+            self.speed = bounded(self.speed * fs, MIN_SPEED, self.limits.max_linear)
+            self.turn = bounded(self.turn * ft, MIN_TURN, self.limits.max_angular)
             if self.moving:
                 self._retarget()
             return "scale"

@@ -164,7 +164,7 @@ class AnalyticsScreen(BaseScreen):
         from .export import ExportChooser
 
         def chosen(formats: tuple[str, ...] | None) -> None:
-            for fmt in formats or ():
-                self.arbiter.export(fmt)
+            if formats:
+                self.arbiter.export(*formats)
 
         self.app.push_screen(ExportChooser(len(self.arbiter.store)), chosen)

@@ -5,7 +5,8 @@ import time
 
 import pytest
 
-from arbiter_tui.analytics.compare import RULE, run_one
+from arbiter_tui.analytics.compare import run_one
+from arbiter_tui.analytics.ranking import RULE, RULE_MISSION, RULE_OVERALL
 from arbiter_tui.analytics.files import load_points
 from arbiter_tui.analytics.store import STATS_FIELDS
 from arbiter_tui.cli import main
@@ -37,9 +38,16 @@ def test_json_schema_ranking_and_best(capsys):
         }
         assert tuple(r["stats"]) == STATS_FIELDS and r["completed"] and r["final_error_m"] <= 0.15
     assert sorted(r["run"] for r in runs) == [1, 2, 3, 4]
-    errors = [r["stats"]["avgDistanceError"] for r in runs]
-    assert errors == sorted(errors)  # ranked by the rule
-    assert body["best"] == {"algorithm": runs[0]["algorithm"], "mission": runs[0]["mission"]}
+    assert [m["mission"] for m in body["missions"]] == ["square", "figure_eight"]
+    for m in body["missions"]:  # ranked within each mission, never across
+        ranked = m["ranking"]
+        assert {r["mission"] for r in ranked} == {m["mission"]} and [r["rank"] for r in ranked] == [1, 2]
+        errors = [r["stats"]["avgDistanceError"] for r in ranked]
+        assert errors == sorted(errors) and m["best"] == ranked[0]["algorithm"] and m["not_run"] == []
+    overall = body["overall"]
+    assert overall["missions"] == ["square", "figure_eight"] and overall["rule"] == RULE_OVERALL
+    assert body["best"] == {"algorithm": overall["best"]}
+    assert overall["mean_rank"][overall["best"]] == min(overall["mean_rank"].values())
     assert body["rule"] == RULE
     # simulated time: minutes of driving in (much) less wall time
     assert sum(r["time_s"] for r in runs) > 10 * wall
@@ -85,5 +93,6 @@ def test_export_dir_writes_the_runs_data(tmp_path, capsys):
 def test_the_table_names_the_best_and_the_rule(capsys):
     assert main(["compare", "--mission", "square"]) == 0
     out = capsys.readouterr().out.splitlines()
-    assert out[0].split()[:3] == ["rank", "algorithm", "mission"]
-    assert out[1].startswith("1 *") and out[-1].startswith(f"* {RULE}: ")
+    assert out[0] == "square" and out[1].split()[:3] == ["rank", "algorithm", "done"]
+    assert out[2].strip().startswith("1 *") and out[-2] == f"* {RULE_MISSION}"
+    assert out[-1].startswith(f"{RULE_OVERALL}: ") and "mean rank 1 over square" in out[-1]

@@ -80,7 +80,7 @@ def test_json_is_strict_and_round_trips():
     text = to_json(pts)
     assert "NaN" not in text and "Infinity" not in text
     doc = json.loads(text)
-    assert set(doc) == {"dataPoints", "stats", "runs"}
+    assert set(doc) == {"dataPoints", "stats", "runs", "algorithms"}
     assert list(doc["dataPoints"][0]) == [*FIELDS, "runId"]
     assert doc["stats"] == stats_of_points(pts).as_dict()
     assert parse_json(text) == pts
@@ -133,6 +133,14 @@ def test_write_new_file_never_overwrites(tmp_path):
     ]
 
 
+def store_with(n: int) -> AnalyticsStore:
+    s = AnalyticsStore()
+    s.start_collection()
+    for p in random_points(n, seed=1):
+        s.record(p)
+    return s
+
+
 @pytest.mark.parametrize("fmt", ["csv", "json", "mcap"])
 def test_export_store_names_and_contents(tmp_path, fmt):
     s = AnalyticsStore()
@@ -152,13 +160,13 @@ def test_unwritable_directory_is_a_clear_error(tmp_path):
     d = tmp_path / "ro"
     d.mkdir()
     d.chmod(stat.S_IRUSR | stat.S_IXUSR)
-    s = AnalyticsStore()
+    s = store_with(1)
     with pytest.raises(ExportError):
         export_store(s, "csv", d)
 
 
 def test_missing_directory_is_a_clear_error_and_leaves_nothing(tmp_path):
-    s = AnalyticsStore()
+    s = store_with(1)
     with pytest.raises(ExportError, match="does not exist"):
         export_store(s, "json", tmp_path / "nope")
     assert list(tmp_path.iterdir()) == []
@@ -215,7 +223,7 @@ def test_bad_exports_are_format_errors(tmp_path, content, message):
 
 
 def test_unwritable_directory_even_for_root():
-    s = AnalyticsStore()
+    s = store_with(1)
     with pytest.raises(ExportError, match="cannot write"):
         export_store(s, "csv", "/proc")
 

@@ -10,12 +10,11 @@ from arbiter_tui.analytics.runs import (
     COMPLETED,
     ENDED,
     OVERRIDDEN,
-    RULE,
     AlgorithmSummary,
     RunLog,
     best_in_columns,
-    best_of,
 )
+from arbiter_tui.analytics.ranking import RULE, best_in, ranked
 from arbiter_tui.analytics.store import EMPTY_STATS, AnalyticsStore, DataPoint
 from arbiter_tui.control.loop import ControlLoop
 from arbiter_tui.control.teleop import Teleop
@@ -112,18 +111,18 @@ def test_pooled_algorithm_rows_and_the_ranking_rule():
             log.add(run, i, i, 0.0, 0.5, 0.0, e, 0.0)
         log.end(outcome, 1000.0, final_error_m=e / 10)
     runs = log.summaries()
-    assert best_of(runs) is runs[0]  # 1.0, completed
+    assert best_in(ranked(runs)) is runs[0]  # 1.0, completed
     g2g, pp = log.by_algorithm()
     assert isinstance(g2g, AlgorithmSummary) and (g2g.runs, g2g.completed) == (2, 2)
     assert g2g.stats.avgDistanceError == pytest.approx(2.0) and g2g.stats.sampleCount == 4
     assert g2g.stats.totalPathLength == pytest.approx(2.0)  # 1 m per run; no step between runs
     assert (pp.runs, pp.completed) == (2, 1) and pp.stats.avgDistanceError == pytest.approx(1.25)
     assert pp.time_s == pytest.approx(1.0) and pp.final_error_m == pytest.approx(0.2)
-    assert best_of([g2g, pp]) is pp  # 1.25 < 2.0 among algorithms with a completed run
+    assert best_in(ranked([g2g, pp])) is pp  # 1.25 < 2.0 among algorithms with a completed run
     marks = best_in_columns(runs)
-    assert marks["avgDistanceError"] == 0 and marks["final_error_m"] == 0
+    assert marks["avgDistanceError"] == {0} and marks["final_error_m"] == {0}
     assert "sampleCount" not in marks and "totalPathLength" not in marks
-    assert "completed runs" in RULE
+    assert "completed first" in RULE
 
 
 def test_clear_forgets_runs_but_an_active_run_goes_on():
@@ -132,7 +131,7 @@ def test_clear_forgets_runs_but_an_active_run_goes_on():
     run = store.begin_run("go_to_goal", "square", 0.0)
     store.record(point(1, *GOLDEN[0], run))
     store.clear()
-    assert store.runs() == () and store.active_run == run
+    assert store.runs() == () and store.active_run == 1  # numbering starts again
     store.record(point(2, *GOLDEN[1], run))
     assert store.runs()[0].stats.sampleCount == 1
 
@@ -213,7 +212,8 @@ def test_override_then_g_resumes_from_the_current_waypoint():
     assert resumed is not None and loop.mission_label == "square, resumed"
     assert loop.restart()  # the separate action starts again from waypoint 0, from here
     assert loop.mission.index == 0 and loop.mission_label == "square"
-    assert store.run(resumed).outcome == ABORTED and store.active_run == resumed + 1
+    # the resumed run recorded nothing before the restart: it is forgotten and its number reused
+    assert store.active_run == resumed and store.run(resumed).mission == "square"
 
 
 def test_go_to_a_point_selects_go_to_goal_and_reaches_it():
@@ -229,8 +229,9 @@ def test_go_to_a_point_selects_go_to_goal_and_reaches_it():
         loop.go_to(math.nan, 0.0)
 
 
-def test_a_run_without_samples_is_not_listed():
+def test_a_run_without_samples_is_not_listed_and_its_number_is_reused():
     store = AnalyticsStore()
     store.begin_run("go_to_goal", "square", 0.0)
     store.end_run(ABORTED, 1.0)
-    assert store.runs() == () and store.run(1) is not None and store.run(1).stats == EMPTY_STATS
+    assert store.runs() == () and store.run(1) is None
+    assert store.begin_run("go_to_goal", "square", 2.0) == 1
