@@ -8,13 +8,14 @@ alone. The plots take no focus and no keys: the screens' keys stay the screens'.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from typing import Any, ClassVar
 
 import numpy as np
 from textual_plot import HiResMode, PlotWidget
+from textual_plot.axis_formatter import AxisFormatter
 
-from arbiter_core import stats as S
-
+from . import axes
 from .views import AnalyticsView, LatencySnapshot, thin
 
 # one marker shape (and colour) per algorithm; later names reuse them in order
@@ -31,32 +32,19 @@ def algorithm_style(name: str, order: int) -> tuple[str, str]:
     return ALGORITHM_STYLES.get(name) or EXTRA_STYLES[order % len(EXTRA_STYLES)]
 
 
-def equal_aspect(
-    xs: list[float], ys: list[float], cols: int, rows: int, pad: float = 0.1
-) -> tuple[float, float, float, float]:
-    """Axis limits showing every point with one metre as long across as up (cells ``CELL_ASPECT`` tall)."""
-    if not xs:
-        xs, ys = [0.0], [0.0]
-    x0, x1, y0, y1 = min(xs), max(xs), min(ys), max(ys)
-    cx, cy = (x0 + x1) / 2, (y0 + y1) / 2
-    span_x = max(x1 - x0, 1.0) * (1 + 2 * pad)
-    span_y = max(y1 - y0, 1.0) * (1 + 2 * pad)
-    m_per_col = max(span_x / max(cols, 1), span_y / (CELL_ASPECT * max(rows, 1)))
-    half_x = m_per_col * max(cols, 1) / 2
-    half_y = m_per_col * CELL_ASPECT * max(rows, 1) / 2
-    return cx - half_x, cx + half_x, cy - half_y, cy + half_y
+MIN_GAP_X = 8  # columns between x ticks: room for a label like "-12.5"
+MIN_GAP_Y = 2  # rows between y ticks
+LINE_GAP_S = 1.0  # latency over time: no line across a second without commands
 
 
-def nice_ticks(lo: float, hi: float, most: int) -> list[float]:
-    """Ticks at 1, 2 or 5 times a power of ten, at most ``most`` of them, between lo and hi."""
-    span = hi - lo
-    if not (math.isfinite(span) and span > 0) or most < 1:
-        return []
-    raw = span / most
-    base = 10 ** math.floor(math.log10(raw))
-    step = next(m * base for m in (1, 2, 5, 10) if m * base >= raw)
-    first = math.ceil(lo / step) * step
-    return [round(first + k * step, 10) for k in range(int((hi - first) / step + 1e-9) + 1)]
+class DecadeFormatter(AxisFormatter):
+    """Labels for a log10 count axis drawn as log10(count) + 1: 1 -> "1", 2 -> "10", 3 -> "100"."""
+
+    def get_ticks(self, min_: float, max_: float, max_ticks: int = 8) -> list[float]:
+        return [float(k) for k in range(1, int(max_) + 1)]
+
+    def get_labels_for_ticks(self, ticks: Sequence[float]) -> list[str]:
+        return [f"{10 ** (round(t) - 1):g}" for t in ticks]
 
 
 class Plot(PlotWidget, can_focus=False):
@@ -102,6 +90,19 @@ class Plot(PlotWidget, can_focus=False):
             max(1, size.height - self.margin_top - self.margin_bottom),
         )
 
+    def scale_size(self) -> tuple[int, int]:
+        """Columns and rows inside the axis lines: what values are mapped onto."""
+        cols, rows = self.canvas_size()
+        return max(2, cols - 2), max(2, rows - 2)
+
+    def set_axes(self, x: axes.Axis | None, y: axes.Axis) -> None:
+        """Limits and ticks from ``axes`` (ticks at round values, evenly spaced in cells)."""
+        if x is not None:
+            self.set_xlimits(x.lo, x.hi)
+            self.set_xticks(list(x.ticks))
+        self.set_ylimits(y.lo, y.hi)
+        self.set_yticks(list(y.ticks))
+
     def data_key(self, view: Any) -> object:
         raise NotImplementedError
 
@@ -118,13 +119,15 @@ class ErrorPlot(Plot):
         return view.plot_version
 
     def draw(self, view: AnalyticsView) -> None:
+        cols, rows = self.scale_size()
         if view.errors:
             # braille: two dots a cell across; more points than that draw the same line, slower
             pick = thin(len(view.errors), 2 * self.canvas_size()[0])
             self.plot(view.error_t[pick], view.errors[pick], line_style="cyan", hires_mode=HiResMode.BRAILLE)
-            self.set_ylimits(0.0, max(max(view.errors) * 1.1, 0.1))
+            x = axes.aligned(view.error_t[0], max(view.error_t[-1], view.error_t[0] + 1.0), cols, MIN_GAP_X)
+            self.set_axes(x, axes.aligned(0.0, max(max(view.errors) * 1.05, 0.1), rows, MIN_GAP_Y))
         else:
-            self.set_ylimits(0.0, 1.0)
+            self.set_axes(axes.aligned(0.0, 10.0, cols, MIN_GAP_X), axes.aligned(0.0, 1.0, rows, MIN_GAP_Y))
 
 
 class TrajectoryPlot(Plot):
@@ -143,10 +146,15 @@ class TrajectoryPlot(Plot):
         for wx, wy in view.waypoints + ((view.goal,) if view.goal is not None else ()):
             xs.append(wx)
             ys.append(wy)
-        cols, rows = self.canvas_size()
-        x0, x1, y0, y1 = equal_aspect(xs, ys, cols, rows)
-        self.set_xlimits(x0, x1)
-        self.set_ylimits(y0, y1)
+        if not xs:
+            xs, ys = [0.0], [0.0]
+        pad_x, pad_y = max(max(xs) - min(xs), 1.0) * 0.1, max(max(ys) - min(ys), 1.0) * 0.1
+        cols, rows = self.scale_size()
+        x_axis, y_axis = axes.equal_aspect_axes(
+            min(xs) - pad_x, max(xs) + pad_x, min(ys) - pad_y, max(ys) + pad_y,
+            cols, rows, CELL_ASPECT, MIN_GAP_X,
+        )  # fmt: skip
+        self.set_axes(x_axis, y_axis)
         legend = []
         for i, (track, x, y) in enumerate(tracks):
             marker, colour = algorithm_style(track.algorithm, i)
@@ -155,14 +163,12 @@ class TrajectoryPlot(Plot):
         if view.waypoints:
             wx, wy = zip(*view.waypoints, strict=True)
             self.scatter(wx, wy, marker="o", marker_style="yellow")
-            legend.append("o waypoint")
+            legend.append("o wpt")
         if view.goal is not None:
             self.scatter([view.goal[0]], [view.goal[1]], marker="G", marker_style="bold red")
             legend.append("G goal")
         # the legend is text in the bottom border: it never hides the path
-        self.border_subtitle = "  ".join(legend)
-        self.set_xticks(nice_ticks(x0, x1, max(1, cols // 7)))
-        self.set_yticks(nice_ticks(y0, y1, max(1, rows // 2)))
+        self.border_subtitle = " ".join(legend)
 
     def _one_per_cell(self, x: np.ndarray, y: np.ndarray) -> tuple[list[float], list[float]]:
         """The first point in each character cell (as the plot maps them): a marker drawn twice in a cell
@@ -187,27 +193,33 @@ class _LatencyWindow(Plot):
 
 
 class LatencyPlot(_LatencyWindow):
-    """The tracker's latencies over time (seconds before the newest), with their p95 as a line."""
+    """The tracker's latencies over time (seconds before the newest), with their p95 as a line: the same
+    window and p95 as the cards above. No line is drawn across a gap with no commands."""
 
     def draw(self, view: LatencySnapshot) -> None:
-        if not view.window:
+        if not view.window or view.summary is None:
             return
         t = np.asarray(view.window_t, dtype=np.float64)
         t = t - t[-1]
         lat = np.asarray(view.window, dtype=np.float64)
-        p95 = S.p95(lat)
-        self.plot(t, lat, line_style="cyan", hires_mode=HiResMode.BRAILLE)
-        left = float(t[0]) if t.size > 1 else -1.0
+        p95 = view.summary.p95
+        for part in axes.gaps(t.tolist(), LINE_GAP_S):
+            if part.stop - part.start > 1:
+                self.plot(t[part], lat[part], line_style="cyan", hires_mode=HiResMode.BRAILLE)
+            else:  # a lone command between two gaps: a dot, not a line to its neighbours
+                self.scatter(t[part], lat[part], marker="•", marker_style="cyan")
+        cols, rows = self.scale_size()
+        x = axes.aligned(float(t[0]) if t.size > 1 else -1.0, 0.0, cols, MIN_GAP_X)
+        y = axes.aligned(0.0, max(float(lat.max()) * 1.05, 0.1), rows, MIN_GAP_Y)
         # the p95 as a row of "─" characters: told apart from the braille trace by shape, not colour
-        cols = max(2, self.canvas_size()[0])
-        self.scatter(np.linspace(left, 0.0, cols), np.full(cols, p95), marker="─", marker_style="red")
-        self.set_xlimits(left, 0.0)
-        self.set_ylimits(0.0, max(float(lat.max()) * 1.15, 0.1))
-        self.border_subtitle = f"⠒ latency  ─ p95 {p95:.2f} ms"
+        self.scatter(np.linspace(x.lo, x.hi, cols), np.full(cols, p95), marker="─", marker_style="red")
+        self.set_axes(x, y)
+        self.border_subtitle = f"⠒ latency ─ p95 {p95:.2f} ms (last {view.summary.count})"
 
 
 class LatencyHistogram(_LatencyWindow):
-    """How the window's latencies are distributed (commands per bin)."""
+    """How the window's latencies are distributed: commands per bin on a log10 count axis (7 next to 563
+    stays visible); an empty bin draws nothing."""
 
     BINS = 12
 
@@ -220,7 +232,10 @@ class LatencyHistogram(_LatencyWindow):
             lo, hi = lo - 0.5, hi + 0.5
         counts, edges = np.histogram(lat, bins=self.BINS, range=(lo, hi))
         centres = (edges[:-1] + edges[1:]) / 2
-        self.bar(centres, counts, width=float(edges[1] - edges[0]) * 0.9, bar_style="cyan")
-        self.set_xlimits(lo, hi)
-        self.set_ylimits(0.0, float(counts.max()) * 1.15)
-        self.set_xticks(nice_ticks(lo, hi, max(1, self.canvas_size()[0] // 7)))
+        full = counts > 0
+        heights = np.log10(counts[full]) + 1.0
+        self.bar(centres[full], heights, width=float(edges[1] - edges[0]) * 0.9, bar_style="cyan")
+        cols, rows = self.scale_size()
+        self.set_y_formatter(DecadeFormatter())
+        self.set_axes(axes.aligned(lo, hi, cols, MIN_GAP_X), axes.decades(float(heights.max()), rows))
+        self.border_subtitle = f"count (log) · {len(lat)} commands"

@@ -14,6 +14,9 @@ from typing import Any
 
 import numpy as np
 
+from arbiter_core import stats as S
+from arbiter_core.stats import Summary
+
 from .analytics.runs import AlgorithmSummary, RunSummary
 from .analytics.store import EMPTY_STATS, AnalyticsStats, AnalyticsStore
 from .control.loop import ControlLoop
@@ -49,7 +52,7 @@ class StatusView:
         if self.warning:
             parts.append(self.warning)
         parts.append(self.algorithm)
-        parts.append(f"{'REC' if self.collecting else 'paused'} {self.points}")
+        parts.append(f"● REC {self.points}" if self.collecting else f"paused {self.points} — r to record")
         if self.api:
             parts.append(self.api)
         return " · ".join(p for p in parts if p)
@@ -145,7 +148,9 @@ class LatencySnapshot:
     failures: int = 0
     reachable: bool | None = None
     error: str | None = None
-    stats: tuple[tuple[str, Any], ...] = ()
+    stats: tuple[tuple[str, Any], ...] = ()  # the tracker's own block, over every record it keeps
+    summary: Summary | None = None  # count/mean/min/max/p95/std over ``window``: the cards and the plot
+    span_s: float = 0.0  # the time ``window`` covers
     deploy: str = "?"
     stale: int = 0
     rejected: int = 0
@@ -330,8 +335,8 @@ def latency_snapshot(
     state = link.state
     if simulated or view is None:
         return LatencySnapshot(simulated=True, link_state=state, offset_warn_ms=offset_warn_ms)
-    summary = link.telemetry.meter.summary()
-    summary.pop("in_flight", None)  # changes with every command; not shown
+    meter = link.telemetry.meter.summary()
+    meter.pop("in_flight", None)  # changes with every command; not shown
     return LatencySnapshot(
         url=url,
         polled=view.version,
@@ -339,6 +344,8 @@ def latency_snapshot(
         reachable=view.reachable,
         error=view.error,
         stats=tuple(view.stats.items()),
+        summary=S.summarize(view.window) if view.window else None,
+        span_s=(view.window_t[-1] - view.window_t[0]) if len(view.window_t) > 1 else 0.0,
         deploy=view.deploy_mode,
         stale=view.stale,
         rejected=view.rejected,
@@ -348,6 +355,6 @@ def latency_snapshot(
         records=tuple(reversed(view.records))[:30],
         link_state=state,
         link_down=state in (DISCONNECTED, RECONNECTING),
-        meter=tuple(summary.items()),
+        meter=tuple(meter.items()),
         offset_warn_ms=offset_warn_ms,
     )

@@ -21,6 +21,7 @@ from textual.widget import Widget
 from .analytics.labels import STAT_LABELS, format_stat
 from .analytics.store import STATS_FIELDS
 from .control.teleop import legend_compact
+from .latency.clocksync import OffsetEstimate
 from .messages import GoalPicked
 from .views import AnalyticsView, LatencySnapshot, MapView, RobotView, StatusView
 
@@ -289,7 +290,8 @@ class TrackerLine(Bound):
             state.append(f"TRACKER UNREACHABLE{at}: {v.error} — retrying every 0.5 s", "bold red")
         else:
             state.append("tracker reachable", "bold green")
-            state.append(f" · deploy mode {v.deploy} · {len(v.window)} samples in window")
+            kept = v.stat("count")
+            state.append(f" · deploy mode {v.deploy}" + ("" if kept is None else f" · tracker keeps {kept}"))
             if v.stale:  # the robot ignores these: the operator must know why it does not move
                 limit = "" if v.max_command_age_ms is None else f" > {v.max_command_age_ms:g} ms"
                 state.append(f" · {v.stale} STALE{limit}, not forwarded", "bold red")
@@ -299,13 +301,19 @@ class TrackerLine(Bound):
 
 
 class TrackerCards(Bound):
+    """One-way latency over the console's window of the tracker's records: the same records, and so the
+    same p95, as the plot and the histogram beside it."""
+
     SOURCE = "latency"
     view: reactive[LatencySnapshot] = reactive(LatencySnapshot)
 
     def draw(self) -> Text:
+        s = self.view.summary
         cards = Text()
+        span = "" if s is None else f", {self.view.span_s:.0f} s"
+        cards.append(f"one-way, last {0 if s is None else s.count} commands{span}\n", "bold")
         for i, (key, label) in enumerate(CARDS):
-            value = self.view.stat(key)
+            value = None if s is None else getattr(s, key.removesuffix("_ms"))
             text = "N/A" if value is None else (str(value) if key == "count" else fmt_ms(value))
             cards.append(f"{label:>7} ", "bold")
             cards.append(f"{text:<14}")
@@ -347,8 +355,10 @@ class ClientLine(Bound):
         off, unc = s["offset_ms"], s["offset_uncertainty_ms"]
         out.append(f"clock offset {fmt_signed(off)} ± {fmt_ms(unc)}")
         out.append(f" · negative {s['negative']} · lost {s['lost_in_window']} in 10 s ({s['lost']} total)")
+        if s.get("late"):
+            out.append(f" · late {s['late']} (queued, not lost)")
         warn = v.offset_warn_ms
-        if off is not None and abs(off) > warn:
+        if off is not None and unc is not None and OffsetEstimate(off, unc, 2 * unc, 1).significant(warn):
             out.append(
                 f"\nCLOCK OFFSET {off:+.1f} ms exceeds {warn:g} ms: raw one-way figures include it",
                 "bold red",

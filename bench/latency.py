@@ -196,7 +196,7 @@ def main() -> int:
             link.send(0.1, 0.0)
             time.sleep(1.0 / a.rate)
         time.sleep(0.5)
-        meter = link.telemetry.meter = LatencyMeter(history=a.count, offset_window=a.count)
+        meter = link.telemetry.meter = LatencyMeter(history=a.count, offset_window_s=3600.0)
         t = time.monotonic()
         for _ in range(a.count):
             sleep_until(t)

@@ -29,6 +29,8 @@ class Column:
     key: str  # a RunSummary/AlgorithmSummary attribute, or an AnalyticsStats field
     header: str  # with its unit
     text: Callable[[Row], str]
+    short: str = ""  # the compact view's header (units in the legend); "" = the same
+    short_text: Callable[[Row], str] | None = None  # the compact view's cell, when shorter
 
 
 def _stat(name: str) -> Callable[[Row], str]:
@@ -43,21 +45,26 @@ def _opt(attr: str, fmt: str) -> Callable[[Row], str]:
     return text
 
 
-_AVG = Column("avgDistanceError", "avg e_d m", _stat("avgDistanceError"))
-_STD = Column("stdDevError", "std e_d m", _stat("stdDevError"))
+SHORT_OUTCOME = {
+    "completed": "done", "aborted": "abort", "overridden": "over", "ended": "end", "running": "run",
+}  # fmt: skip
+_AVG = Column("avgDistanceError", "avg e_d m", _stat("avgDistanceError"), "e_d")
+_STD = Column("stdDevError", "std e_d m", _stat("stdDevError"), "std")
 _TAIL = (
-    Column("p95Error", "p95 e_d m", _stat("p95Error")),
-    Column("avgHeadingError", "|e_θ| rad", _stat("avgHeadingError")),
-    Column("totalPathLength", "path m", lambda r: f"{r.stats.totalPathLength:.2f}"),
-    Column("sampleCount", "samples", lambda r: str(r.stats.sampleCount)),
+    Column("p95Error", "p95 e_d m", _stat("p95Error"), "p95"),
+    Column("avgHeadingError", "|e_θ| rad", _stat("avgHeadingError"), "|e_θ|"),
+    Column("totalPathLength", "path m", lambda r: f"{r.stats.totalPathLength:.2f}", "path"),
+    Column("sampleCount", "samples", lambda r: str(r.stats.sampleCount), "n"),
 )
 _MISSION = Column("mission", "mission", lambda r: r.mission or "—")
+_TIME = Column("time_s", "time s", _opt("time_s", ".1f"), "t")
+_FINAL = Column("final_error_m", "final m", _opt("final_error_m", ".3f"), "final")
 ALGORITHM_COLUMNS = (
     _MISSION,
     Column("algorithm", "algorithm", lambda r: r.algorithm),
     Column("completed", "done", lambda r: f"{int(r.completed)}/{getattr(r, 'runs', 1)}"),
-    Column("time_s", "time s", _opt("time_s", ".1f")),
-    Column("final_error_m", "final m", _opt("final_error_m", ".3f")),
+    _TIME,
+    _FINAL,
     _AVG,
     _STD,
     *_TAIL,
@@ -66,23 +73,36 @@ RUN_COLUMNS = (
     Column("id", "run", lambda r: str(getattr(r, "id", ""))),
     Column("algorithm", "algorithm", lambda r: r.algorithm),
     _MISSION,
-    Column("outcome", "outcome", lambda r: getattr(r, "outcome", "")),
-    Column("time_s", "time s", _opt("time_s", ".1f")),
-    Column("final_error_m", "final m", _opt("final_error_m", ".3f")),
+    Column(
+        "outcome",
+        "outcome",
+        lambda r: getattr(r, "outcome", ""),
+        short_text=lambda r: SHORT_OUTCOME.get(getattr(r, "outcome", ""), ""),
+    ),
+    _TIME,
+    _FINAL,
     _AVG,
     *_TAIL,
 )  # std e_d left out: a run row is wide already (stats --by run prints all nine)
+COMPACT_UNITS = "m: final e_d std p95 path, rad: |e_θ|, s: t, n: samples"
 SORTABLE = {c.key for c in RUN_COLUMNS + ALGORITHM_COLUMNS}
 
 
 @dataclass(frozen=True, slots=True)
 class Table:
+    """Rows of cells. Full: a mission column, units in the headers, ``◆`` after a column's best value.
+    Compact (narrow terminals): missions as group rows (``group_rows``), short headers, the best values
+    listed in ``marked`` (column indices per row) for the screen to show in reverse video."""
+
     headers: tuple[str, ...]
     keys: tuple[str, ...]
     rows: tuple[tuple[str, ...], ...]
     best: str | None  # the best overall by ranking.RULE_OVERALL, or None (then ``overall`` says why)
     overall: str  # the overall answer in words
     rule: str
+    compact: bool = False
+    group_rows: tuple[int, ...] = ()  # compact: indices of the rows that name a mission
+    marked: tuple[tuple[int, ...], ...] = ()  # compact: the best cells of each row
 
 
 def sort_value(row: Row, key: str) -> tuple[bool, float | str]:
@@ -105,10 +125,13 @@ def build(
     algorithms: Sequence[AlgorithmSummary],
     sort: str = RANK,
     descending: bool = False,
+    compact: bool = False,
 ) -> Table:
     """Rows grouped by mission (in the order missions were first driven; manual driving last), sorted
     within each mission; ``★`` on each mission's best, the overall best by ``ranking.RULE_OVERALL``."""
     columns = ALGORITHM_COLUMNS if mode == BY_ALGORITHM else RUN_COLUMNS
+    if compact:
+        columns = tuple(c for c in columns if c is not _MISSION)
     source: list[Row] = list(algorithms if mode == BY_ALGORITHM else runs)
     groups: dict[tuple[bool, str], list[Row]] = {}
     for item in source:
@@ -118,30 +141,54 @@ def build(
         items.extend(sorted(groups[key], key=lambda r: sort_value(r, sort), reverse=descending))
     tops = {id(b) for g in ranking.by_mission(items).values() if (b := ranking.best_in(g)) is not None}
     marks = best_in_columns(items, LOWER_IS_BETTER)
-    rows = []
+    rows: list[tuple[str, ...]] = []
+    group_rows: list[int] = []
+    marked: list[tuple[int, ...]] = []
+    star = next(i for i, c in enumerate(columns) if c.key == "algorithm")
+    previous: str | None = None
     for i, item in enumerate(items):
+        if compact and item.mission != previous:
+            group_rows.append(len(rows))
+            rows.append(tuple(item.mission or "manual" if k == star else "" for k in range(len(columns))))
+            marked.append(())
+        previous = item.mission
         cells = []
-        for c in columns:
-            text = c.text(item)
+        best_cells = []
+        for j, c in enumerate(columns):
+            text = (c.short_text or c.text)(item) if compact else c.text(item)
             if i in marks.get(c.key, ()):
-                text = f"{text} {BEST_CELL}"
+                if compact:
+                    best_cells.append(j)
+                else:
+                    text = f"{text} {BEST_CELL}"
             cells.append(text)
-        if id(item) in tops:  # on the algorithm, the second column in both views
-            cells[1] = f"{BEST_ROW} {cells[1]}"
+        if id(item) in tops:
+            cells[star] = f"{BEST_ROW} {cells[star]}"
+        elif compact:
+            cells[star] = f"  {cells[star]}"  # under the group's name, as the best one is
         rows.append(tuple(cells))
+        marked.append(tuple(best_cells))
     overall = ranking.rank(algorithms if algorithms else runs).overall
     return Table(
-        headers=tuple(c.header for c in columns),
+        headers=tuple((c.short or c.header) if compact else c.header for c in columns),
         keys=tuple(c.key for c in columns),
         rows=tuple(rows),
         best=overall.best,
         overall=overall.reason,
         rule=ranking.RULE_MISSION,
+        compact=compact,
+        group_rows=tuple(group_rows),
+        marked=tuple(marked),
     )
 
 
 def legend(table: Table) -> str:
-    """The rule in one line, as the screen shows it under the table."""
+    """The rule, the overall answer and (compact) the units, as the screen shows them under the table."""
+    if table.compact:
+        return (
+            f"{BEST_ROW} mission best (completed, lowest avg e_d) · overall: {table.overall} · "
+            f"reversed: column best · {COMPACT_UNITS}"
+        )
     return (
         f"{BEST_ROW} best of its mission ({table.rule.removeprefix('per mission: ')}) · overall: "
         f"{table.overall} · {BEST_CELL} best of its column in its mission"

@@ -11,13 +11,19 @@ monotonic time ``m3``:
   (``t2 = t1``): ``offset = ((t1 - t0) + (t2 - t3)) / 2 = raw - rtt / 2``, the
   tracker's clock minus ours, with error at most ``rtt / 2`` (the path asymmetry
   bound);
-* the offset in use is the sample with the lowest RTT in a recent window (the
-  least queueing, so the tightest bound), and
-  ``corrected one-way = raw - offset``.
+* the offset in use is the sample with the lowest RTT over the last
+  ``offset_window_s`` seconds (NTP's clock filter: the least queueing, so the
+  tightest bound), and ``corrected one-way = raw - offset``. The window is one of
+  time, not of count: a flood of commands whose reports queue behind each other
+  (huge RTTs, offsets off by half of them) cannot push the good samples out;
+* an offset is only *significant* when it exceeds a threshold by more than its
+  own error bound (``significant``): a clock alarm needs a sure offset.
 
 Negative raw latencies are kept and counted, never clipped. A command with no
 report after ``lost_after_s`` counts as lost, timestamped, so loss is reported
-per window and a disconnect shows as a gap.
+per window and a disconnect shows as a gap; a report that arrives later after
+all (queued, not lost on the link) takes the command back out of the lost count
+and counts it as ``late``.
 """
 
 from __future__ import annotations
@@ -38,7 +44,11 @@ class OffsetEstimate:
     offset_ms: float  # tracker clock minus ours
     uncertainty_ms: float  # rtt / 2 of the sample used
     rtt_ms: float
-    samples: int
+    samples: int  # candidates in the filter's window
+
+    def significant(self, threshold_ms: float) -> bool:
+        """The offset surely exceeds ``threshold_ms``: even at the edge of its error bound."""
+        return abs(self.offset_ms) - self.uncertainty_ms > threshold_ms
 
 
 @dataclass(frozen=True)
@@ -52,16 +62,22 @@ class Sample:
 class LatencyMeter:
     def __init__(
         self,
-        offset_window: int = 64,
+        offset_window_s: float = 64.0,
         history: int = 2000,
         lost_after_s: float = 2.0,
         loss_window_s: float = 10.0,
         max_pending: int = 100_000,
+        max_expired: int = 10_000,
     ) -> None:
         self._lock = threading.Lock()
         self._pending: dict[int, tuple[float, float]] = {}  # seq -> (send monotonic s, stamp ms)
-        self._offsets: deque[tuple[float, float]] = deque(maxlen=offset_window)  # (offset, rtt)
-        self._best: tuple[float, float] | None = None  # the lowest-RTT entry of _offsets
+        # sliding-window minimum of RTT: (arrival monotonic, offset, rtt), RTTs increasing left to right,
+        # so the left end is the lowest-RTT sample of the last offset_window_s (O(1) amortised per report)
+        self._offsets: deque[tuple[float, float, float]] = deque()
+        self._candidates = 0
+        self.offset_window_s = offset_window_s
+        self._expired: dict[int, tuple[float, float]] = {}  # counted lost; a late report may still come
+        self.max_expired = max_expired
         self._samples: deque[Sample] = deque(maxlen=history)
         self._lost_at: deque[float] = deque()
         self.lost_after_s = lost_after_s
@@ -71,7 +87,8 @@ class LatencyMeter:
         self.matched = 0
         self.negative = 0
         self.lost = 0
-        self.foreign = 0  # reports of commands not ours (another console), or of expired ones
+        self.late = 0  # reported after lost_after_s: queued somewhere, not lost on the link
+        self.foreign = 0  # reports of commands not ours (another console)
 
     # -- events ---------------------------------------------------------------------------------
     def on_send(self, seq: int, stamp_ms: float, send_mono: float) -> None:
@@ -91,32 +108,54 @@ class LatencyMeter:
             return None
         with self._lock:
             sent = self._pending.get(seq)
+            late = sent is None and seq in self._expired
+            if late:
+                sent = self._expired[seq]
             if sent is None or abs((t1_ms - raw) - sent[1]) > MATCH_TOLERANCE_MS:
                 self.foreign += 1
                 return None
-            del self._pending[seq]
+            if late:
+                del self._expired[seq]
+                self.late += 1
+                self.lost -= 1
+                if self._lost_at:
+                    self._lost_at.popleft()
+            else:
+                del self._pending[seq]
             send_mono, _ = sent
             rtt = (arrival_mono - send_mono) * 1000.0
-            self._offsets.append((raw - rtt / 2.0, rtt))
-            self._best = min(self._offsets, key=lambda o: o[1])  # once per report, read per command
-            sample = Sample(seq, raw, rtt, raw - self._best[0])
+            self._filter(arrival_mono, raw - rtt / 2.0, rtt)
+            sample = Sample(seq, raw, rtt, raw - self._offsets[0][1])
             self._samples.append(sample)
             self.matched += 1
             if raw < 0:
                 self.negative += 1
             return sample
 
+    def _filter(self, now: float, offset: float, rtt: float) -> None:
+        """Add a candidate to the sliding-window minimum of RTT (under the lock)."""
+        window = self._offsets
+        while window and window[-1][2] >= rtt:
+            window.pop()
+        window.append((now, offset, rtt))
+        while window[0][0] < now - self.offset_window_s:
+            window.popleft()
+        self._candidates += 1
+
     def expire(self, now_mono: float) -> int:
         """Count commands unreported for ``lost_after_s`` as lost; returns how many were just counted."""
         n = 0
         with self._lock:
             cutoff = now_mono - self.lost_after_s
-            for seq, (sent, _) in list(self._pending.items()):
+            for seq, (sent, stamp) in list(self._pending.items()):
                 if sent >= cutoff:
                     break  # insertion order is send order
                 del self._pending[seq]
+                self._expired[seq] = (sent, stamp)
                 self._count_lost(now_mono)
                 n += 1
+            while len(self._expired) > self.max_expired:
+                del self._expired[next(iter(self._expired))]
             while self._lost_at and self._lost_at[0] < now_mono - self.loss_window_s:
                 self._lost_at.popleft()
         return n
@@ -135,9 +174,9 @@ class LatencyMeter:
     # -- reading --------------------------------------------------------------------------------
     def offset(self) -> OffsetEstimate | None:
         with self._lock:
-            if self._best is None:
+            if not self._offsets:
                 return None
-            off, rtt = self._best
+            _at, off, rtt = self._offsets[0]
             return OffsetEstimate(off, rtt / 2.0, rtt, len(self._offsets))
 
     def samples(self) -> list[Sample]:
@@ -173,6 +212,7 @@ class LatencyMeter:
             "matched": self.matched,
             "negative": self.negative,
             "lost": self.lost,
+            "late": self.late,
             "lost_in_window": self.lost_in_window(),
             "in_flight": len(self._pending),
         }

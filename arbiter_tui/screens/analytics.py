@@ -20,16 +20,26 @@ from ..views import AnalyticsView
 from ..widgets import Bound, StatsCards
 from .base import BaseScreen
 
+FULL_WIDTH = 104  # columns the full table needs; below it the compact view (every number still shown)
 
-def _cell(text: str) -> Text:
+
+def _cell(table: T.Table, row: int, column: int) -> Text:
+    text = table.rows[row][column]
+    if row in table.group_rows:
+        return Text(text, style="bold underline")
+    if table.compact and column in table.marked[row]:
+        return Text(text, style="bold reverse")  # the best of its column: not by colour alone
     return Text(text, style="bold" if T.BEST_CELL in text or T.BEST_ROW in text else "")
 
 
 class CompareTable(DataTable[Text]):
-    """The comparison: refilled only when its rows, its mode or its order changed. Headers sort."""
+    """The comparison: refilled only when its rows, its mode or its order changed. Headers sort. It takes
+    focus (tab), so every run can be reached with the arrow keys and page up/down, and columns that do
+    not fit scroll sideways with left/right."""
 
-    can_focus = False
+    can_focus = True
     mode: reactive[str] = reactive(T.BY_ALGORITHM)
+    compact: reactive[bool] = reactive(False)
     sort: reactive[str] = reactive(T.RANK)
     descending: reactive[bool] = reactive(False)
     fills = 0  # tests: how often the table was rebuilt (a changed cell is updated in place)
@@ -41,6 +51,12 @@ class CompareTable(DataTable[Text]):
 
     def watch_mode(self) -> None:
         self._refill()
+
+    def watch_compact(self) -> None:
+        self._refill()
+
+    def on_resize(self) -> None:
+        self.compact = self.app.size.width < FULL_WIDTH
 
     def watch_sort(self) -> None:
         self._refill()
@@ -54,7 +70,7 @@ class CompareTable(DataTable[Text]):
         view = view or self.app.analytics  # type: ignore[attr-defined]
         # built each time (a few rows), shown only when what it prints changed: a run whose samples the
         # ring drops, or one sample more outside every run, changes nothing here
-        table = T.build(self.mode, view.runs, view.by_algorithm, self.sort, self.descending)
+        table = T.build(self.mode, view.runs, view.by_algorithm, self.sort, self.descending, self.compact)
         key = (self.sort, self.descending, table)
         if key == self._shown:
             return
@@ -66,9 +82,9 @@ class CompareTable(DataTable[Text]):
         if same_shape and (old.keys, len(old.rows)) == (table.keys, len(table.rows)):
             # same columns, order and row count: change only the cells that differ (cheaper than a refill)
             for i, (before, after) in enumerate(zip(old.rows, table.rows, strict=True)):
-                for k, a, b in zip(table.keys, before, after, strict=True):
-                    if a != b:
-                        self.update_cell(str(i), k, _cell(b), update_width=True)
+                for j, (k, a, b) in enumerate(zip(table.keys, before, after, strict=True)):
+                    if a != b or (j in old.marked[i]) != (j in table.marked[i]):
+                        self.update_cell(str(i), k, _cell(table, i, j), update_width=True)
             return
         self.fills += 1
         self.clear(columns=True)
@@ -76,7 +92,7 @@ class CompareTable(DataTable[Text]):
             arrow = (" ▼" if self.descending else " ▲") if k == self.sort else ""
             self.add_column(Text(header + arrow, style="bold"), key=k)
         for i, row in enumerate(table.rows):
-            self.add_row(*(_cell(c) for c in row), key=str(i))
+            self.add_row(*(_cell(table, i, j) for j in range(len(row))), key=str(i))
 
     def sort_by(self, key: str) -> None:
         """Sort by a column; choosing it again reverses the order."""
@@ -116,11 +132,33 @@ class RingWarning(Bound):
         dropped = self.view.dropped_runs
         if not dropped:
             return Text()
-        parts = ", ".join(f"run {r.id} {r.in_ring}/{r.stats.sampleCount}" for r in dropped[-3:])
-        more = f" and {len(dropped) - 3} more" if len(dropped) > 3 else ""
+        parts = ", ".join(
+            f"run {r.id} {'all' if r.in_ring == 0 else r.dropped} of {r.stats.sampleCount}" for r in dropped
+        )
         return Text(
-            f"⚠ ring buffer ({self.view.ring} points) dropped samples: {parts}{more} kept. "
-            "Rows count all samples; cards and plots only the ring's.",
+            f"⚠ ring buffer ({self.view.ring} points) dropped: {parts}. "
+            "Rows still count every sample; cards and plots show only the ring.",
+            no_wrap=False,
+        )
+
+
+class EmptyState(Bound):
+    """Says why there is nothing to show, and what to do: recording is on and nothing moved yet, or it is
+    paused."""
+
+    SOURCE = "analytics"
+    DEFAULT_CSS = "EmptyState { height: auto; padding: 0 1; color: $text-muted; }"
+    view: reactive[AnalyticsView] = reactive(AnalyticsView)
+
+    def watch_view(self, view: AnalyticsView) -> None:
+        self.display = view.points == 0 and not view.runs
+
+    def draw(self) -> Text:
+        if not self.view.collecting:
+            return Text("Recording is paused — press r to record.", style="bold yellow")
+        return Text(
+            "● Recording. Nothing yet: drive (1, then a movement key) or start a mission (g); "
+            "samples appear here. A robot standing still adds none.",
             no_wrap=False,
         )
 
@@ -137,12 +175,13 @@ class AnalyticsScreen(BaseScreen):
 
     def compose_body(self) -> ComposeResult:
         yield StatsCards(id="cards")
+        yield EmptyState(id="empty")
         yield RingWarning(id="ring-warning")
         yield CompareTable(id="compare", show_cursor=False, zebra_stripes=True)
         yield RuleLine(id="rule")
         with Horizontal(id="plots"):
-            yield TrajectoryPlot("trajectory: x, y in m (equal aspect)", id="traj")
-            yield ErrorPlot("distance error e_d (m) over time (s)", id="err-plot")
+            yield TrajectoryPlot("trajectory (m)", id="traj")
+            yield ErrorPlot("e_d (m) vs time (s)", id="err-plot")
 
     def action_toggle_collect(self) -> None:
         self.arbiter.toggle_collection()

@@ -44,6 +44,6 @@ class LatencyScreen(BaseScreen):
         yield TrackerCards(id="lat-cards")
         yield ClientLine(id="lat-client")
         with Horizontal(id="lat-plots"):
-            yield LatencyPlot("one-way latency (ms) over time (s)", id="lat-plot")
-            yield LatencyHistogram("histogram: commands per latency (ms)", id="lat-hist")
+            yield LatencyPlot("one-way (ms) vs time (s)", id="lat-plot")
+            yield LatencyHistogram("one-way (ms) histogram", id="lat-hist")
         yield RecordsTable(id="lat-records", show_cursor=False, zebra_stripes=True)

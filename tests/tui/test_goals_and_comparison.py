@@ -21,7 +21,7 @@ def sim_app(tmp_path):
     store = AnalyticsStore()
     store.start_collection()
     app = still_app(tmp_path, link=SimLink(clock=clock), store=store)
-    app.fake_clock = clock  # the control loop and the simulator share one fake clock
+    app.fake_clock = app.clock = clock  # the control loop and the simulator share one fake clock
     app.link.step()
     return app, clock
 
@@ -33,6 +33,7 @@ def drive(app, clock, seconds: float) -> None:
         app.link.step()
         if n % 5 == 4:
             app._control_tick()
+            app._sample()
 
 
 async def test_a_click_on_the_map_drives_to_that_point(tmp_path):
@@ -110,19 +111,23 @@ async def test_g_after_an_override_resumes_and_capital_g_restarts(tmp_path):
 
 async def test_the_comparison_ranks_marks_sorts_and_warns(tmp_path):
     app = still_app(tmp_path)
-    async with app.run_test(size=SIZE) as pilot:
+    async with app.run_test(size=(120, 30)) as pilot:  # wide: the full table (units, a mission column)
         await pilot.press("2")
         table = app.screen.query_one(CompareTable)
         assert await until(pilot, lambda: len(table.table.rows) == 2)
         rows = table.table.rows
         # go_to_goal completed the square: best overall (the only completed), best in its columns
-        assert rows[0][0] == f"{T.BEST_ROW} go_to_goal" and rows[0][1] == "1/1"
+        # one row per (mission, algorithm): go_to_goal is best of the square (the only one that ran it)
+        assert rows[0][:3] == ("square", f"{T.BEST_ROW} go_to_goal", "1/1")
         assert T.BEST_CELL in rows[0][table.table.keys.index("avgDistanceError")]
-        assert not any(T.BEST_CELL in c for c in rows[1])  # pure_pursuit never completed
-        assert "→ go_to_goal" in str(app.screen.query_one(RuleLine).render())
+        assert rows[1][:2] == ("figure_eight", "pure_pursuit")  # never completed: no marks
+        assert not any(T.BEST_CELL in c or T.BEST_ROW in c for c in rows[1])
+        # no mission was completed by both: no overall best, and the line says why
+        rule = str(app.screen.query_one(RuleLine).render())
+        assert "no mission completed by every algorithm" in rule and table.table.best is None
         assert "avg e_d m" in table.table.headers and "time s" in table.table.headers
         warning = str(app.screen.query_one(RingWarning).render())
-        assert "run 1 150/206" in warning and app.screen.query_one(RingWarning).display
+        assert "run 1 56 of 206" in warning and app.screen.query_one(RingWarning).display
         await pilot.press("v")  # per run
         assert await until(pilot, lambda: table.table.keys[0] == "id")
         assert [r[table.table.keys.index("outcome")] for r in table.table.rows] == ["completed", "aborted"]
@@ -130,7 +135,8 @@ async def test_the_comparison_ranks_marks_sorts_and_warns(tmp_path):
         assert table.sort == "id"
         await pilot.click(CompareTable, offset=(2, 0))  # the header of the first column again: reversed
         assert await until(pilot, lambda: table.descending)
-        assert [r[0].lstrip(f"{T.BEST_ROW} ") for r in table.table.rows] == ["2", "1"]
+        # sorting orders rows within each mission; missions keep their order (one run each here)
+        assert [r[0] for r in table.table.rows] == ["1", "2"]
 
 
 async def test_unchanged_data_redraws_nothing(tmp_path):

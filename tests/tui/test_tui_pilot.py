@@ -25,13 +25,16 @@ async def test_teleop_keys_send_the_right_twists_and_stop_by_themselves():
     async with app.run_test(size=SIZE) as pilot:
         await pilot.press("i")
         assert link.sent[-1] == (0.5, 0.0)  # sent on the press, not at the next tick
+        app.fake_clock.t += 0.1  # a tick later: --repeat-rate (10 Hz) is a ceiling
         await pilot.press("comma")
         assert link.sent[-1] == (-0.5, 0.0)
+        app.fake_clock.t += 0.1
         await pilot.press("u")
         assert link.sent[-1] == (0.5, 1.0)
         await pilot.press("q")  # scale both by 1.1 while moving
         app._control_tick()
         assert link.sent[-1] == pytest.approx((0.55, 1.1))
+        app.fake_clock.t += 0.1
         await pilot.press("left")
         assert link.sent[-1] == pytest.approx((0.0, 1.1))
         # key timeout: repeats until the deadline, then exactly one zero, then silence
@@ -94,7 +97,9 @@ async def test_nothing_is_sent_while_disconnected():
     link = RecordingLink(state=DISCONNECTED)
     app = still_app(link=link)
     async with app.run_test(size=SIZE) as pilot:
-        await pilot.press("i", "i", "u")
+        for key in ("i", "i", "u"):
+            await pilot.press(key)
+            app.fake_clock.t += 0.1
         app._control_tick()
         assert link.sent == []
         assert app.loop.unsent >= 3
@@ -105,8 +110,8 @@ async def test_screens_switch_and_keep_collected_data(tmp_path):
     store = AnalyticsStore()
     app = still_app(tmp_path, store=store)
     async with app.run_test(size=SIZE) as pilot:
-        await pilot.press("2", "r")
-        assert store.is_collecting
+        assert store.is_collecting  # recording is on from the start
+        await pilot.press("2")
         await pilot.press("1")
         assert isinstance(app.screen, ControlScreen)
         for _ in range(7):

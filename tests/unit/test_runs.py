@@ -5,6 +5,7 @@ import math
 
 import pytest
 
+from arbiter_tui.analytics.ranking import RULE, best_in, ranked
 from arbiter_tui.analytics.runs import (
     ABORTED,
     COMPLETED,
@@ -14,8 +15,7 @@ from arbiter_tui.analytics.runs import (
     RunLog,
     best_in_columns,
 )
-from arbiter_tui.analytics.ranking import RULE, best_in, ranked
-from arbiter_tui.analytics.store import EMPTY_STATS, AnalyticsStore, DataPoint
+from arbiter_tui.analytics.store import AnalyticsStore, DataPoint
 from arbiter_tui.control.loop import ControlLoop
 from arbiter_tui.control.teleop import Teleop
 from arbiter_tui.link.sim import SimLink
