@@ -16,6 +16,7 @@ from . import ranking
 from .compare import AUTONOMOUS, MISSION_NAMES, CompareError, RunResult, compare, parse_names, ranking_of
 from .exports import to_csv, to_json, to_mcap
 from .files import ExportError, write_new_file
+from .runs import row_of
 from .store import stats_of_points
 
 
@@ -80,12 +81,13 @@ def table(results: list[RunResult]) -> str:
 def export(results: list[RunResult], directory: Path) -> list[Path]:
     points = [p for r in results for p in r.points]
     runs = [r.summary for r in results if r.summary is not None]
+    rows = [row_of(r) for r in runs]  # one run per (mission, algorithm)
     stats = stats_of_points(points)
     stem = f"arbiter_compare_{time.time_ns() // 1_000_000}"
     return [
         write_new_file(directory, stem, "csv", to_csv(points).encode()),
-        write_new_file(directory, stem, "json", to_json(points, stats, runs).encode()),
-        write_new_file(directory, stem, "mcap", to_mcap(points, stats, runs)),
+        write_new_file(directory, stem, "json", to_json(points, stats, runs, rows).encode()),
+        write_new_file(directory, stem, "mcap", to_mcap(points, stats, runs, rows)),
     ]
 
 

@@ -180,25 +180,26 @@ def to_csv(points: Sequence[DataPoint]) -> str:
 def to_json(
     points: Sequence[DataPoint],
     stats: AnalyticsStats | None = None,
-    runs: Sequence[RunSummary] = (),
-    algorithms: Sequence[AlgorithmSummary] = (),
+    runs: Sequence[RunSummary] | None = None,
+    algorithms: Sequence[AlgorithmSummary] | None = None,
 ) -> str:
+    """The seed's JSON export plus, when given, the run summaries and per-(mission, algorithm) rows (a
+    reader tells "no runs" from "not recorded" by the key's presence)."""
     if stats is None:
         stats = stats_of_points(points)
-    doc = {
-        "dataPoints": [p.as_dict() for p in points],
-        "stats": stats.as_dict(),
-        "runs": [r.as_dict() for r in runs],
-        "algorithms": [a.as_dict() for a in algorithms],
-    }
+    doc: dict[str, Any] = {"dataPoints": [p.as_dict() for p in points], "stats": stats.as_dict()}
+    if runs is not None:
+        doc["runs"] = [r.as_dict() for r in runs]
+    if algorithms is not None:
+        doc["algorithms"] = [a.as_dict() for a in algorithms]
     return json.dumps(doc, allow_nan=False, indent=1) + "\n"
 
 
 def to_mcap(
     points: Sequence[DataPoint],
     stats: AnalyticsStats | None = None,
-    runs: Sequence[RunSummary] = (),
-    algorithms: Sequence[AlgorithmSummary] = (),
+    runs: Sequence[RunSummary] | None = None,
+    algorithms: Sequence[AlgorithmSummary] | None = None,
 ) -> bytes:
     from mcap_ros2.writer import Writer
 
@@ -206,15 +207,18 @@ def to_mcap(
         stats = stats_of_points(points)
     rows = [_mcap_point(p) for p in points]  # validate everything before writing a byte
     stats_row = _mcap_stats(stats)
-    run_rows = [_mcap_run(r) for r in runs]
-    algorithm_rows = [_mcap_algorithm(a) for a in algorithms]
+    run_rows = [_mcap_run(r) for r in runs or ()]
+    algorithm_rows = [_mcap_algorithm(a) for a in algorithms or ()]
     buf = io.BytesIO()
     writer = Writer(buf)
     point_schema = writer.register_msgdef(MCAP_POINT_TYPE, MCAP_POINT_DEF)
     odom_schema = writer.register_msgdef(MCAP_ODOM_TYPE, MCAP_ODOM_DEF)
     stats_schema = writer.register_msgdef(MCAP_STATS_TYPE, MCAP_STATS_DEF)
-    run_schema = writer.register_msgdef(MCAP_RUN_TYPE, MCAP_RUN_DEF)
-    algorithm_schema = writer.register_msgdef(MCAP_ALGORITHM_TYPE, MCAP_ALGORITHM_DEF)
+    # the summary channels exist when the summaries were given (even none): "no runs", not "unknown"
+    run_schema = writer.register_msgdef(MCAP_RUN_TYPE, MCAP_RUN_DEF) if runs is not None else 0
+    algorithm_schema = (
+        writer.register_msgdef(MCAP_ALGORITHM_TYPE, MCAP_ALGORITHM_DEF) if algorithms is not None else 0
+    )
     last_ns = 0
     for p, row in zip(points, rows, strict=False):
         t_ns = max(0, int(p.timestamp * 1_000_000))
@@ -223,7 +227,7 @@ def to_mcap(
         writer.write_message(
             MCAP_ODOM_TOPIC, odom_schema, _odometry(p, t_ns), log_time=t_ns, publish_time=t_ns
         )
-    for r, row in zip(runs, run_rows, strict=True):
+    for r, row in zip(runs or (), run_rows, strict=True):
         t_ns = max(0, int((r.end_ms if r.end_ms is not None else r.last_ms or r.start_ms) * 1_000_000))
         writer.write_message(MCAP_RUNS_TOPIC, run_schema, row, log_time=t_ns, publish_time=t_ns)
     for row in algorithm_rows:

@@ -274,6 +274,20 @@ class RunLog:
             self.begin(active.algorithm, active.mission, active.start_ms)
 
 
+def row_of(run: RunSummary) -> AlgorithmSummary:
+    """The per-(mission, algorithm) row of a mission driven once (as ``arbiter-tui compare`` drives)."""
+    done = run.completed
+    return AlgorithmSummary(
+        algorithm=run.algorithm,
+        mission=run.mission,
+        runs=1,
+        completed=int(done),
+        time_s=run.time_s if done else None,
+        final_error_m=run.final_error_m if done else None,
+        stats=run.stats,
+    )
+
+
 def _pool(algorithm: str, mission: str, runs: list[_Run]) -> AlgorithmSummary:
     # x and y only make the path, which is the sum of the runs' paths (no step between two runs)
     cols = np.concatenate([r.cols[2:, : r.n] for r in runs], axis=1)

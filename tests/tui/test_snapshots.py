@@ -72,3 +72,21 @@ def test_comparison_per_run_sorted(snap_compare, size):
 def test_goal_prompt_with_an_error(snap_compare):
     """t: the goal prompt, after a bad entry (the error says what to type)."""
     assert snap_compare(still_app(), terminal_size=(80, 24), press=["t", *"1 x", "enter"])
+
+
+@pytest.mark.parametrize("paused", [False, True], ids=["recording", "paused"])
+def test_analytics_empty_state(snap_compare, paused):
+    """Nothing recorded yet: the screen says whether recording is on, and what to do."""
+    from arbiter_tui.analytics.store import AnalyticsStore
+
+    app = still_app(store=AnalyticsStore())
+    if paused:
+        app.store.stop_collection()
+    assert snap_compare(app, terminal_size=(80, 24), press=["2"])
+
+
+def test_latency_histogram_of_a_skewed_window(snap_compare):
+    """563 fast commands and a few slow ones: a log count axis, no bar where a bin is empty."""
+    from .test_trust_screens import SKEWED, latency_app
+
+    assert snap_compare(latency_app(SKEWED), terminal_size=(100, 30), press=["3"])
