@@ -417,6 +417,11 @@ class ArbiterApp(App[None]):
         """``g``: resume an interrupted mission or start the selected one; ``restart``: from waypoint 1."""
         if self.too_small:
             return False  # nothing starts moving while the console cannot be seen
+        if self.link_down() or self.link.state == STARTING:
+            # a mission that cannot move says why, instead of "driving" at v 0
+            self.notify("The link to the robot is down: nothing can be sent. Press g once it is back.",
+                        severity="warning")  # fmt: skip
+            return False
         started = self.loop.restart() if restart else self.loop.go()
         if not started:
             self.notify("Select go_to_goal or pure_pursuit with [b]a[/b] first", severity="warning")

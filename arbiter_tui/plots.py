@@ -37,6 +37,23 @@ MIN_GAP_Y = 2  # rows between y ticks
 LINE_GAP_S = 1.0  # latency over time: no line across a second without commands
 
 
+SHORT_NAMES = {"manual": "man", "waypoint": "wpt"}
+
+
+def short_name(name: str) -> str:
+    """go_to_goal -> gtg, pure_pursuit -> pp, manual -> man: for a legend that would not fit."""
+    parts = name.split("_")
+    return "".join(p[0] for p in parts) if len(parts) > 1 else SHORT_NAMES.get(name, name)
+
+
+def legend_text(items: Sequence[tuple[str, str]], width: int) -> str:
+    """``marker name`` pairs in one line of at most ``width`` cells: full names, else short ones."""
+    full = " ".join(f"{m} {n}" for m, n in items)
+    if len(full) <= width:
+        return full
+    return " ".join(f"{m} {short_name(n)}" for m, n in items)[: max(width, 0)]
+
+
 class DecadeFormatter(AxisFormatter):
     """Labels for a log10 count axis drawn as log10(count) + 1: 1 -> "1", 2 -> "10", 3 -> "100"."""
 
@@ -155,20 +172,20 @@ class TrajectoryPlot(Plot):
             cols, rows, CELL_ASPECT, MIN_GAP_X,
         )  # fmt: skip
         self.set_axes(x_axis, y_axis)
-        legend = []
+        legend: list[tuple[str, str]] = []
         for i, (track, x, y) in enumerate(tracks):
             marker, colour = algorithm_style(track.algorithm, i)
             self.scatter(*self._one_per_cell(x, y), marker=marker, marker_style=colour)
-            legend.append(f"{marker} {track.algorithm}")
+            legend.append((marker, track.algorithm))
         if view.waypoints:
             wx, wy = zip(*view.waypoints, strict=True)
             self.scatter(wx, wy, marker="o", marker_style="yellow")
-            legend.append("o wpt")
+            legend.append(("o", "waypoint"))
         if view.goal is not None:
             self.scatter([view.goal[0]], [view.goal[1]], marker="G", marker_style="bold red")
-            legend.append("G goal")
+            legend.append(("G", "goal"))
         # the legend is text in the bottom border: it never hides the path
-        self.border_subtitle = " ".join(legend)
+        self.border_subtitle = legend_text(legend, self.size.width - 6)
 
     def _one_per_cell(self, x: np.ndarray, y: np.ndarray) -> tuple[list[float], list[float]]:
         """The first point in each character cell (as the plot maps them): a marker drawn twice in a cell

@@ -24,8 +24,8 @@ HELP = f"""[b]arbiter-tui[/b] — teleop console, analytics and latency monitor
   screens 2 and 3. Focus loss or a too-small window stops the robot.
 
 [b]Analytics[/b]  r record/pause  v per algorithm / per run  s sort (or click
-  a header)  ctrl+s export  delete clear (asks first)  arrows scroll runs;
-  ranked within each mission, overall only over missions all completed
+  a header)  ctrl+s export  delete clear (asks first)  arrows scroll
+  ranked per mission; overall: over missions all algorithms completed
 
 [b]Latency[/b]    polls GET /api/latency at 2 Hz; one-way = receive - stamp
 

@@ -168,3 +168,32 @@ async def test_export_all_writes_one_stem_and_nothing_when_empty(tmp_path):
         (result,) = app.export("csv", "json", "mcap")
         assert result.path is None and "0 samples" in result.error
         assert list(empty.iterdir()) == []
+
+
+async def test_a_mission_that_cannot_move_says_why():
+    from arbiter_tui.link.base import DISCONNECTED
+
+    from ..support.tui import RecordingLink
+
+    app = still_app(link=RecordingLink(state=DISCONNECTED))
+    async with app.run_test(size=(100, 30)) as pilot:
+        await pilot.press("a", "g")
+        assert not app.loop.running and app.store.active_run is None
+        assert any("link to the robot is down" in n.message for n in app._notifications)
+
+
+async def test_the_trajectory_legend_fits_its_border():
+    app = still_app()
+    async with app.run_test(size=(80, 24)) as pilot:
+        await pilot.press("2")
+        from arbiter_tui.plots import TrajectoryPlot
+
+        plot = app.screen.query_one(TrajectoryPlot)
+        assert await until(pilot, lambda: bool(plot.border_subtitle))
+        assert len(plot.border_subtitle) <= plot.size.width - 6 and "…" not in plot.border_subtitle
+        assert plot.border_subtitle == "+ go_to_goal x pure_pursuit"
+        from arbiter_tui.plots import legend_text
+
+        items = [("·", "manual"), ("+", "go_to_goal"), ("x", "pure_pursuit"), ("o", "waypoint"),
+                 ("G", "goal")]  # fmt: skip
+        assert legend_text(items, 34) == "· man + gtg x pp o wpt G goal"  # too long in full: short names
