@@ -23,15 +23,14 @@ from textual.binding import Binding
 from textual.reactive import var
 from textual.screen import Screen
 
-from .analytics.files import FORMATS, ExportError, NothingToExport, export_stem, export_store
-from .analytics.store import STORE, AnalyticsStore
+from .analytics.files import FORMATS
+from .analytics.store import AnalyticsStore
 from .config import save_theme
 from .control.algorithms import ALGORITHMS, MISSIONS
 from .control.loop import ControlLoop
 from .control.teleop import Teleop
 from .latency.tracker_client import LatencyView, TrackerClient
-from .link.base import DISCONNECTED, RECONNECTING, STARTING, Link, PendingLink
-from .link.sim import SimLink
+from .link.base import STARTING, Link, PendingLink
 from .messages import (
     BackendFailed,
     BackendStarted,
@@ -48,6 +47,7 @@ from .screens.analytics import AnalyticsScreen
 from .screens.control import ControlScreen
 from .screens.help import HelpScreen
 from .screens.latency import LatencyScreen
+from .session.robot import MissionFinished, RobotSession, SessionConfig
 from .settings import SIM, Settings
 from .views import (
     AnalyticsView,
@@ -102,33 +102,65 @@ class ArbiterApp(App[None]):
         settings: Settings,
         link: Link,
         tracker: TrackerClient | None = None,
-        store: AnalyticsStore = STORE,
+        store: AnalyticsStore | None = None,
         clock: Callable[[], float] = time.monotonic,
         connector: Connector | None = None,
     ) -> None:
         super().__init__()
         self.settings = settings
-        self.link = link
         self.tracker = tracker
-        self.store = store
-        self.clock = clock
         self._connector = connector
         self._cleanup: Callable[[], None] | None = None
-        self.teleop = Teleop(speed=settings.speed, turn=settings.turn, key_timeout=settings.key_timeout)
-        self.loop = ControlLoop(link, store, self.teleop, max_rate=settings.repeat_rate)
+        config = SessionConfig(
+            repeat_rate=settings.repeat_rate, collection_rate=settings.collection_rate,
+            max_points=settings.max_points, speed=settings.speed, turn=settings.turn,
+            key_timeout=settings.key_timeout, start_paused=settings.start_paused,
+            export_dir=settings.export_dir,
+        )  # fmt: skip
+        self.session = RobotSession(config, link, store, clock)
+        self.session.on_event = self._session_event  # from the session's thread: post_message is safe
         self.last_export: ExportResult | None = None
-        self.stop_reason: str | None = None
         self.start_error: str | None = None
-        self.too_small = False
         self._link_state: str | None = None
-        self._was_running = False
         self._shown_command: tuple[object, ...] = ()
         self._analytics_at = float("-inf")
-        store.collection_rate = settings.collection_rate
-        if store.max_data_points != settings.max_points:
-            store.max_data_points = settings.max_points
-        if not settings.start_paused and not store.is_collecting and len(store) == 0:
-            store.start_collection()  # recording is on unless asked otherwise (r pauses it)
+
+    # The session's parts, for the screens and the views (the session owns them).
+    @property
+    def link(self) -> Link:
+        return self.session.link
+
+    @property
+    def loop(self) -> ControlLoop:
+        return self.session.loop
+
+    @property
+    def teleop(self) -> Teleop:
+        return self.session.teleop
+
+    @property
+    def store(self) -> AnalyticsStore:
+        return self.session.store
+
+    @property
+    def clock(self) -> Callable[[], float]:
+        return self.session.clock
+
+    @clock.setter
+    def clock(self, clock: Callable[[], float]) -> None:
+        self.session.clock = clock
+
+    @property
+    def too_small(self) -> bool:
+        return self.session.too_small
+
+    @property
+    def stop_reason(self) -> str | None:
+        return self.session.stop_reason
+
+    def _session_event(self, event: object) -> None:
+        if isinstance(event, MissionFinished):
+            self.post_message(RunFinished(event.algorithm, event.mission))
 
     # -- lifecycle -------------------------------------------------------------------------
     def on_mount(self) -> None:
@@ -139,11 +171,8 @@ class ArbiterApp(App[None]):
             self.notify(note, severity="warning", timeout=8)
         self.publish_views(force=True)
         if self.settings.live:
-            self.set_interval(1.0 / self.settings.repeat_rate, self._control_tick)
-            self.set_interval(1.0 / self.store.collection_rate, self._sample)
+            self.session.start()  # the robot's clock: control, sampling, simulation on their own thread
             self.set_interval(1.0 / self.settings.ui_rate, self.publish_views)
-            if isinstance(self.link, SimLink):
-                self.set_interval(1.0 / 50.0, self.link.step)
             if self._connector is not None:
                 self._connect()
             elif self.tracker is not None:
@@ -184,8 +213,7 @@ class ArbiterApp(App[None]):
 
     @on(BackendStarted)
     def _attach(self, event: BackendStarted) -> None:
-        self.link = event.link
-        self.loop.link = event.link
+        self.session.attach(event.link)
         self.tracker = event.tracker
         self._cleanup = event.cleanup
         if self.tracker is not None and self.settings.live:
@@ -225,25 +253,8 @@ class ArbiterApp(App[None]):
             self.latency = self._latency_snapshot()
         self.status = self._status_view()
 
-    def _control_tick(self) -> None:
-        try:
-            self.link.telemetry.meter.expire(time.monotonic())  # unreported commands become "lost"
-            self.loop.tick_control(self.clock())
-        except Exception:  # a failing link must not take the console (and its stop keys) down
-            log.exception("control tick failed")
-        running = self.loop.running
-        if self._was_running and not running and self.loop.mission.done:
-            self.post_message(RunFinished(self.loop.algorithm, self.loop.mission_label))
-        self._was_running = running
-
-    def _sample(self) -> None:
-        try:
-            self.loop.sample()
-        except Exception:
-            log.exception("sampling failed")
-
     async def on_unmount(self) -> None:
-        self.stop_robot("quit")
+        self.session.close()  # one zero, and the clocked work ends
         if self.tracker is not None:
             with contextlib.suppress(Exception):
                 await self.tracker.aclose()
@@ -317,25 +328,15 @@ class ArbiterApp(App[None]):
     # -- safety ------------------------------------------------------------------------------
     def stop_robot(self, reason: str) -> None:
         """Stop teleop and autonomy and send one zero now (best effort: never raises)."""
-        self.stop_reason = reason
-        self.loop.stop()
-        with contextlib.suppress(Exception):
-            self.loop.tick_control(self.clock())
-        self._was_running = False
+        self.session.stop(reason)
 
     def end_manual_hold(self, reason: str) -> None:
         """A held teleop key ends now (one zero); an autonomous run is left driving."""
-        if self.teleop.moving:
-            self.stop_reason = reason
-            self.teleop.stop()
-            with contextlib.suppress(Exception):
-                self.loop.tick_control(self.clock())
+        self.session.end_manual_hold(reason)
 
     def set_too_small(self, small: bool) -> None:
         """While the terminal is too small to show the console, the robot stands still."""
-        if small and not self.too_small:
-            self.stop_robot("terminal too small")
-        self.too_small = small
+        self.session.set_too_small(small)
         self.publish_views()
 
     def on_app_blur(self, event: events.AppBlur) -> None:
@@ -343,35 +344,11 @@ class ArbiterApp(App[None]):
 
     def teleop_key(self, key: str) -> bool:
         """A key pressed on the control screen; True if teleop used it."""
-        if self.too_small:
-            return key in self.teleop_keys()  # swallowed: nothing moves unseen
-        if self.loop.running and key in ("k", " ", "space"):
-            self.loop.stop()
-        was_manual = self.loop.algorithm == "manual"
-        before = (self.teleop.moving, self.teleop.target)
-        result = self.teleop.press(key, self.clock())
-        if result is None:
-            return False
-        if result == "move" and not was_manual:
-            # Manual keys take over from an autonomous controller (g resumes its mission).
-            self.loop.override()
-            self.teleop.press(key, self.clock())
-        if result == "move":
-            self.loop.running = False
-            if (self.teleop.moving, self.teleop.target) != before:
-                # a new key (or direction) is answered at once; a key's auto-repeats only keep it held,
-                # and the control tick sends at --repeat-rate
-                self._control_tick()
-        if (self.loop.command, self.teleop.speed, self.teleop.turn) != self._shown_command:
+        used = self.session.key(key)
+        if used and (self.loop.command, self.teleop.speed, self.teleop.turn) != self._shown_command:
             # a new command or limit shows at once; a held key's repeats wait for the UI tick
             self.publish_views()
-        return True
-
-    @staticmethod
-    def teleop_keys() -> frozenset[str]:
-        from .control.teleop import MOVE_KEYS, SCALE_KEYS
-
-        return frozenset(MOVE_KEYS) | frozenset(SCALE_KEYS)
+        return used
 
     def get_system_commands(self, screen: Screen[object]) -> Iterable[SystemCommand]:
         yield from super().get_system_commands(screen)
@@ -406,34 +383,31 @@ class ArbiterApp(App[None]):
 
     # -- driving -------------------------------------------------------------------------------
     def select_algorithm(self, name: str) -> None:
-        self.loop.set_algorithm(name)
+        self.session.select_algorithm(name)
         self.publish_views(force=True)
 
     def select_mission(self, name: str) -> None:
-        self.loop.set_mission(name)
+        self.session.select_mission(name)
         self.publish_views(force=True)
+
+    def cycle_mission(self) -> None:
+        self.session.cycle_mission()
+        self.publish_views()
 
     def go(self, restart: bool = False) -> bool:
         """``g``: resume an interrupted mission or start the selected one; ``restart``: from waypoint 1."""
-        if self.too_small:
-            return False  # nothing starts moving while the console cannot be seen
-        if self.link_down() or self.link.state == STARTING:
-            # a mission that cannot move says why, instead of "driving" at v 0
-            self.notify("The link to the robot is down: nothing can be sent. Press g once it is back.",
-                        severity="warning")  # fmt: skip
-            return False
-        started = self.loop.restart() if restart else self.loop.go()
-        if not started:
-            self.notify("Select go_to_goal or pure_pursuit with [b]a[/b] first", severity="warning")
+        why = self.session.go(restart)
+        if why is not None and not self.too_small:
+            self.notify(why, severity="warning")
         self.publish_views(force=True)
-        return started
+        return why is None
 
     def set_goal(self, x: float, y: float) -> None:
         """Drive to (x, y) with go_to_goal (or the autonomous controller already selected)."""
         if self.too_small:
             return
         try:
-            self.loop.go_to(x, y)
+            self.session.go_to(x, y)
         except ValueError as exc:
             self.notify(str(exc), severity="error")
             return
@@ -473,10 +447,7 @@ class ArbiterApp(App[None]):
         self.exit()
 
     def toggle_collection(self) -> None:
-        if self.store.is_collecting:
-            self.store.stop_collection()
-        else:
-            self.store.start_collection()
+        self.session.toggle_collection()
         self.publish_views(force=True)
 
     def ask_clear(self) -> None:
@@ -486,8 +457,7 @@ class ArbiterApp(App[None]):
 
         def done(confirmed: bool | None) -> None:
             if confirmed:
-                self.store.clear()
-                self.post_message(DataCleared(n))
+                self.post_message(DataCleared(self.session.clear()))
 
         self.push_screen(ConfirmClear(n), done)
 
@@ -498,25 +468,16 @@ class ArbiterApp(App[None]):
 
     def export(self, *formats: str) -> list[ExportResult]:
         """Write the collected data in each format, all under one file stem; nothing when there is none."""
-        n = len(self.store)
-        stem = export_stem()
-        results = []
-        for fmt in formats:
-            try:
-                path = export_store(self.store, fmt, self.settings.export_dir, stem=stem)
-            except NothingToExport as exc:
-                result = ExportResult(fmt, None, n, str(exc))
-                self.notify(str(exc), severity="warning", timeout=6)
-                self.last_export = result
-                return [result]  # said once, whatever the number of formats
-            except (ExportError, OSError, ValueError) as exc:
-                result = ExportResult(fmt, None, n, str(exc))
-                self.post_message(ExportFailed(result))
-            else:
-                result = ExportResult(fmt, path, n)
+        results = self.session.export(*formats)
+        for result in results:
+            if result.path is not None:
                 self.post_message(ExportWritten(result))
-            self.last_export = result
-            results.append(result)
+            elif len(results) == 1 and "0 samples" in (result.error or ""):
+                self.notify(result.error or "", severity="warning", timeout=6)
+            else:
+                self.post_message(ExportFailed(result))
+        if results:
+            self.last_export = results[-1]
         return results
 
     @on(ExportWritten)
@@ -535,10 +496,6 @@ class ArbiterApp(App[None]):
             return None
         return self.tracker.view
 
-    def link_down(self) -> bool:
-        """The rosbridge link was lost (or never came up): nothing the console sends goes out."""
-        return self.link.state in (DISCONNECTED, RECONNECTING)
-
     def status_text(self) -> str:
         return self._status_view().text()
 
@@ -547,7 +504,7 @@ def make_app(
     settings: Settings,
     link: Link | None = None,
     tracker: TrackerClient | None = None,
-    store: AnalyticsStore = STORE,
+    store: AnalyticsStore | None = None,
     clock: Callable[[], float] = time.monotonic,
     connector: Connector | None = None,
 ) -> ArbiterApp:

@@ -12,7 +12,7 @@ def main(argv: list[str] | None = None) -> int:
 
         return run(argv[1:])
     if argv and argv[0] == "compare":
-        from .analytics.compare_cmd import run as run_compare
+        from .session.compare_cmd import run as run_compare
 
         return run_compare(argv[1:])
     from .launch import run_app

@@ -8,13 +8,14 @@ finished, failed or was decided.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
-from pathlib import Path
 
 from textual.message import Message
 
 from .latency.tracker_client import TrackerClient
 from .link.base import Link
+from .session.robot import ExportResult
+
+__all__ = ["ExportResult"]  # the session's; the messages below carry it
 
 
 class BackendStarted(Message):
@@ -55,14 +56,6 @@ class RunFinished(Message):
         super().__init__()
         self.algorithm = algorithm
         self.mission = mission
-
-
-@dataclass
-class ExportResult:
-    fmt: str
-    path: Path | None
-    points: int
-    error: str | None = None
 
 
 class ExportWritten(Message):

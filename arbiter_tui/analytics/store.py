@@ -1,25 +1,24 @@
-"""The analytics store: the seed's ``useAnalyticsEngine`` as one process-wide singleton.
+"""The analytics store: the seed's ``useAnalyticsEngine``.
 
-The seed keeps its refs at module level so that data survives page
-navigation; we keep one :class:`AnalyticsStore` at module level (``STORE``)
-so that data survives screen switches. It is a circular buffer of
+The seed keeps its refs at module level so that data survives page navigation; here the robot
+session (``session/robot.py``) owns one store, shared by every screen, so data survives screen switches
+and a second session (another robot, a test) has its own. It is a circular buffer of
 :class:`DataPoint` held column-wise in numpy arrays (9 float64 columns, a one-byte
 algorithm code and a four-byte run id: 77 bytes per point), grown on demand up to
 ``max_data_points``, so statistics over a million points take milliseconds.
 
-Who writes it: only the console's UI loop (the control loop samples odometry
+Who writes it: the robot session's thread (the control loop samples odometry
 from the link's telemetry at the collection rate; roslibpy's Twisted thread
-writes telemetry, never the store). It still takes a lock, so a bench or a
-headless caller may write from another thread (tests/unit exercise concurrent
-writers). Observers are called after each change, outside the lock, with the
-name of the change.
+writes telemetry, never the store); the shell reads it at its own pace. It takes
+a lock, so readers and writers on different threads see consistent data (tests/unit
+exercise concurrent writers).
 """
 
 from __future__ import annotations
 
 import math
 import threading
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 
 import numpy as np
 
@@ -43,13 +42,9 @@ _COL = {name: i for i, name in enumerate(NUMERIC)}
 MAX_CAPACITY = 10_000_000
 
 
-Observer = Callable[[str], None]
-
-
 class AnalyticsStore:
     def __init__(self, max_data_points: int = 1000, collection_rate: float = 10.0) -> None:
         self._lock = threading.RLock()
-        self._observers: list[Observer] = []
         self._version = 0
         self._is_collecting = False
         self._collection_rate = 10.0
@@ -110,7 +105,6 @@ class AnalyticsStore:
         ):
             raise ValueError(f"collection_rate must be in (0, 1000] Hz, got {hz!r}")
         self._collection_rate = float(hz)
-        self._notify("settings")
 
     @property
     def max_data_points(self) -> int:
@@ -140,26 +134,6 @@ class AnalyticsStore:
                 self._size = k
                 self._next = k % self._num.shape[1] if k == n else k
                 self._version += 1
-        self._notify("settings")
-
-    # -- observers -----------------------------------------------------------
-    def subscribe(self, observer: Observer) -> Callable[[], None]:
-        """Call ``observer(change)`` after every change; returns a function that unsubscribes."""
-        with self._lock:
-            self._observers.append(observer)
-
-        def unsubscribe() -> None:
-            with self._lock:
-                if observer in self._observers:
-                    self._observers.remove(observer)
-
-        return unsubscribe
-
-    def _notify(self, change: str) -> None:
-        with self._lock:
-            observers = list(self._observers)
-        for obs in observers:
-            obs(change)
 
     # -- collection ----------------------------------------------------------
     @property
@@ -170,12 +144,10 @@ class AnalyticsStore:
     def start_collection(self) -> None:
         self._is_collecting = True
         self._version += 1
-        self._notify("collecting")
 
     def stop_collection(self) -> None:
         self._is_collecting = False
         self._version += 1
-        self._notify("collecting")
 
     def clear(self) -> None:
         """Forget every point and every run (a run in progress goes on, from now)."""
@@ -183,7 +155,6 @@ class AnalyticsStore:
             self._reset_buffers(0)
             self._runs.clear()
             self._version += 1
-        self._notify("cleared")
 
     # -- runs ----------------------------------------------------------------------------------
     def begin_run(self, algorithm: str, mission: str, t_ms: float) -> int:
@@ -191,7 +162,6 @@ class AnalyticsStore:
         with self._lock:
             run_id = self._runs.begin(algorithm, mission, t_ms)
             self._version += 1
-        self._notify("run")
         return run_id
 
     def end_run(self, outcome: str, t_ms: float, final_error_m: float | None = None) -> RunSummary | None:
@@ -199,8 +169,6 @@ class AnalyticsStore:
             summary = self._runs.end(outcome, t_ms, final_error_m)
             if summary is not None:
                 self._version += 1
-        if summary is not None:
-            self._notify("run")
         return summary
 
     @property
@@ -266,7 +234,6 @@ class AnalyticsStore:
                 self._size += 1
             self._total_recorded += 1
             self._version += 1
-        self._notify("recorded")
         return True
 
     # -- reading ---------------------------------------------------------------
@@ -375,12 +342,5 @@ class AnalyticsStore:
 
 __all__ = [  # the data model lives in model.py; these names are read from here too
     "EMPTY_STATS", "FIELDS", "MAX_ALGORITHM_NAME", "MAX_CAPACITY", "NUMERIC", "STATS_FIELDS",
-    "AnalyticsStats", "AnalyticsStore", "DataPoint", "compute_stats", "get_store", "stats_of_points",
+    "AnalyticsStats", "AnalyticsStore", "DataPoint", "compute_stats", "stats_of_points",
 ]  # fmt: skip
-
-STORE = AnalyticsStore()
-"""The process-wide singleton every screen shares."""
-
-
-def get_store() -> AnalyticsStore:
-    return STORE

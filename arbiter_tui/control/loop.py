@@ -79,10 +79,6 @@ class ControlLoop:
         self.algorithm = name
         self.controller = make_controller(name)
 
-    def cycle_algorithm(self) -> str:
-        self.set_algorithm(ALGORITHMS[(ALGORITHMS.index(self.algorithm) + 1) % len(ALGORITHMS)])
-        return self.algorithm
-
     def set_mission(self, name: str) -> None:
         if name not in MISSIONS:
             raise ValueError(f"unknown mission {name!r}; choose from {', '.join(MISSIONS)}")

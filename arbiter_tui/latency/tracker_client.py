@@ -13,9 +13,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from arbiter_core.failures import connect_failure, http_failure
 from arbiter_core.record import LatencyRecord, RecordError
-
-from ..link.errors import connect_failure, http_failure
 
 if TYPE_CHECKING:
     import httpx

@@ -11,8 +11,9 @@ from pathlib import Path
 from typing import Any
 
 from arbiter_core import envelope, topics
+from arbiter_core import failures as errors
 
-from . import errors, wsframe
+from . import wsframe
 from .base import CONNECTED, CONNECTING, DISCONNECTED, RECONNECTING, Telemetry
 
 log = logging.getLogger(__name__)

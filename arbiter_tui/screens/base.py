@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, cast
+from typing import Protocol, cast
 
 from textual import events
 from textual.app import ComposeResult
@@ -11,10 +11,46 @@ from textual.geometry import Size
 from textual.screen import Screen
 from textual.widgets import Footer, Static
 
+from ..analytics.store import AnalyticsStore
+from ..control.loop import ControlLoop
+from ..session.robot import ExportResult
 from ..widgets import StatusLine
 
-if TYPE_CHECKING:
-    from ..app import ArbiterApp
+
+class Console(Protocol):
+    """What the screens ask of the console (the app implements it): session commands that also refresh
+    what is shown, and the dialogs. Screens never reach into the concrete app."""
+
+    @property
+    def loop(self) -> ControlLoop: ...
+
+    @property
+    def store(self) -> AnalyticsStore: ...
+
+    @property
+    def too_small(self) -> bool: ...
+
+    def publish_views(self, force: bool = False) -> None: ...
+
+    def set_too_small(self, small: bool) -> None: ...
+
+    def teleop_key(self, key: str) -> bool: ...
+
+    def end_manual_hold(self, reason: str) -> None: ...
+
+    def select_algorithm(self, name: str) -> None: ...
+
+    def cycle_mission(self) -> None: ...
+
+    def go(self, restart: bool = False) -> bool: ...
+
+    def ask_goal(self) -> None: ...
+
+    def toggle_collection(self) -> None: ...
+
+    def ask_clear(self) -> None: ...
+
+    def export(self, *formats: str) -> list[ExportResult]: ...
 
 MIN_WIDTH, MIN_HEIGHT = 80, 24
 TOO_SMALL = (
@@ -27,8 +63,8 @@ class BaseScreen(Screen[None]):
     CSS_PATH = "base.tcss"
 
     @property
-    def arbiter(self) -> ArbiterApp:
-        return cast("ArbiterApp", self.app)
+    def arbiter(self) -> Console:
+        return cast(Console, self.app)
 
     def compose(self) -> ComposeResult:
         yield StatusLine(id="status")

@@ -48,8 +48,7 @@ class ControlScreen(BaseScreen):
         self.arbiter.select_algorithm(ALGORITHMS[(ALGORITHMS.index(loop.algorithm) + 1) % len(ALGORITHMS)])
 
     def action_cycle_mission(self) -> None:
-        self.arbiter.loop.cycle_mission()
-        self.arbiter.publish_views()
+        self.arbiter.cycle_mission()
 
     def action_go(self) -> None:
         self.arbiter.go()

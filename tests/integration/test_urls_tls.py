@@ -11,11 +11,11 @@ from aiohttp import web
 
 from arbiter_backend.bridge import RosbridgeEndpoint
 from arbiter_backend.bus import TopicBus
+from arbiter_core.failures import TLS_HINT, TOKEN_HINT
 from arbiter_tui.analytics.store import AnalyticsStore
 from arbiter_tui.cli import main as tui_main
 from arbiter_tui.latency.tracker_client import TrackerClient
 from arbiter_tui.link.base import CONNECTED
-from arbiter_tui.link.errors import TLS_HINT, TOKEN_HINT
 from arbiter_tui.link.rosbridge import AUTH_RETRY_S, RosLink
 
 from ..support.backend import start_backend

@@ -19,8 +19,8 @@ def seeded_store() -> AnalyticsStore:
     oldest samples of run 1, so the analytics screen warns."""
     from dataclasses import replace
 
-    from arbiter_tui.analytics.compare import run_one
     from arbiter_tui.analytics.runs import ABORTED, COMPLETED
+    from arbiter_tui.session.compare import run_one
 
     store = AnalyticsStore(max_data_points=SEEDED_POINTS)
     store.start_collection()

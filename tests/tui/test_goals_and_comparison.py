@@ -32,8 +32,8 @@ def drive(app, clock, seconds: float) -> None:
         clock.t = round(clock.t + 0.02, 6)
         app.link.step()
         if n % 5 == 4:
-            app._control_tick()
-            app._sample()
+            app.session.tick_control()
+            app.session.sample()
 
 
 async def test_a_click_on_the_map_drives_to_that_point(tmp_path):

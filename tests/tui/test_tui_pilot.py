@@ -6,7 +6,7 @@ import pytest
 
 from arbiter_core.kinematics import Pose
 from arbiter_tui.analytics.exports import CSV_HEADER
-from arbiter_tui.analytics.store import STORE, AnalyticsStore
+from arbiter_tui.analytics.store import AnalyticsStore
 from arbiter_tui.link.base import DISCONNECTED
 from arbiter_tui.screens.analytics import AnalyticsScreen
 from arbiter_tui.screens.confirm import ConfirmClear
@@ -32,7 +32,7 @@ async def test_teleop_keys_send_the_right_twists_and_stop_by_themselves():
         await pilot.press("u")
         assert link.sent[-1] == (0.5, 1.0)
         await pilot.press("q")  # scale both by 1.1 while moving
-        app._control_tick()
+        app.session.tick_control()
         assert link.sent[-1] == pytest.approx((0.55, 1.1))
         app.fake_clock.t += 0.1
         await pilot.press("left")
@@ -40,11 +40,11 @@ async def test_teleop_keys_send_the_right_twists_and_stop_by_themselves():
         # key timeout: repeats until the deadline, then exactly one zero, then silence
         n = len(link.sent)
         app.fake_clock.t += 0.3
-        app._control_tick()
+        app.session.tick_control()
         assert link.sent[n:] == [pytest.approx((0.0, 1.1))]
         app.fake_clock.t += 0.5
         for _ in range(5):
-            app._control_tick()
+            app.session.tick_control()
         assert link.sent[n + 1 :] == [(0.0, 0.0)]
 
 
@@ -53,12 +53,12 @@ async def test_space_and_k_stop_at_once():
     async with app.run_test(size=SIZE) as pilot:
         await pilot.press("i")
         await pilot.press("space")
-        app._control_tick()
+        app.session.tick_control()
         assert app.link.sent[-1] == (0.0, 0.0)
         await pilot.press("j")
         assert app.link.sent[-1] == (0.0, 1.0)
         await pilot.press("k")
-        app._control_tick()
+        app.session.tick_control()
         assert app.link.sent[-1] == (0.0, 0.0)
 
 
@@ -100,7 +100,7 @@ async def test_nothing_is_sent_while_disconnected():
         for key in ("i", "i", "u"):
             await pilot.press(key)
             app.fake_clock.t += 0.1
-        app._control_tick()
+        app.session.tick_control()
         assert link.sent == []
         assert app.loop.unsent >= 3
         assert "DISCONNECTED" in app.status_text()
@@ -210,7 +210,7 @@ async def test_an_autonomous_run_keeps_driving_on_screens_2_and_3_and_space_stop
         for screen in ("2", "3"):
             await pilot.press(screen)
             n = len(app.link.sent)
-            app._control_tick()
+            app.session.tick_control()
             assert app.loop.running and len(app.link.sent) == n + 1
             assert app.link.sent[-1] != (0.0, 0.0)
             await pilot.press("space")
@@ -225,7 +225,7 @@ async def test_a_terminal_too_small_stops_the_robot_and_ignores_movement_keys():
     app = still_app()
     async with app.run_test(size=SIZE) as pilot:
         await pilot.press("a", "g")
-        app._control_tick()
+        app.session.tick_control()
         assert app.loop.running
         await pilot.resize_terminal(60, 20)
         await pilot.pause()
@@ -233,7 +233,7 @@ async def test_a_terminal_too_small_stops_the_robot_and_ignores_movement_keys():
         assert app.stop_reason == "terminal too small"
         n = len(app.link.sent)
         await pilot.press("i", "i", "u", "g")
-        app._control_tick()
+        app.session.tick_control()
         assert app.link.sent[n:] == [] and not app.teleop.moving and not app.loop.running
         await pilot.resize_terminal(*SIZE)
         await pilot.pause()
@@ -265,7 +265,7 @@ async def test_autonomous_controller_sends_commands_and_manual_keys_take_over():
         await pilot.press("a")
         assert app.loop.algorithm == "go_to_goal"
         await pilot.press("g")
-        app._control_tick()
+        app.session.tick_control()
         v, w = app.link.sent[-1]
         assert v >= 0 and (v, w) != (0.0, 0.0)
         await pilot.press("i")
@@ -273,12 +273,20 @@ async def test_autonomous_controller_sends_commands_and_manual_keys_take_over():
         assert app.link.sent[-1] == (0.5, 0.0)
 
 
-def test_default_store_is_the_singleton():
+async def test_one_store_per_session_outlives_screen_switches():
+    """The seed's singleton, scoped to the robot session: every screen shares it, another session
+    (another robot, another test) has its own; no module-level store."""
     from arbiter_tui.app import make_app
     from arbiter_tui.settings import Settings
 
     app = make_app(Settings(live=False, handle_signals=False), RecordingLink())
-    assert app.store is STORE
+    other = make_app(Settings(live=False, handle_signals=False), RecordingLink())
+    assert app.store is app.session.store and other.store is not app.store
+    async with app.run_test(size=(100, 30)) as pilot:
+        store = app.store
+        for key in ("2", "3", "1", "2"):
+            await pilot.press(key)
+            assert app.store is store
 
 
 async def test_the_first_frame_comes_before_the_link_and_the_link_is_attached_when_ready():

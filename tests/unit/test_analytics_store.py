@@ -44,14 +44,10 @@ def test_defaults_and_field_names_are_the_seeds():
     ]
 
 
-def test_module_level_singleton_is_shared():
-    from arbiter_tui.analytics.store import STORE, get_store
+def test_no_module_level_store():
+    import arbiter_tui.analytics.store as module
 
-    assert get_store() is STORE
-    import importlib
-
-    again = importlib.import_module("arbiter_tui.analytics.store")
-    assert again.STORE is STORE
+    assert not any(isinstance(v, AnalyticsStore) for v in vars(module).values())
 
 
 def test_not_collecting_drops_points():
@@ -129,16 +125,15 @@ def test_stats_by_algorithm_compare_controllers():
     assert by["pure_pursuit"].avgLinearVel == pytest.approx(0.3)
 
 
-def test_observers_are_told_and_can_unsubscribe():
+def test_every_change_a_reader_sees_moves_the_version():
     s = AnalyticsStore()
-    seen = []
-    unsub = s.subscribe(seen.append)
-    s.start_collection()
-    s.record(make_point(0))
-    s.clear()
-    unsub()
-    s.record(make_point(1))
-    assert seen == ["collecting", "recorded", "cleared"]
+    seen = [s.version]
+    for change in (s.start_collection, lambda: s.record(make_point(0)), s.clear, s.stop_collection):
+        change()
+        seen.append(s.version)
+    assert seen == sorted(set(seen))  # four changes, four new versions
+    s.record(make_point(1))  # not collecting: nothing changed
+    assert s.version == seen[-1]
 
 
 def test_invalid_points_are_refused_and_store_is_unchanged():

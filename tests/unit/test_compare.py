@@ -5,11 +5,11 @@ import time
 
 import pytest
 
-from arbiter_tui.analytics.compare import run_one
 from arbiter_tui.analytics.files import load_points
 from arbiter_tui.analytics.ranking import RULE, RULE_MISSION, RULE_OVERALL
 from arbiter_tui.analytics.store import STATS_FIELDS
 from arbiter_tui.cli import main
+from arbiter_tui.session.compare import run_one
 
 
 def run_json(capsys, *args):

@@ -2,7 +2,7 @@
 
 import pytest
 
-from arbiter_tui.link.errors import TLS_HINT, TOKEN_HINT, close_failure, connect_failure, http_failure
+from arbiter_core.failures import TLS_HINT, TOKEN_HINT, close_failure, connect_failure, http_failure
 
 
 @pytest.mark.parametrize(

@@ -10,7 +10,6 @@ import pytest
 
 from arbiter_core.record import LatencyRecord
 from arbiter_tui.analytics import ranking
-from arbiter_tui.analytics.compare import compare, run_one
 from arbiter_tui.analytics.files import export_store, load_points
 from arbiter_tui.analytics.model import EMPTY_STATS, AnalyticsStats
 from arbiter_tui.analytics.runs import ABORTED, COMPLETED, RunSummary
@@ -20,6 +19,7 @@ from arbiter_tui.control.loop import ControlLoop
 from arbiter_tui.control.teleop import MIN_SPEED, MIN_TURN, Teleop
 from arbiter_tui.latency.clocksync import LatencyMeter
 from arbiter_tui.link.sim import SimLink
+from arbiter_tui.session.compare import compare, run_one
 
 from ..support.tui import FakeClock
 

@@ -11,13 +11,13 @@ from pathlib import Path
 from arbiter_core.cliargs import OneLineParser, positive_float
 from arbiter_core.kinematics import DEFAULT_LIMITS
 
+from ..analytics import ranking
+from ..analytics.exports import to_csv, to_json, to_mcap
+from ..analytics.files import ExportError, write_new_file
+from ..analytics.runs import row_of
+from ..analytics.store import stats_of_points
 from ..control.teleop import cap_setting
-from . import ranking
 from .compare import AUTONOMOUS, MISSION_NAMES, CompareError, RunResult, compare, parse_names, ranking_of
-from .exports import to_csv, to_json, to_mcap
-from .files import ExportError, write_new_file
-from .runs import row_of
-from .store import stats_of_points
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -1,0 +1,282 @@
+"""The robot session: one object that drives the robot and records what it did, with no Textual.
+
+It owns the link, teleop, the control loop, the analytics store (the seed's ``useAnalyticsEngine``: one
+per robot session, outliving screen switches) and the exports. Its clocked work -- the control tick at
+``--repeat-rate``, sampling at ``--collection-rate``, stepping the client-side simulator at 50 Hz and
+expiring unanswered commands -- runs on a thread of its own on a monotonic schedule, so a slow paint
+never delays a command (the robot's clock is not the UI's clock). The Textual shell turns keys into
+the commands below and samples the session into frozen snapshots at its own pace; ``arbiter-tui
+compare`` and tests drive the same session without Textual (``live=False``: the caller ticks it).
+
+Thread safety: every command and every tick takes ``lock`` (an RLock held for microseconds); the store
+and the link's telemetry have locks of their own. Events (a mission finished) go to ``on_event``, which
+the shell points at its thread-safe ``post_message``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from arbiter_core.simulator import RATE_HZ as SIM_HZ
+
+from ..analytics.files import FORMATS, ExportError, NothingToExport, export_stem, export_store
+from ..analytics.store import AnalyticsStore
+from ..control.loop import ControlLoop
+from ..control.teleop import MOVE_KEYS, SCALE_KEYS, STOP_KEYS, Teleop
+from ..link.base import DISCONNECTED, RECONNECTING, STARTING, Link
+from ..link.sim import SimLink
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class ExportResult:
+    fmt: str
+    path: Path | None
+    points: int
+    error: str | None = None
+
+
+@dataclass(frozen=True)
+class MissionFinished:
+    """A mission (or a goal) was completed."""
+
+    algorithm: str
+    mission: str
+
+
+@dataclass(frozen=True)
+class SessionConfig:
+    """What the session needs of the console's settings."""
+
+    repeat_rate: float = 10.0
+    collection_rate: float = 10.0
+    max_points: int = 1000
+    speed: float = 0.5
+    turn: float = 1.0
+    key_timeout: float = 0.6
+    start_paused: bool = False
+    export_dir: Path = Path(".")
+
+
+NO_LINK_WORDS = "The link to the robot is down: nothing can be sent. Press g once it is back."
+
+
+class RobotSession:
+    def __init__(
+        self,
+        config: SessionConfig,
+        link: Link,
+        store: AnalyticsStore | None = None,
+        clock: Callable[[], float] = time.monotonic,
+    ) -> None:
+        self.config = config
+        self.lock = threading.RLock()
+        self.link = link
+        self.clock = clock
+        self.store = store if store is not None else AnalyticsStore(config.max_points, config.collection_rate)
+        self.store.collection_rate = config.collection_rate
+        if self.store.max_data_points != config.max_points:
+            self.store.max_data_points = config.max_points
+        if not config.start_paused and not self.store.is_collecting and len(self.store) == 0:
+            self.store.start_collection()  # recording is on unless asked otherwise (r pauses it)
+        self.teleop = Teleop(speed=config.speed, turn=config.turn, key_timeout=config.key_timeout)
+        self.loop = ControlLoop(link, self.store, self.teleop, max_rate=config.repeat_rate)
+        self.too_small = False
+        self.stop_reason: str | None = None
+        self.on_event: Callable[[object], None] = lambda event: None
+        self.ticks = 0  # control ticks run (tests and the bench read it)
+        self.late_ticks = 0  # ticks that ran more than one period late
+        self._was_running = False
+        self._thread: threading.Thread | None = None
+        self._stopping = threading.Event()
+
+    # -- the link ---------------------------------------------------------------------------------
+    def attach(self, link: Link) -> None:
+        """The real link replaces the pending one (the embedded backend started in a worker)."""
+        with self.lock:
+            self.link = link
+            self.loop.link = link
+
+    def link_down(self) -> bool:
+        """The rosbridge link was lost (or never came up): nothing the console sends goes out."""
+        return self.link.state in (DISCONNECTED, RECONNECTING)
+
+    # -- the clocked work ---------------------------------------------------------------------------------
+    def tick_control(self) -> None:
+        """One control tick: a held key's command or the controller's, and run bookkeeping."""
+        with self.lock:
+            try:
+                self.link.telemetry.meter.expire(time.monotonic())  # unreported commands become "lost"
+                self.loop.tick_control(self.clock())
+            except Exception:  # a failing link must not take the session (and its stop keys) down
+                log.exception("control tick failed")
+            self.ticks += 1
+            running = self.loop.running
+            finished = self._was_running and not running and self.loop.mission.done
+            self._was_running = running
+            event = MissionFinished(self.loop.algorithm, self.loop.mission_label) if finished else None
+        if event is not None:
+            self.on_event(event)
+
+    def sample(self) -> None:
+        with self.lock:
+            try:
+                self.loop.sample()
+            except Exception:
+                log.exception("sampling failed")
+
+    def step_link(self) -> None:
+        link = self.link
+        if isinstance(link, SimLink):
+            with self.lock:
+                link.step()
+
+    def start(self) -> None:
+        """Run the clocked work on the session's own thread until :meth:`close`."""
+        if self._thread is None:
+            self._thread = threading.Thread(target=self._run, name="robot-session", daemon=True)
+            self._thread.start()
+
+    def _run(self) -> None:
+        periods = {
+            self.tick_control: 1.0 / self.config.repeat_rate,
+            self.sample: 1.0 / self.config.collection_rate,
+            self.step_link: 1.0 / SIM_HZ,
+        }
+        now = time.monotonic()
+        due = {job: now + period for job, period in periods.items()}
+        while not self._stopping.is_set():
+            job = min(due, key=due.__getitem__)
+            wait = due[job] - time.monotonic()
+            if wait > 0 and self._stopping.wait(wait):
+                break
+            job()
+            period = periods[job]
+            due[job] += period
+            behind = time.monotonic() - due[job]
+            if behind > 0:  # late by more than a period: start again from now, never a burst
+                if job == self.tick_control:
+                    self.late_ticks += 1
+                due[job] = time.monotonic() + period
+
+    def close(self) -> None:
+        """Stop the robot (one zero) and the clocked work."""
+        self.stop("quit")
+        self._stopping.set()
+        if self._thread is not None and self._thread is not threading.current_thread():
+            self._thread.join(timeout=2.0)
+
+    # -- commands (any thread) -------------------------------------------------------------------------
+    def stop(self, reason: str) -> None:
+        """Stop teleop and autonomy and send one zero now (best effort: never raises)."""
+        with self.lock:
+            self.stop_reason = reason
+            self.loop.stop()
+            with contextlib.suppress(Exception):
+                self.loop.tick_control(self.clock())
+            self._was_running = False
+
+    def end_manual_hold(self, reason: str) -> None:
+        """A held teleop key ends now (one zero); an autonomous run is left driving."""
+        with self.lock:
+            if self.teleop.moving:
+                self.stop_reason = reason
+                self.teleop.stop()
+                with contextlib.suppress(Exception):
+                    self.loop.tick_control(self.clock())
+
+    def set_too_small(self, small: bool) -> None:
+        """While the terminal is too small to show the console, the robot stands still."""
+        with self.lock:
+            if small and not self.too_small:
+                self.stop("terminal too small")
+            self.too_small = small
+
+    def key(self, key: str) -> bool:
+        """A key pressed on the control screen; True if teleop used it."""
+        with self.lock:
+            if self.too_small:
+                return key in MOVE_KEYS or key in SCALE_KEYS  # swallowed: nothing moves unseen
+            if self.loop.running and key in STOP_KEYS:
+                self.loop.stop()
+            was_manual = self.loop.algorithm == "manual"
+            before = (self.teleop.moving, self.teleop.target)
+            result = self.teleop.press(key, self.clock())
+            if result is None:
+                return False
+            if result == "move" and not was_manual:
+                # Manual keys take over from an autonomous controller (g resumes its mission).
+                self.loop.override()
+                self.teleop.press(key, self.clock())
+            if result == "move":
+                self.loop.running = False
+                if (self.teleop.moving, self.teleop.target) != before:
+                    # a new key (or direction) is answered at once; a key's auto-repeats only keep it
+                    # held, and the control tick sends at --repeat-rate
+                    self.tick_control()
+            return True
+
+    def select_algorithm(self, name: str) -> None:
+        with self.lock:
+            self.loop.set_algorithm(name)
+
+    def select_mission(self, name: str) -> None:
+        with self.lock:
+            self.loop.set_mission(name)
+
+    def cycle_mission(self) -> None:
+        with self.lock:
+            self.loop.cycle_mission()
+
+    def go(self, restart: bool = False) -> str | None:
+        """``g``: resume an interrupted mission or start the selected one; ``restart``: from waypoint 1.
+        Returns why nothing started (None when it did)."""
+        with self.lock:
+            if self.too_small:
+                return "the terminal is too small"
+            if self.link_down() or self.link.state == STARTING:
+                return NO_LINK_WORDS  # a mission that cannot move says why, instead of "driving" at v 0
+            started = self.loop.restart() if restart else self.loop.go()
+            return None if started else "Select go_to_goal or pure_pursuit with [b]a[/b] first"
+
+    def go_to(self, x: float, y: float) -> None:
+        """Drive to (x, y) with go_to_goal (or the autonomous controller already selected)."""
+        with self.lock:
+            if not self.too_small:
+                self.loop.go_to(x, y)
+
+    def toggle_collection(self) -> None:
+        if self.store.is_collecting:
+            self.store.stop_collection()
+        else:
+            self.store.start_collection()
+
+    def clear(self) -> int:
+        n = len(self.store)
+        self.store.clear()
+        return n
+
+    def export(self, *formats: str) -> list[ExportResult]:
+        """Write the collected data in each format under one file stem; nothing when there is none."""
+        n = len(self.store)
+        stem = export_stem()
+        results = []
+        for fmt in formats:
+            if fmt not in FORMATS:
+                raise ValueError(f"unknown export format {fmt!r}")
+            try:
+                path = export_store(self.store, fmt, self.config.export_dir, stem=stem)
+            except NothingToExport as exc:
+                return [ExportResult(fmt, None, n, str(exc))]  # said once, whatever the formats
+            except (ExportError, OSError, ValueError) as exc:
+                results.append(ExportResult(fmt, None, n, str(exc)))
+            else:
+                results.append(ExportResult(fmt, path, n))
+        return results

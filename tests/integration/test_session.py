@@ -1,0 +1,88 @@
+"""The robot session without Textual: a mission driven through the real embedded backend (rosbridge
+endpoint, tracker, simulator in their own process) by the real roslibpy link, the session's own thread
+keeping time; and a paint that takes 300 ms does not delay a command."""
+
+import asyncio
+import time
+
+from rich.text import Text
+from textual.widget import Widget
+
+from arbiter_tui.analytics.runs import COMPLETED
+from arbiter_tui.app import make_app
+from arbiter_tui.latency.tracker_client import TrackerClient
+from arbiter_tui.link.base import CONNECTED, Telemetry
+from arbiter_tui.link.rosbridge import RosLink
+from arbiter_tui.session.robot import MissionFinished, RobotSession, SessionConfig
+from arbiter_tui.settings import Settings
+
+from ..support.backend import get_json, start_backend
+from ..support.waits import wait_for
+
+
+def test_a_mission_through_the_real_backend_with_no_textual(tmp_path):
+    backend = start_backend()
+    link = RosLink("127.0.0.1", backend.bridge_port)
+    session = RobotSession(SessionConfig(export_dir=tmp_path), link)
+    events = []
+    session.on_event = events.append
+    try:
+        assert wait_for(lambda: link.state == CONNECTED and link.telemetry.odom_count > 0, timeout=15)
+        session.start()
+        session.select_algorithm("go_to_goal")
+        assert session.go() is None
+        assert wait_for(lambda: not session.loop.running, timeout=60)
+        (run,) = session.store.runs()
+        assert run.outcome == COMPLETED and run.mission == "square" and run.stats.sampleCount > 100
+        assert events == [MissionFinished("go_to_goal", "square")]
+        health = get_json(f"{backend.api}/api/health")
+        assert health["total_seen"] >= run.stats.sampleCount  # every command went through the tracker
+        (csv,) = session.export("csv")
+        assert csv.path is not None and csv.path.exists()
+    finally:
+        session.close()
+        link.close()
+        backend.stop()
+
+
+class Timed:
+    """A link that notes when each command went out (the wire is not what is measured here)."""
+
+    def __init__(self):
+        self.telemetry = Telemetry()
+        self.state = CONNECTED
+        self.at: list[float] = []
+
+    def send(self, v, w):
+        self.at.append(time.monotonic())
+        return True
+
+    def close(self):
+        pass
+
+
+class SlowPaint(Widget):
+    """A widget whose every paint takes 300 ms of the UI thread."""
+
+    def render(self) -> Text:
+        time.sleep(0.3)
+        return Text("slow")
+
+    def on_mount(self) -> None:
+        self.set_interval(0.05, self.refresh)
+
+
+async def test_a_slow_paint_does_not_delay_the_commands(tmp_path):
+    link = Timed()
+    settings = Settings(mode="embedded", handle_signals=False, export_dir=tmp_path, repeat_rate=10.0)
+    app = make_app(settings, link, TrackerClient("http://127.0.0.1:9"))
+    async with app.run_test(size=(100, 30)) as pilot:
+        app.session.select_algorithm("go_to_goal")
+        assert app.session.go() is None
+        await app.screen.mount(SlowPaint())
+        start = len(link.at)
+        await asyncio.sleep(3.0)  # a measurement window: three seconds of painting 300 ms frames
+        gaps = [b - a for a, b in zip(link.at[start:], link.at[start + 1 :], strict=False)]
+        await pilot.press("space")
+    assert len(gaps) >= 20
+    assert max(gaps) < 0.25, f"a command waited {max(gaps) * 1000:.0f} ms behind a paint"
