@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import gc
 import logging
 import os
 import signal
@@ -63,6 +64,19 @@ from .views import (
 )
 
 log = logging.getLogger(__name__)
+FREEZE_AFTER_S = 2.0
+
+
+def freeze_heap() -> None:
+    """Move every object alive now into the garbage collector's permanent generation.
+
+    A full (generation 2) collection walks every tracked object while holding the GIL; the console's
+    heap (Textual's widgets, styles, caches) made that 100-500 ms on a Pi-class CPU (bench/pi.py, gc
+    callbacks), during which the session thread could not send a command. The widgets and caches made
+    at start and on each screen's first showing live as long as the console, so they need never be walked
+    again: a full collection then only walks what was made since. Cheap (a list splice) and called a
+    handful of times, so the garbage frozen with them stays a one-off."""
+    gc.freeze()
 EXIT_DEADLINE_S = 2.0  # after SIGHUP/SIGTERM the process is gone by then, whatever the terminal does
 
 Connector = Callable[[], tuple[Link, "TrackerClient | None", Callable[[], None]]]
@@ -124,6 +138,7 @@ class ArbiterApp(App[None]):
         self._link_state: str | None = None
         self._shown_command: tuple[object, ...] = ()
         self._analytics_at = float("-inf")
+        self._frozen_modes: set[str] = set()
 
     # The session's parts, for the screens and the views (the session owns them).
     @property
@@ -170,6 +185,7 @@ class ArbiterApp(App[None]):
         for note in self.settings.notes:
             self.notify(note, severity="warning", timeout=8)
         self.publish_views(force=True)
+        self.set_timer(FREEZE_AFTER_S, freeze_heap)
         if self.settings.live:
             self.session.start()  # the robot's clock: control, sampling, simulation on their own thread
             self.set_interval(1.0 / self.settings.ui_rate, self.publish_views)
@@ -210,6 +226,12 @@ class ArbiterApp(App[None]):
             cleanup()
             return
         self.post_message(BackendStarted(link, tracker, cleanup))
+
+    def screen_shown(self) -> None:
+        """A screen came to the front (its ``on_screen_resume``)."""
+        if self.current_mode not in self._frozen_modes:  # a screen's widgets, made once, kept for good
+            self._frozen_modes.add(self.current_mode)
+            self.set_timer(FREEZE_AFTER_S, freeze_heap)
 
     @on(BackendStarted)
     def _attach(self, event: BackendStarted) -> None:

@@ -32,6 +32,8 @@ class Console(Protocol):
 
     def publish_views(self, force: bool = False) -> None: ...
 
+    def screen_shown(self) -> None: ...
+
     def set_too_small(self, small: bool) -> None: ...
 
     def teleop_key(self, key: str) -> bool: ...
@@ -83,6 +85,7 @@ class BaseScreen(Screen[None]):
     def on_screen_resume(self) -> None:
         self._check_size(self.app.size)
         self.arbiter.publish_views(force=True)  # what it shows may not have been sampled meanwhile
+        self.arbiter.screen_shown()
 
     def on_resize(self, event: events.Resize) -> None:
         self._check_size(event.size)
