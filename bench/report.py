@@ -115,6 +115,23 @@ def rows(results: list[dict]) -> list[str]:
             f"| recovery | silent link (no FIN) → noticed by the keep-alive | "
             f"{fig('silent_to_noticed')} | a few s |",
         ]
+    if pi := by.get("pi"):
+        fl = pi["floor"]
+        out.append(
+            f"| pi | {pi['quota_cores'] * 100:g} % quota, floor (plain roslibpy, 10 Hz): gap p50 / p95 / max "
+            f"| {fl['gap_p50_ms']:.0f} / {fl['gap_p95_ms']:.0f} / {fl['gap_max_ms']:.0f} ms | |"
+        )
+        for name, c in pi["console"].items():
+            out.append(
+                f"| pi | {name} screen, mission driving: gap p50 / p95 / max · CPU of quota | "
+                f"{c['gap_p50_ms']:.0f} / {c['gap_p95_ms']:.0f} / {c['gap_max_ms']:.0f} ms · "
+                f"{c['cpu_percent_of_quota']:g} % | p95 ≤ 120, max ≤ 250 ms |"
+            )
+        k, r = pi["key_to_wire_console"], pi["key_to_wire_raw_tty"]
+        out.append(
+            f"| pi | key to wire p95: console / raw-tty script (n={k['n']}) | {k['p95_ms']:.1f} / "
+            f"{r['p95_ms']:.1f} ms = {pi['key_to_wire_p95_ratio']}x | ≤ 3x |"
+        )
     m = next((r.get("machine") for r in results if r.get("machine")), None)
     if m:
         out.append("")

@@ -16,3 +16,5 @@ if [ -n "${SHORT:-}" ]; then d=3; s=15; soak=300; else d=10; s=60; soak=3600; fi
 "$PY" bench/recovery.py --trials 5 | tail -1 >> "$out"
 "$PY" bench/fuzz.py --count 10000 --seed 1 | tail -1 >> "$out"
 "$PY" bench/soak.py --duration "$soak" | tail -1 >> "$out"
+# the Pi-class CPU quota (cgroups): root only
+if [ "$(id -u)" = 0 ]; then "$PY" bench/pi.py --seconds "$((s / 4 + 5))" | tail -1 >> "$out"; fi

@@ -3,37 +3,33 @@ recent records, and this console's own round trip, clock offset and loss."""
 
 from __future__ import annotations
 
+from rich.text import Text
 from textual.app import ComposeResult
 from textual.containers import Horizontal
-from textual.widgets import DataTable
+from textual.reactive import reactive
 
 from ..plots import LatencyHistogram, LatencyPlot
 from ..views import LatencySnapshot
-from ..widgets import ClientLine, TrackerCards, TrackerLine, fmt_ms
+from ..widgets import Bound, ClientLine, TrackerCards, TrackerLine, fmt_ms
 from .base import BaseScreen
 
 
-class RecordsTable(DataTable[str]):
-    """The newest records; refilled only when a poll brought new ones."""
+class RecordsList(Bound):
+    """The newest records, as many as fit: plain lines, repainted only when a poll brought new ones.
+    (A DataTable refilled at every poll was a third of this screen's CPU: bench/pi.py, py-spy.)"""
 
-    def on_mount(self) -> None:
-        self.add_columns("seq", "latency", "linear_x", "angular_z", "mode")
-        self._shown: int | None = None
-        self.watch(self.app, "latency", self._show)
+    SOURCE = "latency"
+    view: reactive[LatencySnapshot] = reactive(LatencySnapshot)
+    HEAD = f"{'seq':>8}  {'latency':>10}  {'linear_x':>8}  {'angular_z':>9}  mode"
 
-    def _show(self, view: LatencySnapshot) -> None:
-        if view.polled == self._shown:
-            return
-        self._shown = view.polled
-        self.clear()
-        for r in view.records:
-            self.add_row(
-                "" if r.seq is None else str(r.seq),
-                fmt_ms(r.latency_ms),
-                f"{r.linear_x:+.2f}",
-                f"{r.angular_z:+.2f}",
-                r.deploy_mode,
-            )
+    def draw(self) -> Text:
+        rows = max(0, self.size.height - 1)
+        out = Text(self.HEAD + "\n", style="bold")
+        for r in self.view.records[:rows]:
+            seq = "" if r.seq is None else str(r.seq)
+            lat = fmt_ms(r.latency_ms)
+            out.append(f"{seq:>8}  {lat:>10}  {r.linear_x:>+8.2f}  {r.angular_z:>+9.2f}  {r.deploy_mode}\n")
+        return out
 
 
 class LatencyScreen(BaseScreen):
@@ -46,4 +42,4 @@ class LatencyScreen(BaseScreen):
         with Horizontal(id="lat-plots"):
             yield LatencyPlot("one-way (ms) vs time (s)", id="lat-plot")
             yield LatencyHistogram("one-way (ms) histogram", id="lat-hist")
-        yield RecordsTable(id="lat-records", show_cursor=False, zebra_stripes=True)
+        yield RecordsList(id="lat-records")

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import sys
 import threading
 import time
 from collections.abc import Callable
@@ -65,6 +66,7 @@ class SessionConfig:
     export_dir: Path = Path(".")
 
 
+SWITCH_INTERVAL_S = 0.001
 NO_LINK_WORDS = "The link to the robot is down: nothing can be sent. Press g once it is back."
 
 
@@ -141,6 +143,10 @@ class RobotSession:
     def start(self) -> None:
         """Run the clocked work on the session's own thread until :meth:`close`."""
         if self._thread is None:
+            # A thread that wants the GIL asks the holder to let go after the switch interval; 5 ms by
+            # default is 20 ms of wall time at a Pi-class CPU quota, per hand-off (session, then Twisted's
+            # reactor). 1 ms keeps a command's way through both threads short while the UI paints.
+            sys.setswitchinterval(SWITCH_INTERVAL_S)
             self._thread = threading.Thread(target=self._run, name="robot-session", daemon=True)
             self._thread.start()
 
