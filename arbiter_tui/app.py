@@ -48,7 +48,7 @@ from .screens.analytics import AnalyticsScreen
 from .screens.control import ControlScreen
 from .screens.help import HelpScreen
 from .screens.latency import LatencyScreen
-from .session.robot import MissionFinished, RobotSession, SessionConfig
+from .session.robot import MissionFinished, RobotSession
 from .settings import SIM, Settings
 from .views import (
     AnalyticsView,
@@ -125,13 +125,7 @@ class ArbiterApp(App[None]):
         self.tracker = tracker
         self._connector = connector
         self._cleanup: Callable[[], None] | None = None
-        config = SessionConfig(
-            repeat_rate=settings.repeat_rate, collection_rate=settings.collection_rate,
-            max_points=settings.max_points, speed=settings.speed, turn=settings.turn,
-            key_timeout=settings.key_timeout, start_paused=settings.start_paused,
-            export_dir=settings.export_dir,
-        )  # fmt: skip
-        self.session = RobotSession(config, link, store, clock)
+        self.session = RobotSession(settings, link, store, clock)
         self.session.on_event = self._session_event  # from the session's thread: post_message is safe
         self.last_export: ExportResult | None = None
         self.start_error: str | None = None

@@ -43,6 +43,8 @@ from .settings import (
     Settings,
 )
 
+D = Settings()  # the defaults: one place, read by the parser, the help texts and the app
+
 
 def build_parser() -> argparse.ArgumentParser:
     p = OneLineParser(
@@ -102,8 +104,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--collection-rate",
         type=bounded_float(*COLLECTION_RATE_HZ, "Hz", low_open=True),
-        default=10.0,
-        help=f"analytics samples per second, up to {COLLECTION_RATE_HZ[1]:g} (10)",
+        default=D.collection_rate,
+        help=f"analytics samples per second, up to {COLLECTION_RATE_HZ[1]:g} ({D.collection_rate:g})",
     )
     p.add_argument(
         "--start-paused",
@@ -112,41 +114,42 @@ def build_parser() -> argparse.ArgumentParser:
         "standing still outside a run adds no samples)",
     )
     p.add_argument(
-        "--max-points", type=count, default=1000,
-        help="analytics ring buffer size (1000); run summaries keep all their samples regardless",
+        "--max-points", type=count, default=D.max_points,
+        help=f"analytics ring buffer size ({D.max_points}); run summaries keep all their samples regardless",
     )  # fmt: skip
     p.add_argument(
         "--speed",
         type=positive_float,
-        default=0.5,
-        help=f"start max speed of teleop and the controllers, m/s (0.5; above the robot's "
+        default=D.speed,
+        help=f"start max speed of teleop and the controllers, m/s ({D.speed:g}; above the robot's "
         f"{DEFAULT_LIMITS.max_linear:g} it is capped, and said)",
     )
     p.add_argument(
         "--turn",
         type=positive_float,
-        default=1.0,
-        help=f"start max turn rate, rad/s (1.0; capped at {DEFAULT_LIMITS.max_angular:g})",
+        default=D.turn,
+        help=f"start max turn rate, rad/s ({D.turn:g}; capped at {DEFAULT_LIMITS.max_angular:g})",
     )
     p.add_argument(
         "--repeat-rate",
         type=bounded_float(*REPEAT_RATE_HZ, "Hz"),
-        default=10.0,
+        default=D.repeat_rate,
         help=f"commands per second while a key is held or a mission drives, a ceiling "
-        f"({REPEAT_RATE_HZ[0]:g}-{REPEAT_RATE_HZ[1]:g}; 10)",
+        f"({REPEAT_RATE_HZ[0]:g}-{REPEAT_RATE_HZ[1]:g}; {D.repeat_rate:g})",
     )
     p.add_argument(
         "--key-timeout",
         type=bounded_float(*KEY_TIMEOUT_S, "s"),
-        default=0.6,
-        help=f"stop this long after the last key, s ({KEY_TIMEOUT_S[0]:g}-{KEY_TIMEOUT_S[1]:g}; 0.6)",
+        default=D.key_timeout,
+        help=f"stop this long after the last key, s ({KEY_TIMEOUT_S[0]:g}-{KEY_TIMEOUT_S[1]:g}; "
+        f"{D.key_timeout:g})",
     )
     p.add_argument(
         "--offset-warn-ms",
         type=bounded_float(*OFFSET_WARN_MS, "ms", low_open=True),
-        default=10.0,
-        help="warn when the clock offset to the tracker is surely beyond this, ms (10, the seed's chrony "
-        "rule)",
+        default=D.offset_warn_ms,
+        help=f"warn when the clock offset to the tracker is surely beyond this, ms "
+        f"({D.offset_warn_ms:g}, the seed's chrony rule)",
     )
     p.add_argument(
         "--token-file",

@@ -17,7 +17,10 @@ from ..analytics.files import ExportError, write_new_file
 from ..analytics.runs import row_of
 from ..analytics.store import stats_of_points
 from ..control.teleop import cap_setting
+from ..settings import Settings
 from .compare import AUTONOMOUS, MISSION_NAMES, CompareError, RunResult, compare, parse_names, ranking_of
+
+D = Settings()  # the console's defaults, one place
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -33,9 +36,9 @@ def build_parser() -> argparse.ArgumentParser:
         "--algorithms", default=",".join(AUTONOMOUS), help=f"comma-separated ({', '.join(AUTONOMOUS)})"
     )
     p.add_argument(
-        "--speed", type=positive_float, default=0.5, help="max speed of the controllers, m/s (0.5)"
+        "--speed", type=positive_float, default=D.speed, help=f"max speed of controllers, m/s ({D.speed:g})"
     )
-    p.add_argument("--turn", type=positive_float, default=1.0, help="max turn rate, rad/s (1.0)")
+    p.add_argument("--turn", type=positive_float, default=D.turn, help=f"max turn rate, rad/s ({D.turn:g})")
     p.add_argument(
         "--json",
         action="store_true",

@@ -32,6 +32,7 @@ from ..control.loop import ControlLoop
 from ..control.teleop import MOVE_KEYS, SCALE_KEYS, STOP_KEYS, Teleop
 from ..link.base import DISCONNECTED, RECONNECTING, STARTING, Link
 from ..link.sim import SimLink
+from ..settings import Settings
 
 log = logging.getLogger(__name__)
 
@@ -52,20 +53,6 @@ class MissionFinished:
     mission: str
 
 
-@dataclass(frozen=True)
-class SessionConfig:
-    """What the session needs of the console's settings."""
-
-    repeat_rate: float = 10.0
-    collection_rate: float = 10.0
-    max_points: int = 1000
-    speed: float = 0.5
-    turn: float = 1.0
-    key_timeout: float = 0.6
-    start_paused: bool = False
-    export_dir: Path = Path(".")
-
-
 SWITCH_INTERVAL_S = 0.001
 NO_LINK_WORDS = "The link to the robot is down: nothing can be sent. Press g once it is back."
 
@@ -73,7 +60,7 @@ NO_LINK_WORDS = "The link to the robot is down: nothing can be sent. Press g onc
 class RobotSession:
     def __init__(
         self,
-        config: SessionConfig,
+        config: Settings,
         link: Link,
         store: AnalyticsStore | None = None,
         clock: Callable[[], float] = time.monotonic,
@@ -83,6 +70,7 @@ class RobotSession:
         self.link = link
         self.clock = clock
         self.store = store if store is not None else AnalyticsStore(config.max_points, config.collection_rate)
+        # the settings are read here once: their defaults live in one place (settings.Settings)
         self.store.collection_rate = config.collection_rate
         if self.store.max_data_points != config.max_points:
             self.store.max_data_points = config.max_points

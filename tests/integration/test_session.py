@@ -13,7 +13,7 @@ from arbiter_tui.app import make_app
 from arbiter_tui.latency.tracker_client import TrackerClient
 from arbiter_tui.link.base import CONNECTED, Telemetry
 from arbiter_tui.link.rosbridge import RosLink
-from arbiter_tui.session.robot import MissionFinished, RobotSession, SessionConfig
+from arbiter_tui.session.robot import MissionFinished, RobotSession
 from arbiter_tui.settings import Settings
 
 from ..support.backend import get_json, start_backend
@@ -23,7 +23,7 @@ from ..support.waits import wait_for
 def test_a_mission_through_the_real_backend_with_no_textual(tmp_path):
     backend = start_backend()
     link = RosLink("127.0.0.1", backend.bridge_port)
-    session = RobotSession(SessionConfig(export_dir=tmp_path), link)
+    session = RobotSession(Settings(export_dir=tmp_path), link)
     events = []
     session.on_event = events.append
     try:
