@@ -9,7 +9,8 @@ the same key stream:
 * ``control_key_held``: ``i`` every 0.1 s (a held key's auto-repeat: teleop commands flowing,
   the robot moving, the control screen live);
 * ``latency_screen``: the latency screen open while the tracker is polled (keys: none);
-* ``analytics_collecting``: a go_to_goal mission driving and collection on, analytics screen open.
+* ``analytics_collecting``: a go_to_goal mission driving (recording is on from the start), analytics
+  screen open.
 
 The bare app gets the same keys and durations. CPU is the app process's user+system time (/proc; the
 embedded backend child excluded); output is every byte written to the terminal (tmux ``pipe-pane``).
@@ -128,7 +129,7 @@ def main() -> int:
     steps = [
         ("control_key_held", [], "i", s),
         ("latency_screen", ["3"], None, s),
-        ("analytics_collecting", ["1", "a", "g", "2", "r"], None, s),
+        ("analytics_collecting", ["1", "a", "g", "2"], None, s),  # recording is on from the start
     ]
     bare_cmd = f"{sys.executable} {HERE / 'bare_app.py'}"
     tui_runs, bare_runs = [], []
