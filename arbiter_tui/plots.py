@@ -16,11 +16,12 @@ from textual_plot import HiResMode, PlotWidget
 from textual_plot.axis_formatter import AxisFormatter
 
 from . import axes
+from .analytics.runs import MANUAL
 from .views import AnalyticsView, LatencySnapshot, thin
 
 # one marker shape (and colour) per algorithm; later names reuse them in order
 ALGORITHM_STYLES: dict[str, tuple[str, str]] = {
-    "manual": ("·", "bright_white"),
+    MANUAL: ("·", "bright_white"),
     "go_to_goal": ("+", "cyan"),
     "pure_pursuit": ("x", "magenta"),
 }
@@ -37,7 +38,7 @@ MIN_GAP_Y = 2  # rows between y ticks
 LINE_GAP_S = 1.0  # latency over time: no line across a second without commands
 
 
-SHORT_NAMES = {"manual": "man", "waypoint": "wpt"}
+SHORT_NAMES = {MANUAL: "man", "waypoint": "wpt"}
 
 
 def short_name(name: str) -> str:

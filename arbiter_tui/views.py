@@ -17,7 +17,7 @@ import numpy as np
 from arbiter_core import stats as S
 from arbiter_core.stats import Summary
 
-from .analytics.runs import AlgorithmSummary, RunSummary
+from .analytics.runs import MANUAL, AlgorithmSummary, RunSummary
 from .analytics.store import EMPTY_STATS, AnalyticsStats, AnalyticsStore
 from .control.loop import ControlLoop
 from .latency.tracker_client import LatencyView
@@ -31,7 +31,7 @@ class StatusView:
     link: str = STARTING
     target: str = ""
     deploy: str | None = None  # only once the tracker answered
-    algorithm: str = "manual"
+    algorithm: str = MANUAL
     collecting: bool = False
     points: int = 0
     api: str | None = None  # "api UNREACHABLE" / "api …" (not answered yet); None when it answers
@@ -73,7 +73,7 @@ class RobotView:
     theta: float = 0.0
     v_odom: float = 0.0
     w_odom: float = 0.0
-    algorithm: str = "manual"
+    algorithm: str = MANUAL
     state: str = "stopped"  # driving (a mission run) / teleop (a held key) / stopped
     mission: str = ""
     done: int = 0
@@ -210,7 +210,7 @@ def odometry_warning(link: Link, now: float) -> str | None:
 
 def robot_view(link: Link, loop: ControlLoop, too_small: bool = False, now: float | None = None) -> RobotView:
     pose, v_odom, w_odom, _lat = link.telemetry.snapshot()
-    manual = loop.algorithm == "manual"
+    manual = loop.algorithm == MANUAL
     goal = None if manual else loop.goal()
     e_d = e_th = None
     if goal is not None:
@@ -247,7 +247,7 @@ def map_view(link: Link, loop: ControlLoop, previous: MapView | None = None) -> 
     pose = link.telemetry.snapshot()[0]
     version = loop.trail_version
     trail = previous.trail if previous is not None and previous.version == version else tuple(loop.trail)
-    manual = loop.algorithm == "manual"
+    manual = loop.algorithm == MANUAL
     return MapView(
         version=version,
         trail=trail,
@@ -276,7 +276,7 @@ def analytics_view(
     version = store.version
     waypoints: tuple[tuple[float, float], ...] = ()
     goal = None
-    if loop is not None and loop.algorithm != "manual":
+    if loop is not None and loop.algorithm != MANUAL:
         waypoints, goal = tuple(loop.mission.waypoints), loop.goal()
     if previous is not None and previous.version == version:
         plots_due = previous.plotted_from != version and now - previous.plotted_at >= PLOT_PERIOD_S

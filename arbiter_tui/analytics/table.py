@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 from . import ranking
 from .labels import format_stat
-from .runs import LOWER_IS_BETTER, AlgorithmSummary, RunSummary, best_in_columns
+from .runs import LOWER_IS_BETTER, MANUAL, AlgorithmSummary, RunSummary, best_in_columns
 
 BEST_CELL = "◆"
 BEST_ROW = "★"
@@ -149,7 +149,7 @@ def build(
     for i, item in enumerate(items):
         if compact and item.mission != previous:
             group_rows.append(len(rows))
-            rows.append(tuple(item.mission or "manual" if k == star else "" for k in range(len(columns))))
+            rows.append(tuple(item.mission or MANUAL if k == star else "" for k in range(len(columns))))
             marked.append(())
         previous = item.mission
         cells = []

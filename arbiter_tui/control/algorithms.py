@@ -19,6 +19,8 @@ from arbiter_core.kinematics import (
     wrap_angle,
 )
 
+from ..analytics.runs import MANUAL
+
 Point = tuple[float, float]
 
 
@@ -39,7 +41,7 @@ MISSIONS: dict[str, list[Point]] = {
     "square": _square(),
     "figure_eight": _figure_eight(),
 }
-ALGORITHMS = ("manual", "go_to_goal", "pure_pursuit")
+ALGORITHMS = (MANUAL, "go_to_goal", "pure_pursuit")
 
 
 @dataclass
@@ -90,7 +92,7 @@ class ManualController:
 
     v: float = 0.0
     w: float = 0.0
-    name: str = "manual"
+    name: str = MANUAL
 
     def command(self, pose: Pose, mission: MissionProgress) -> tuple[float, float]:
         return self.v, self.w
@@ -167,7 +169,7 @@ Controller = ManualController | GoToGoalController | PurePursuitController
 
 
 def make_controller(name: str, limits: Limits = DEFAULT_LIMITS) -> Controller:
-    if name == "manual":
+    if name == MANUAL:
         return ManualController()
     if name == "go_to_goal":
         return GoToGoalController(limits=limits)

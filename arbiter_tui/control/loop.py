@@ -18,7 +18,7 @@ from dataclasses import replace
 
 from arbiter_core.kinematics import Limits, Pose, clamp_twist, distance_error, heading_error
 
-from ..analytics.runs import ABORTED, COMPLETED, ENDED, MANUAL_IDLE_S, OVERRIDDEN
+from ..analytics.runs import ABORTED, COMPLETED, ENDED, MANUAL, MANUAL_IDLE_S, OVERRIDDEN
 from ..analytics.store import AnalyticsStore, DataPoint
 from ..link.base import Link
 from .algorithms import ALGORITHMS, MISSIONS, MissionProgress, make_controller
@@ -49,7 +49,7 @@ class ControlLoop:
         self.store = store
         self.teleop = teleop
         self._wall_ms = wall_ms
-        self.algorithm = "manual"
+        self.algorithm = MANUAL
         self.mission_name = "square"  # the named mission ``n`` selects and ``g`` starts
         self.mission = MissionProgress.named(self.mission_name)
         self.mission_label = self.mission_name  # what the current (or last) run drives: a name or a goal
@@ -94,9 +94,9 @@ class ControlLoop:
 
     def _autonomous(self) -> bool:
         """Make sure an autonomous controller is selected (go_to_goal after manual); False if none can be."""
-        if self.algorithm == "manual":
+        if self.algorithm == MANUAL:
             self.set_algorithm("go_to_goal")
-        return self.algorithm != "manual"
+        return self.algorithm != MANUAL
 
     def _run(self, mission: MissionProgress, label: str) -> None:
         self.stop()
@@ -108,7 +108,7 @@ class ControlLoop:
 
     def start_autonomous(self) -> bool:
         """Start the selected controller on the named mission, from the robot's current pose."""
-        if self.algorithm == "manual":
+        if self.algorithm == MANUAL:
             return False
         pose = self.link.telemetry.snapshot()[0]
         mission = MissionProgress.named(self.mission_name)
@@ -124,7 +124,7 @@ class ControlLoop:
         interrupted = self.interrupted
         if interrupted is None or interrupted.done:
             return self.start_autonomous()
-        if self.algorithm == "manual":
+        if self.algorithm == MANUAL:
             self.set_algorithm(self._interrupted_algorithm)
         pose = self.link.telemetry.snapshot()[0]
         interrupted.start = (pose.x, pose.y)  # pure pursuit follows the segment from here
@@ -134,7 +134,7 @@ class ControlLoop:
 
     def restart(self) -> bool:
         """Start the named mission from its first waypoint (an interrupted one is forgotten)."""
-        if self.algorithm == "manual" and self.interrupted is not None:
+        if self.algorithm == MANUAL and self.interrupted is not None:
             self.set_algorithm(self._interrupted_algorithm)
         self.interrupted = None
         return self.start_autonomous()
@@ -163,7 +163,7 @@ class ControlLoop:
     def override(self) -> None:
         """A movement key takes over from the controller: the run ends as overridden, manual selected."""
         self.stop(OVERRIDDEN)
-        self.set_algorithm("manual")
+        self.set_algorithm(MANUAL)
 
     def _final_error(self) -> float:
         pose = self.link.telemetry.snapshot()[0]
@@ -176,9 +176,9 @@ class ControlLoop:
 
     def _track_manual(self, now: float, v: float, w: float) -> None:
         """Manual driving is a run from its first movement until ``MANUAL_IDLE_S`` without one."""
-        if self.algorithm == "manual" and (v, w) != (0.0, 0.0):
+        if self.algorithm == MANUAL and (v, w) != (0.0, 0.0):
             if self._manual_at is None:
-                self.store.begin_run("manual", "", self._wall_ms())
+                self.store.begin_run(MANUAL, "", self._wall_ms())
             self._manual_at = (now, self._wall_ms())
         elif self._manual_at is not None and now - self._manual_at[0] >= MANUAL_IDLE_S:
             self._end_manual_run()

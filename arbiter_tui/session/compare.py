@@ -15,14 +15,14 @@ from arbiter_core.kinematics import Pose, distance_error
 from arbiter_core.simulator import RATE_HZ
 
 from ..analytics import ranking
-from ..analytics.runs import RunSummary
+from ..analytics.runs import MANUAL, RunSummary
 from ..analytics.store import AnalyticsStats, AnalyticsStore, DataPoint
 from ..control.algorithms import ALGORITHMS, MISSIONS
 from ..control.loop import ControlLoop
 from ..control.teleop import Teleop
 from ..link.sim import SimLink
 
-AUTONOMOUS = tuple(a for a in ALGORITHMS if a != "manual")
+AUTONOMOUS = tuple(a for a in ALGORITHMS if a != MANUAL)
 SIM_HZ = RATE_HZ  # the simulator's own rate (arbiter_core.simulator)
 CONTROL_HZ = 10.0
 TIME_LIMIT_S = 600.0  # a run that has not finished by then counts as not completed

@@ -27,6 +27,7 @@ from pathlib import Path
 from arbiter_core.simulator import RATE_HZ as SIM_HZ
 
 from ..analytics.files import FORMATS, ExportError, NothingToExport, export_stem, export_store
+from ..analytics.runs import MANUAL
 from ..analytics.store import AnalyticsStore
 from ..control.loop import ControlLoop
 from ..control.teleop import MOVE_KEYS, SCALE_KEYS, STOP_KEYS, Teleop
@@ -200,7 +201,7 @@ class RobotSession:
                 return key in MOVE_KEYS or key in SCALE_KEYS  # swallowed: nothing moves unseen
             if self.loop.running and key in STOP_KEYS:
                 self.loop.stop()
-            was_manual = self.loop.algorithm == "manual"
+            was_manual = self.loop.algorithm == MANUAL
             before = (self.teleop.moving, self.teleop.target)
             result = self.teleop.press(key, self.clock())
             if result is None:
