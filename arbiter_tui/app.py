@@ -488,7 +488,7 @@ class ArbiterApp(App[None]):
         for result in results:
             if result.path is not None:
                 self.post_message(ExportWritten(result))
-            elif len(results) == 1 and "0 samples" in (result.error or ""):
+            elif result.nothing:
                 self.notify(result.error or "", severity="warning", timeout=6)
             else:
                 self.post_message(ExportFailed(result))

@@ -44,6 +44,7 @@ class ExportResult:
     path: Path | None
     points: int
     error: str | None = None
+    nothing: bool = False  # refused: no samples to export (not a failure)
 
 
 @dataclass(frozen=True)
@@ -269,7 +270,7 @@ class RobotSession:
             try:
                 path = export_store(self.store, fmt, self.config.export_dir, stem=stem)
             except NothingToExport as exc:
-                return [ExportResult(fmt, None, n, str(exc))]  # said once, whatever the formats
+                return [ExportResult(fmt, None, n, str(exc), nothing=True)]  # said once, whatever the formats
             except (ExportError, OSError, ValueError) as exc:
                 results.append(ExportResult(fmt, None, n, str(exc)))
             else:

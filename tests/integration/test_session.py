@@ -2,7 +2,6 @@
 endpoint, tracker, simulator in their own process) by the real roslibpy link, the session's own thread
 keeping time; and a paint that takes 300 ms does not delay a command."""
 
-import asyncio
 import time
 
 from rich.text import Text
@@ -17,7 +16,7 @@ from arbiter_tui.session.robot import MissionFinished, RobotSession
 from arbiter_tui.settings import Settings
 
 from ..support.backend import get_json, start_backend
-from ..support.waits import wait_for
+from ..support.waits import async_until, wait_for
 
 
 def test_a_mission_through_the_real_backend_with_no_textual(tmp_path):
@@ -81,7 +80,8 @@ async def test_a_slow_paint_does_not_delay_the_commands(tmp_path):
         assert app.session.go() is None
         await app.screen.mount(SlowPaint())
         start = len(link.at)
-        await asyncio.sleep(3.0)  # a measurement window: three seconds of painting 300 ms frames
+        # thirty commands' worth of painting 300 ms frames (about 3 s when nothing is late)
+        assert await async_until(lambda: len(link.at) >= start + 30, timeout=15)
         gaps = [b - a for a, b in zip(link.at[start:], link.at[start + 1 :], strict=False)]
         await pilot.press("space")
     assert len(gaps) >= 20
