@@ -77,6 +77,8 @@ def freeze_heap() -> None:
     again: a full collection then only walks what was made since. Cheap (a list splice) and called a
     handful of times, so the garbage frozen with them stays a one-off."""
     gc.freeze()
+
+
 EXIT_DEADLINE_S = 2.0  # after SIGHUP/SIGTERM the process is gone by then, whatever the terminal does
 
 Connector = Callable[[], tuple[Link, "TrackerClient | None", Callable[[], None]]]
@@ -265,7 +267,7 @@ class ArbiterApp(App[None]):
 
     @on(LatencyPolled)
     def _polled(self) -> None:
-        if self.current_mode == "latency":  # elsewhere nobody shows it: sampled when the screen shows
+        if self.current_mode == "latency" or self.dashboard_shown():  # elsewhere nobody shows it
             self.latency = self._latency_snapshot()
         self.status = self._status_view()
 
@@ -293,16 +295,22 @@ class ArbiterApp(App[None]):
         self._link_state = state
         self.status = self._status_view()
         mode = self.current_mode
+        dashboard = self.dashboard_shown()
         if mode == "control":
             self.robot = robot_view(self.link, self.loop, self.too_small)
             self.trajectory = map_view(self.link, self.loop, self.trajectory)
-        elif mode == "analytics":
+        if mode == "analytics" or dashboard:
             now = time.monotonic()
             if force or now - self._analytics_at >= 1.0 / self.settings.analytics_rate:
                 self._analytics_at = now
                 self.analytics = analytics_view(self.store, self.analytics, self.loop)
-        elif mode == "latency":
+        if mode == "latency" or dashboard:
             self.latency = self._latency_snapshot()
+
+    def dashboard_shown(self) -> bool:
+        """The control screen is showing as the dashboard (a large terminal): it shows every view."""
+        screen = self.screen
+        return self.current_mode == "control" and isinstance(screen, ControlScreen) and screen.dashboard
 
     def _status_view(self) -> StatusView:
         return status_view(

@@ -94,6 +94,24 @@ def equal_aspect_axes(
     return out[0], out[1]
 
 
+def cell(value: float, axis: Axis, cells: int) -> int:
+    """The cell (0 at ``axis.lo``) a value falls in on an axis of ``cells`` cells (outside: < 0, >= cells)."""
+    return math.floor((value - axis.lo) / (axis.hi - axis.lo) * cells)
+
+
+def around(
+    xs: list[float], ys: list[float], cols: int, rows: int, cell_aspect: float, min_gap_x: int
+) -> tuple[Axis, Axis]:
+    """Equal-aspect axes around points (a tenth of their span, at least 0.1 m, added on every side): a
+    map of a path in metres."""
+    if not xs:
+        xs, ys = [0.0], [0.0]
+    pad_x, pad_y = max(max(xs) - min(xs), 1.0) * 0.1, max(max(ys) - min(ys), 1.0) * 0.1
+    return equal_aspect_axes(
+        min(xs) - pad_x, max(xs) + pad_x, min(ys) - pad_y, max(ys) + pad_y, cols, rows, cell_aspect, min_gap_x
+    )
+
+
 def decades(top: float, cells: int) -> Axis:
     """A log10 count axis drawn as ``log10(count) + 1`` (a count of 1 is one decade tall, not nothing):
     ticks at whole decades (labelled 1, 10, 100... by the caller), an equal number of cells apart."""

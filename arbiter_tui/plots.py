@@ -12,12 +12,14 @@ from collections.abc import Sequence
 from typing import Any, ClassVar
 
 import numpy as np
+from textual import events
 from textual_plot import HiResMode, PlotWidget
 from textual_plot.axis_formatter import AxisFormatter
 
 from . import axes
 from .analytics.runs import MANUAL
-from .views import AnalyticsView, LatencySnapshot, thin
+from .messages import GoalPicked
+from .views import AnalyticsView, LatencySnapshot, MapView, thin
 
 # one marker shape (and colour) per algorithm; later names reuse them in order
 ALGORITHM_STYLES: dict[str, tuple[str, str]] = {
@@ -148,7 +150,54 @@ class ErrorPlot(Plot):
             self.set_axes(axes.aligned(0.0, 10.0, cols, MIN_GAP_X), axes.aligned(0.0, 1.0, rows, MIN_GAP_Y))
 
 
-class TrajectoryPlot(Plot):
+class MapPlot(Plot):
+    """A path in metres at equal aspect: the axes are the scale. Shared by the analytics trajectory and
+    the control screen's live map, so both are drawn (and read) the same way."""
+
+    def map_axes(
+        self,
+        xs: list[float],
+        ys: list[float],
+        waypoints: tuple[tuple[float, float], ...],
+        goal: tuple[float, float] | None,
+    ) -> tuple[axes.Axis, axes.Axis]:
+        xs, ys = list(xs), list(ys)
+        for wx, wy in waypoints + ((goal,) if goal is not None else ()):
+            xs.append(wx)
+            ys.append(wy)
+        cols, rows = self.scale_size()
+        return axes.around(xs, ys, cols, rows, CELL_ASPECT, MIN_GAP_X)
+
+    def draw_mission(
+        self, waypoints: tuple[tuple[float, float], ...], goal: tuple[float, float] | None
+    ) -> list[tuple[str, str]]:
+        """The waypoints ``o`` and the goal ``G``; their legend entries."""
+        legend = []
+        if waypoints:
+            wx, wy = zip(*waypoints, strict=True)
+            self.scatter(wx, wy, marker="o", marker_style="yellow")
+            legend.append(("o", "waypoint"))
+        if goal is not None:
+            self.scatter([goal[0]], [goal[1]], marker="G", marker_style="bold red")
+            legend.append(("G", "goal"))
+        return legend
+
+    def one_per_cell(
+        self, x: np.ndarray, y: np.ndarray, x_axis: axes.Axis, y_axis: axes.Axis
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """The first point in each character cell: a marker drawn twice in a cell looks the same, and the
+        plot library pays for every point."""
+        if x.size == 0:
+            return x, y
+        cols, rows = self.scale_size()
+        c = np.floor((x - x_axis.lo) / (x_axis.hi - x_axis.lo) * cols).astype(np.int64)
+        r = np.floor((y - y_axis.lo) / (y_axis.hi - y_axis.lo) * rows).astype(np.int64)
+        _, first = np.unique(r * (cols + 1) + c, return_index=True)
+        first.sort()
+        return x[first], y[first]
+
+
+class TrajectoryPlot(MapPlot):
     """The collected path, one marker per algorithm (legend), the mission's waypoints ``o`` and goal ``G``,
     at equal aspect: the axes in metres are the scale."""
 
@@ -161,44 +210,80 @@ class TrajectoryPlot(Plot):
         tracks = [(t, np.asarray(t.x), np.asarray(t.y)) for t in view.tracks]
         xs = [float(v) for _t, x, _y in tracks for v in (x.min(), x.max())]
         ys = [float(v) for _t, _x, y in tracks for v in (y.min(), y.max())]
-        for wx, wy in view.waypoints + ((view.goal,) if view.goal is not None else ()):
-            xs.append(wx)
-            ys.append(wy)
-        if not xs:
-            xs, ys = [0.0], [0.0]
-        pad_x, pad_y = max(max(xs) - min(xs), 1.0) * 0.1, max(max(ys) - min(ys), 1.0) * 0.1
-        cols, rows = self.scale_size()
-        x_axis, y_axis = axes.equal_aspect_axes(
-            min(xs) - pad_x, max(xs) + pad_x, min(ys) - pad_y, max(ys) + pad_y,
-            cols, rows, CELL_ASPECT, MIN_GAP_X,
-        )  # fmt: skip
+        x_axis, y_axis = self.map_axes(xs, ys, view.waypoints, view.goal)
         self.set_axes(x_axis, y_axis)
         legend: list[tuple[str, str]] = []
         for i, (track, x, y) in enumerate(tracks):
             marker, colour = algorithm_style(track.algorithm, i)
-            self.scatter(*self._one_per_cell(x, y), marker=marker, marker_style=colour)
+            self.scatter(*self.one_per_cell(x, y, x_axis, y_axis), marker=marker, marker_style=colour)
             legend.append((marker, track.algorithm))
-        if view.waypoints:
-            wx, wy = zip(*view.waypoints, strict=True)
-            self.scatter(wx, wy, marker="o", marker_style="yellow")
-            legend.append(("o", "waypoint"))
-        if view.goal is not None:
-            self.scatter([view.goal[0]], [view.goal[1]], marker="G", marker_style="bold red")
-            legend.append(("G", "goal"))
+        legend += self.draw_mission(view.waypoints, view.goal)
         # the legend is text in the bottom border: it never hides the path
         self.border_subtitle = legend_text(legend, self.size.width - 6)
 
-    def _one_per_cell(self, x: np.ndarray, y: np.ndarray) -> tuple[list[float], list[float]]:
-        """The first point in each character cell (as the plot maps them): a marker drawn twice in a cell
-        looks the same, and the plot library pays for every point. Before the first paint the plot's
-        mapping is unknown: every point is kept."""
-        if not self._scale_rectangle.area:
-            return x.tolist(), y.tolist()
-        cells: dict[tuple[int, int], tuple[float, float]] = {}
-        for xi, yi in zip(x.tolist(), y.tolist(), strict=True):
-            cells.setdefault(self.get_pixel_from_coordinate(xi, yi), (xi, yi))
-        kept = list(cells.values())
-        return [p[0] for p in kept], [p[1] for p in kept]
+
+class LiveMap(MapPlot):
+    """The control screen's map: the robot (an arrow along its heading), its trail, the origin ``+``, and
+    the waypoints and goal where ``g`` takes it, drawn as the analytics trajectory is. Redrawn only when
+    what it shows moves by a cell (the robot, the axes) or the mission changes, not at every pose. A click
+    sets a go-to-goal target there."""
+
+    SOURCE = "trajectory"
+    view: MapView | None = None
+
+    def data_key(self, view: MapView) -> object:
+        x_axis, y_axis = self._axes(view)
+        cols, rows = self.scale_size()
+        cell = None
+        if view.pose is not None:
+            x, y, theta = view.pose
+            cell = (axes.cell(x, x_axis, cols), axes.cell(y, y_axis, rows), heading_arrow(theta))
+        return (x_axis, y_axis, cell, view.goal, view.waypoints, view.stale)
+
+    def _axes(self, view: MapView) -> tuple[axes.Axis, axes.Axis]:
+        xs, ys = [0.0], [0.0]  # the origin is always on the map
+        if view.bounds is not None:
+            xs += [view.bounds[0], view.bounds[1]]
+            ys += [view.bounds[2], view.bounds[3]]
+        if view.pose is not None:
+            xs.append(view.pose[0])
+            ys.append(view.pose[1])
+        return self.map_axes(xs, ys, view.waypoints, view.goal)
+
+    def draw(self, view: MapView) -> None:
+        self.view = view
+        x_axis, y_axis = self._axes(view)
+        self.set_axes(x_axis, y_axis)
+        legend = [("+", "origin")]
+        self.scatter([0.0], [0.0], marker="+", marker_style="dim")
+        if view.trail:
+            trail = np.asarray(view.trail, dtype=np.float64)
+            x, y = self.one_per_cell(trail[:, 0], trail[:, 1], x_axis, y_axis)
+            self.scatter(x, y, marker="·", marker_style="cyan")
+            legend.append(("·", "trail"))
+        legend += self.draw_mission(view.waypoints, view.goal)
+        if view.pose is not None:
+            x, y, theta = view.pose
+            arrow = heading_arrow(theta)
+            self.scatter([x], [y], marker=arrow, marker_style="dim" if view.stale else "bold green")
+            legend.insert(0, (arrow, "robot (stale)" if view.stale else "robot"))
+        self.border_subtitle = legend_text(legend, self.size.width - 6)
+
+    def on_click(self, event: events.Click) -> None:
+        """A click inside the axes sets a go-to-goal target there (rounded to a centimetre)."""
+        canvas = self.query_one("#plot")
+        offset = event.get_content_offset(canvas)
+        if offset is None or not self._scale_rectangle.contains(offset.x, offset.y):
+            return
+        x, y = self.get_coordinate_from_pixel(offset.x, offset.y)
+        self.post_message(GoalPicked(round(x, 2), round(y, 2)))
+
+
+ARROWS = "→↗↑↖←↙↓↘"
+
+
+def heading_arrow(theta: float) -> str:
+    return ARROWS[round(theta / (math.pi / 4)) % 8]
 
 
 class _LatencyWindow(Plot):

@@ -9,12 +9,14 @@ screen would not change: Textual then calls no watcher and the widget does no wo
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 
 from arbiter_core import stats as S
+from arbiter_core.kinematics import distance_error, heading_error
 from arbiter_core.stats import Summary
 
 from .analytics.runs import MANUAL, AlgorithmSummary, RunSummary
@@ -64,6 +66,7 @@ class RobotView:
 
     link_down: bool = False
     starting: bool = False
+    stale: bool = False  # pose and odometry are the last received, not live
     v_cmd: float = 0.0
     w_cmd: float = 0.0
     speed: float = 0.0
@@ -91,9 +94,11 @@ class MapView:
 
     version: int = 0
     trail: tuple[tuple[float, float], ...] = field(default=(), compare=False)
+    bounds: tuple[float, float, float, float] | None = None  # of the trail: x min, x max, y min, y max
     pose: tuple[float, float, float] | None = None
     goal: tuple[float, float] | None = None
     waypoints: tuple[tuple[float, float], ...] = ()
+    stale: bool = False  # the pose is not live (link down, no odometry)
 
 
 PLOT_ERRORS = 2000  # the error plot shows the newest samples, thinned to PLOT_MAX points
@@ -208,19 +213,29 @@ def odometry_warning(link: Link, now: float) -> str | None:
     return None
 
 
+def odometry_stale(link: Link, now: float) -> bool:
+    """The pose and odometry shown are not live: the link is down, or odometry stopped coming."""
+    if link.state in (DISCONNECTED, RECONNECTING):
+        return True
+    return link.state == CONNECTED and link.telemetry.odometry_missing(now)
+
+
 def robot_view(link: Link, loop: ControlLoop, too_small: bool = False, now: float | None = None) -> RobotView:
     pose, v_odom, w_odom, _lat = link.telemetry.snapshot()
-    manual = loop.algorithm == MANUAL
-    goal = None if manual else loop.goal()
+    now = time.monotonic() if now is None else now
+    plan = loop.plan(pose)  # what g drives: the goal shown is the one it drives to
+    goal = None if plan is None else plan.goal
     e_d = e_th = None
     if goal is not None:
-        e_d, e_th = (round(e, 2) for e in loop.errors(pose))
+        e_d, e_th = round(distance_error(pose, goal), 2), round(heading_error(pose, goal), 2)
     state = "driving" if loop.running else ("teleop" if loop.teleop.moving else "stopped")
-    mission = loop.mission
+    mission = plan or loop.mission
     v, w = loop.command
+    down = link.state in (DISCONNECTED, RECONNECTING)
     return RobotView(
-        link_down=link.state in (DISCONNECTED, RECONNECTING),
+        link_down=down,
         starting=link.state == STARTING,
+        stale=odometry_stale(link, now),
         v_cmd=round(v, 2),
         w_cmd=round(w, 2),
         speed=round(loop.teleop.speed, 2),
@@ -239,22 +254,39 @@ def robot_view(link: Link, loop: ControlLoop, too_small: bool = False, now: floa
         e_d=e_d,
         e_th=e_th,
         too_small=too_small,
-        warning=odometry_warning(link, time.monotonic() if now is None else now),
+        warning=odometry_warning(link, now),
     )
 
 
-def map_view(link: Link, loop: ControlLoop, previous: MapView | None = None) -> MapView:
+def map_view(
+    link: Link, loop: ControlLoop, previous: MapView | None = None, now: float | None = None
+) -> MapView:
     pose = link.telemetry.snapshot()[0]
     version = loop.trail_version
-    trail = previous.trail if previous is not None and previous.version == version else tuple(loop.trail)
-    manual = loop.algorithm == MANUAL
+    if previous is not None and previous.version == version:
+        trail, bounds = previous.trail, previous.bounds
+    else:
+        trail = tuple(loop.trail)
+        bounds = bounds_of(trail)
+    plan = loop.plan(pose)  # the waypoints where g takes the robot, not the mission's own frame
     return MapView(
         version=version,
         trail=trail,
+        bounds=bounds,
         pose=(round(pose.x, 2), round(pose.y, 2), round(pose.theta, 1)),
-        goal=None if manual else loop.goal(),
-        waypoints=() if manual else tuple(loop.mission.waypoints),
+        goal=None if plan is None else plan.goal,
+        waypoints=() if plan is None else tuple(plan.waypoints),
+        stale=odometry_stale(link, time.monotonic() if now is None else now),
     )
+
+
+def bounds_of(points: Sequence[tuple[float, float]]) -> tuple[float, float, float, float] | None:
+    """(x min, x max, y min, y max) of the points; None when there are none."""
+    if not points:
+        return None
+    xs = [p[0] for p in points]
+    ys = [p[1] for p in points]
+    return min(xs), max(xs), min(ys), max(ys)
 
 
 def thin(n: int, most: int) -> slice:

@@ -7,14 +7,9 @@ does no work. ``renders`` counts render calls (tests check that equal data costs
 
 from __future__ import annotations
 
-import math
-from collections.abc import Sequence
-from dataclasses import dataclass
 from typing import Any, ClassVar
 
 from rich.text import Text
-from textual import events
-from textual.geometry import Size
 from textual.reactive import reactive
 from textual.widget import Widget
 
@@ -22,13 +17,12 @@ from .analytics.labels import STAT_LABELS, format_stat
 from .analytics.store import STATS_FIELDS
 from .control.teleop import legend_compact
 from .latency.clocksync import OffsetEstimate
-from .messages import GoalPicked
-from .views import AnalyticsView, LatencySnapshot, MapView, RobotView, StatusView
+from .views import AnalyticsView, LatencySnapshot, RobotView, StatusView
 
-ARROWS = "→↗↑↖←↙↓↘"
-LINK_DOWN = (  # fits the 36 columns inside the panel
-    "LINK DOWN: nothing is sent.\nThe robot stops on its own timeout.\nPress a key once the link is back.\n"
+LINK_DOWN = (  # two lines of the 36 columns inside the panel: the rows below stay in view
+    "LINK DOWN: nothing is sent.\nThe robot stops on its own timeout.\n"
 )
+STALE = "*"  # marks a value that is the last received, not live
 KEY_HELP = legend_compact()
 
 
@@ -86,10 +80,14 @@ class RobotPanel(Bound):
         t.append(f"v {r.v_cmd:+.2f} m/s  ω {r.w_cmd:+.2f} rad/s\n")
         t.append("Max      ", "bold")
         t.append(f"speed {r.speed:.2f}  turn {r.turn:.2f}\n")
-        t.append("Pose     ", "bold")
-        t.append(f"x {r.x:+.2f} y {r.y:+.2f} θ {r.theta:+.2f} rad\n")
-        t.append("Odom     ", "bold")
-        t.append(f"v {r.v_odom:+.2f}  ω {r.w_odom:+.2f}\n")
+        # Pose and odometry that are not live are marked (a star and dim, not colour alone) and kept:
+        # where the robot was last seen is still worth knowing.
+        mark, look = (STALE, "dim") if r.stale else (" ", "")
+        t.append(f"Pose{mark}    ", "bold")
+        t.append(f"x {r.x:+.2f} y {r.y:+.2f} θ {r.theta:+.2f} rad\n", look)
+        t.append(f"Odom{mark}    ", "bold")
+        t.append(f"v {r.v_odom:+.2f}  ω {r.w_odom:+.2f}", look)
+        t.append("  * stale\n" if r.stale else "\n", "bold yellow")
         t.append("Algo     ", "bold")
         t.append(f"{r.algorithm} ({r.state})\n")
         t.append("Mission  ", "bold")
@@ -102,145 +100,6 @@ class RobotPanel(Bound):
         else:
             t.append(f"e_d {r.e_d:.2f} m  e_θ {r.e_th:+.2f} rad")
         return t
-
-
-def heading_arrow(theta: float) -> str:
-    return ARROWS[round(theta / (math.pi / 4)) % 8]
-
-
-@dataclass(frozen=True, slots=True)
-class MapFrame:
-    """Where the world sits on a character map: equal aspect, a cell twice as tall as it is wide."""
-
-    width: int
-    height: int
-    cx: float
-    cy: float
-    m_per_col: float
-
-    @classmethod
-    def around(cls, width: int, height: int, pts: Sequence[tuple[float, float]]) -> MapFrame:
-        pts = list(pts) or [(0.0, 0.0)]
-        xs = [p[0] for p in pts]
-        ys = [p[1] for p in pts]
-        span_x = max(max(xs) - min(xs), 1.0) * 1.15
-        span_y = max(max(ys) - min(ys), 1.0) * 1.15
-        return cls(
-            width, height, (min(xs) + max(xs)) / 2, (min(ys) + max(ys)) / 2,
-            max(span_x / width, span_y / (2 * height)),
-        )  # fmt: skip
-
-    def cell(self, x: float, y: float) -> tuple[int, int] | None:
-        """(row, column) of a world point, None when off the map."""
-        c = round((x - self.cx) / self.m_per_col + self.width / 2 - 0.5)
-        r = round(self.height / 2 - 0.5 - (y - self.cy) / (2 * self.m_per_col))
-        if 0 <= c < self.width and 0 <= r < self.height:
-            return r, c
-        return None
-
-    def world(self, row: int, col: int) -> tuple[float, float]:
-        """The world point at the centre of a cell (what a click there means)."""
-        return (
-            self.cx + (col + 0.5 - self.width / 2) * self.m_per_col,
-            self.cy + (self.height / 2 - 0.5 - row) * 2 * self.m_per_col,
-        )
-
-
-def render_map(
-    width: int,
-    height: int,
-    trail: Sequence[tuple[float, float]],
-    pose: tuple[float, float, float] | None,
-    goal: tuple[float, float] | None,
-    waypoints: Sequence[tuple[float, float]] = (),
-) -> tuple[Text, MapFrame]:
-    """A character map of the trajectory with equal aspect, and the frame it was drawn in."""
-    width, height = max(width, 4), max(height, 3)
-    pts = list(trail) + list(waypoints)
-    if pose is not None:
-        pts.append((pose[0], pose[1]))
-    if goal is not None:
-        pts.append(goal)
-    frame = MapFrame.around(width, height, pts)
-    grid = [[" "] * width for _ in range(height)]
-    styles: dict[tuple[int, int], str] = {}
-
-    def put(x: float, y: float, ch: str, style: str) -> None:
-        rc = frame.cell(x, y)
-        if rc:
-            grid[rc[0]][rc[1]] = ch
-            styles[rc] = style
-
-    for x, y in trail:
-        put(x, y, "·", "cyan")
-    for x, y in waypoints:
-        put(x, y, "o", "yellow")
-    if goal is not None:
-        put(goal[0], goal[1], "G", "bold magenta")
-    if pose is not None:
-        put(pose[0], pose[1], heading_arrow(pose[2]), "bold green")
-    text = Text(no_wrap=True, overflow="crop")
-    for r, row in enumerate(grid):
-        # one span per run of equally styled cells, not one per character
-        start = 0
-        for c in range(1, width + 1):
-            if c == width or styles.get((r, c), "") != styles.get((r, start), ""):
-                text.append("".join(row[start:c]), styles.get((r, start), ""))
-                start = c
-        if r < height - 1:
-            text.append("\n")
-    return text, frame
-
-
-class GridMap(Bound):
-    """A character map. Its grid is cheap to compute and costly to paint, so a new snapshot is painted
-    only when the grid it gives (at the widget's current size) differs from the one shown."""
-
-    DEFAULT_CSS = """
-    GridMap { border: round $primary; height: 1fr; width: 1fr; }
-    """
-    _shown: Text | None = None
-    _shown_size: Size | None = None
-
-    def grid(self, width: int, height: int) -> Text:
-        raise NotImplementedError
-
-    def watch_view(self) -> None:
-        size = self.content_size
-        if size.width <= 0 or size.height <= 0:
-            return  # not laid out yet: the first paint computes it
-        text = self.grid(size.width, size.height)
-        if (text, size) != (self._shown, self._shown_size):
-            self._shown, self._shown_size = text, size
-            self.refresh()
-
-    def draw(self) -> Text:
-        size = self.content_size
-        if self._shown is None or size != self._shown_size:
-            self._shown, self._shown_size = self.grid(size.width, size.height), size
-        return self._shown
-
-
-class TrajectoryMap(GridMap):
-    """The live trail, pose, goal and waypoints (the control screen)."""
-
-    SOURCE = "trajectory"
-    view: reactive[MapView] = reactive(MapView, repaint=False)
-
-    frame: MapFrame | None = None
-
-    def grid(self, width: int, height: int) -> Text:
-        v = self.view
-        text, self.frame = render_map(width, height, v.trail, v.pose, v.goal, v.waypoints)
-        return text
-
-    def on_click(self, event: events.Click) -> None:
-        """A click on the map sets a go-to-goal target there."""
-        offset = event.get_content_offset(self)
-        if offset is None or self.frame is None:
-            return
-        x, y = self.frame.world(offset.y, offset.x)
-        self.post_message(GoalPicked(round(x, 2), round(y, 2)))
 
 
 class StatsCards(Bound):

@@ -228,9 +228,11 @@ def main() -> int:
 
         # the console, screen by screen, a mission driving
         session = f"arbiter-pi-{tag}"
-        cmd = (f"env PYTHONPATH={env.get('PYTHONPATH', '')} {python} -m arbiter_tui.cli --connect "
-               f"--rosbridge ws://127.0.0.1:{bridge} --tracker {api} --export-dir {tmp} "
-               f"--log-file {tmp / 'tui.log'}")
+        cmd = (
+            f"env PYTHONPATH={env.get('PYTHONPATH', '')} {python} -m arbiter_tui.cli --connect "
+            f"--rosbridge ws://127.0.0.1:{bridge} --tracker {api} --export-dir {tmp} "
+            f"--log-file {tmp / 'tui.log'}"
+        )
         tmux("new-session", "-d", "-s", session, "-x", cols, "-y", rows, cmd)
         pane = int(tmux("display-message", "-p", "-t", session, "#{pane_pid}").strip())
         for pid in tree(pane):

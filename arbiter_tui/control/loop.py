@@ -110,13 +110,28 @@ class ControlLoop:
         """Start the selected controller on the named mission, from the robot's current pose."""
         if self.algorithm == MANUAL:
             return False
-        pose = self.link.telemetry.snapshot()[0]
+        self._run(self._named_from(self.link.telemetry.snapshot()[0]), self.mission_name)
+        return True
+
+    def _named_from(self, pose: Pose) -> MissionProgress:
+        """The selected mission as it runs from ``pose``: missions are relative to where the robot stands
+        when they start."""
         mission = MissionProgress.named(self.mission_name)
-        # Missions are relative to where the robot stands when they start.
         mission.waypoints = [(pose.x + x, pose.y + y) for x, y in mission.waypoints]
         mission.start = (pose.x, pose.y)
-        self._run(mission, self.mission_name)
-        return True
+        return mission
+
+    def plan(self, pose: Pose) -> MissionProgress | None:
+        """What ``g`` drives, as the map and the panel show it: the run in progress; else the interrupted
+        mission ``g`` resumes; else the selected mission from ``pose``, where ``g`` would start it. None
+        when ``g`` would start nothing (manual driving with nothing to resume)."""
+        if self.running:
+            return self.mission
+        if self.interrupted is not None and not self.interrupted.done:
+            return self.interrupted
+        if self.algorithm == MANUAL:
+            return None
+        return self._named_from(pose)
 
     def go(self) -> bool:
         """``g``: resume an interrupted mission from its current waypoint (with the selected controller,
@@ -289,7 +304,3 @@ class ControlLoop:
             runId=run,
         )
         return point if self.store.record(point) else None
-
-    def errors(self, pose: Pose) -> tuple[float, float]:
-        goal = self.mission.goal
-        return distance_error(pose, goal), heading_error(pose, goal)

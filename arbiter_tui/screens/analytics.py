@@ -12,6 +12,7 @@ from textual.app import ComposeResult
 from textual.binding import Binding
 from textual.containers import Horizontal
 from textual.reactive import reactive
+from textual.widget import Widget
 from textual.widgets import DataTable
 
 from ..analytics import table as T
@@ -56,7 +57,9 @@ class CompareTable(DataTable[Text]):
         self._refill()
 
     def on_resize(self) -> None:
-        self.compact = self.app.size.width < FULL_WIDTH
+        # the width it is given: the whole screen, or half of the dashboard
+        width = self.parent.size.width if isinstance(self.parent, Widget) else self.app.size.width
+        self.compact = width < FULL_WIDTH
 
     def watch_sort(self) -> None:
         self._refill()

@@ -54,6 +54,7 @@ class Console(Protocol):
 
     def export(self, *formats: str) -> list[ExportResult]: ...
 
+
 MIN_WIDTH, MIN_HEIGHT = 80, 24
 TOO_SMALL = (
     f"Terminal too small: need at least {MIN_WIDTH}x{MIN_HEIGHT}. The robot is stopped and movement "

@@ -1,5 +1,7 @@
 """Control screen: keyboard teleop, algorithm and mission selection, goals (t, or a click on the map),
-pose/errors, trajectory map."""
+pose/errors and the live map. On a terminal of at least 160x45 it is the dashboard: the same control
+panel and map, with the live comparison and the link's latency below them, as the seed's web dashboard
+shows its performance cards beside control."""
 
 from __future__ import annotations
 
@@ -10,8 +12,12 @@ from textual.containers import Horizontal, Vertical
 from textual.widgets import Static
 
 from ..control.algorithms import ALGORITHMS
-from ..widgets import KEY_HELP, RobotPanel, TrajectoryMap
+from ..plots import ErrorPlot, LatencyPlot, LiveMap
+from ..widgets import KEY_HELP, ClientLine, RobotPanel, StatsCards, TrackerCards, TrackerLine
+from .analytics import CompareTable, RuleLine
 from .base import BaseScreen
+
+DASHBOARD_WIDTH, DASHBOARD_HEIGHT = 160, 45
 
 
 class ControlScreen(BaseScreen):
@@ -23,13 +29,35 @@ class ControlScreen(BaseScreen):
         Binding("G", "restart", "Restart", show=False),
         Binding("t", "goal", "Goal"),
     ]
+    dashboard = False  # the terminal is large enough for the dashboard (set on every resize)
 
     def compose_body(self) -> ComposeResult:
-        with Horizontal():
+        with Horizontal(id="drive"):
             with Vertical(id="panel"):
                 yield RobotPanel(id="robot")
                 yield Static(KEY_HELP, id="keys")  # painted once: the legend never changes
-            yield TrajectoryMap(id="map")
+            yield LiveMap("map (m)", id="map")
+        with Horizontal(id="dash"):
+            with Vertical(id="dash-compare"):
+                yield StatsCards(id="dash-cards")
+                table = CompareTable(id="dash-table", show_cursor=False, zebra_stripes=True)
+                table.can_focus = False  # the arrow keys drive here: they must never scroll a table
+                yield table
+                yield RuleLine(id="dash-rule")
+                yield ErrorPlot("e_d (m) vs time (s)", id="dash-err")
+            with Vertical(id="dash-latency"):
+                yield TrackerLine(id="dash-lat-state")
+                yield TrackerCards(id="dash-lat-cards")
+                yield ClientLine(id="dash-lat-client")
+                yield LatencyPlot("one-way (ms) vs time (s)", id="dash-lat-plot")
+
+    def on_resize(self, event: events.Resize) -> None:
+        super().on_resize(event)
+        dashboard = event.size.width >= DASHBOARD_WIDTH and event.size.height >= DASHBOARD_HEIGHT
+        if dashboard != self.dashboard:
+            self.dashboard = dashboard
+            self.set_class(dashboard, "dashboard")
+            self.arbiter.publish_views(force=True)  # its panes show what was not sampled before
 
     def on_key(self, event: events.Key) -> None:
         key = event.character if event.character and event.character.isprintable() else event.key

@@ -79,9 +79,7 @@ def run_one(
     clock = _Clock()
     link = SimLink(clock=clock)
     store = AnalyticsStore(max_data_points=1_000_000, collection_rate=collection_rate)
-    loop = ControlLoop(
-        link, store, Teleop(speed=speed, turn=turn), wall_ms=lambda: t0_ms + clock.t * 1000.0
-    )
+    loop = ControlLoop(link, store, Teleop(speed=speed, turn=turn), wall_ms=lambda: t0_ms + clock.t * 1000.0)
     loop.set_algorithm(algorithm)
     loop.set_mission(mission)
     store.start_collection()

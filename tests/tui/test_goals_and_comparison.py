@@ -5,11 +5,10 @@ from arbiter_tui.analytics import table as T
 from arbiter_tui.analytics.runs import COMPLETED, OVERRIDDEN
 from arbiter_tui.analytics.store import AnalyticsStore
 from arbiter_tui.link.sim import SimLink
-from arbiter_tui.plots import ErrorPlot, TrajectoryPlot
+from arbiter_tui.plots import ErrorPlot, LiveMap, TrajectoryPlot
 from arbiter_tui.screens.analytics import CompareTable, RingWarning, RuleLine
 from arbiter_tui.screens.goal import GoalPrompt
 from arbiter_tui.views import PLOT_PERIOD_S
-from arbiter_tui.widgets import TrajectoryMap
 
 from ..support.tui import FakeClock, still_app, until
 
@@ -41,11 +40,13 @@ async def test_a_click_on_the_map_drives_to_that_point(tmp_path):
     async with app.run_test(size=SIZE) as pilot:
         app.publish_views(force=True)
         await pilot.pause()
-        the_map = app.screen.query_one(TrajectoryMap)
-        assert await until(pilot, lambda: the_map.frame is not None)
-        row, col = the_map.frame.cell(1.0, 0.6)
-        await pilot.click(TrajectoryMap, offset=(col + 1, row + 1))  # +1: the map's border
-        goal = tuple(round(v, 2) for v in the_map.frame.world(row, col))
+        the_map = app.screen.query_one(LiveMap)
+        assert await until(pilot, lambda: the_map._scale_rectangle.area > 0)
+        px, py = the_map.get_pixel_from_coordinate(1.0, 0.6)  # a cell of the plot's canvas
+        canvas = the_map.query_one("#plot").region
+        at = (canvas.x - the_map.region.x + px, canvas.y - the_map.region.y + py)
+        await pilot.click(LiveMap, offset=at)
+        goal = tuple(round(v, 2) for v in the_map.get_coordinate_from_pixel(px, py))
         assert await until(pilot, lambda: app.loop.running)
         run = app.store.active_run
         assert app.loop.algorithm == "go_to_goal" and app.loop.mission.waypoints == [goal]

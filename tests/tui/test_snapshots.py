@@ -90,3 +90,19 @@ def test_latency_histogram_of_a_skewed_window(snap_compare):
     from .test_trust_screens import SKEWED, latency_app
 
     assert snap_compare(latency_app(SKEWED), terminal_size=(100, 30), press=["3"])
+
+
+def test_the_map_with_a_mission_selected(snap_compare):
+    """go_to_goal selected (a): the square's waypoints and goal where g will take the robot, in metres."""
+    assert snap_compare(still_app(), terminal_size=(100, 30), press=["a"])
+
+
+def test_dashboard(snap_compare):
+    """200x60: control panel and map, the live comparison and the latency figures and plot at once."""
+    assert snap_compare(still_app(), terminal_size=(200, 60))
+
+
+def test_dashboard_with_the_link_down(snap_compare):
+    """Stale pose and odometry marked, the banner short, the latency pane saying the link is down."""
+    app = still_app(link=RecordingLink(state=RECONNECTING))
+    assert snap_compare(app, terminal_size=(200, 60))

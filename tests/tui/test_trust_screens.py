@@ -28,8 +28,14 @@ def record(i: int, latency: float, t: float) -> dict:
 def tracker_body(latencies, times=None, p95=9.99, count=996):
     times = times or [1_800_000_000.0 + 0.1 * i for i in range(len(latencies))]
     return {
-        "stats": {"count": count, "mean_ms": 1.0, "min_ms": 0.1, "max_ms": 9.0, "p95_ms": p95,
-                  "stddev_ms": 1.0},
+        "stats": {
+            "count": count,
+            "mean_ms": 1.0,
+            "min_ms": 0.1,
+            "max_ms": 9.0,
+            "p95_ms": p95,
+            "stddev_ms": 1.0,
+        },
         "records": [record(i, lat, t) for i, (lat, t) in enumerate(zip(latencies, times, strict=True))],
         "deploy_mode": "native",
     }

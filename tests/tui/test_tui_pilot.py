@@ -245,18 +245,21 @@ async def test_widgets_do_no_work_when_their_data_did_not_change():
     app = still_app()
     async with app.run_test(size=SIZE) as pilot:
         await pilot.pause()
-        widgets = [app.screen.query_one(q) for q in ("#status", "#robot", "#map")]
-        before = [w.renders for w in widgets]
+        status_line, panel, live_map = (app.screen.query_one(q) for q in ("#status", "#robot", "#map"))
+        before = (status_line.renders, panel.renders, live_map.draws)
         for _ in range(20):
             app.publish_views()
             await pilot.pause()
-        assert [w.renders for w in widgets] == before  # nothing changed: nothing rendered
-        app.link.telemetry.pose = Pose(1.5, -0.5, 0.6)  # the robot moved
+        assert (status_line.renders, panel.renders, live_map.draws) == before  # nothing changed: no work
+        app.link.telemetry.pose = Pose(1.26, -0.5, 0.6)  # a centimetre: the panel says so, the map's
+        app.publish_views()  # arrow stays in its cell and is not redrawn
+        await pilot.pause()
+        assert panel.renders > before[1] and live_map.draws == before[2]
+        app.link.telemetry.pose = Pose(1.5, -0.5, 0.6)  # the robot moved by a cell and more
         app.publish_views()
         await pilot.pause()
-        status, panel, robot_map = (w.renders for w in widgets)
-        assert status == before[0]  # the status line did not change
-        assert panel > before[1] and robot_map > before[2]
+        assert status_line.renders == before[0]  # the status line did not change
+        assert live_map.draws > before[2]
 
 
 async def test_autonomous_controller_sends_commands_and_manual_keys_take_over():

@@ -1,0 +1,107 @@
+"""The screen a user drives from: the map shows where g will take the robot, values that are not live are
+marked stale, and a large terminal shows the dashboard (control, comparison and latency at once)."""
+
+from arbiter_core.kinematics import Pose
+from arbiter_tui.link.base import CONNECTED, RECONNECTING
+from arbiter_tui.plots import LatencyPlot, LiveMap
+from arbiter_tui.screens.analytics import CompareTable
+from arbiter_tui.screens.control import ControlScreen
+from arbiter_tui.widgets import RobotPanel, TrackerCards
+
+from ..support.tui import RecordingLink, still_app, until
+
+
+def text_of(widget) -> str:
+    return str(widget.render())
+
+
+async def test_the_map_shows_the_mission_where_g_will_take_the_robot():
+    """Missions run from where the robot stands: before g, the waypoints and the goal shown are those g
+    drives to (not the mission's own frame at the origin), and after g they are the same points."""
+    app = still_app()
+    async with app.run_test(size=(100, 30)) as pilot:
+        app.link.telemetry.pose = Pose(1.0, 1.0, 0.0)
+        await pilot.press("a")  # go_to_goal, the square selected
+        app.publish_views(force=True)
+        await pilot.pause()
+        shown = app.trajectory
+        assert shown.waypoints == ((3.0, 1.0), (3.0, 3.0), (1.0, 3.0), (1.0, 1.0))
+        assert shown.goal == (3.0, 1.0) and app.robot.goal == (3.0, 1.0)
+        assert app.robot.e_d == 2.0  # measured to that goal, 2 m ahead
+        live_map = app.screen.query_one(LiveMap)
+        assert await until(pilot, lambda: live_map.view is not None and live_map.view.goal == (3.0, 1.0))
+        assert "G goal" in str(live_map.border_subtitle) and "+ origin" in str(live_map.border_subtitle)
+        await pilot.press("g")
+        assert app.loop.running and [tuple(p) for p in app.loop.mission.waypoints] == list(shown.waypoints)
+        # another mission chosen while the robot stands elsewhere: its waypoints move with the robot
+        await pilot.press("space")
+        app.link.telemetry.pose = Pose(-2.0, 0.5, 0.0)
+        await pilot.press("n", "n")  # square -> figure_eight -> square: no run to resume
+        app.publish_views(force=True)
+        assert app.trajectory.waypoints[0] == (0.0, 0.5)
+
+
+async def test_manual_driving_shows_no_goal_and_resuming_shows_the_interrupted_mission():
+    app = still_app()
+    async with app.run_test(size=(100, 30)) as pilot:
+        app.publish_views(force=True)
+        assert app.trajectory.goal is None and app.trajectory.waypoints == () and app.robot.goal is None
+        await pilot.press("a", "g")
+        first_goal = app.loop.mission.goal
+        await pilot.press("i")  # a movement key takes over: manual, the mission interrupted
+        assert app.loop.algorithm == "manual" and not app.loop.running
+        app.link.telemetry.pose = Pose(5.0, 5.0, 0.0)
+        app.publish_views(force=True)
+        assert app.trajectory.goal == first_goal  # g resumes it: that goal, not a square from (5, 5)
+
+
+async def test_values_that_are_not_live_are_marked_stale_and_the_rows_stay_in_view():
+    link = RecordingLink(state=CONNECTED)
+    app = still_app(link=link)
+    async with app.run_test(size=(80, 24)) as pilot:
+        app.publish_views(force=True)
+        await pilot.pause()
+        panel = app.screen.query_one(RobotPanel)
+        assert not app.robot.stale and "stale" not in text_of(panel)
+        link._state = RECONNECTING
+        app.publish_views(force=True)
+        await pilot.pause()
+        text = text_of(panel)
+        assert app.robot.stale and app.trajectory.stale
+        assert "Pose*" in text and "Odom*" in text and "* stale" in text and "LINK DOWN" in text
+        # every row of the panel is still inside it at 80x24: the banner pushed none of them out
+        assert panel.region.bottom <= app.screen.query_one("#panel").content_region.bottom
+        for row in ("Goal", "Errors", "Mission"):
+            assert row in text
+        live_map = app.screen.query_one(LiveMap)
+        assert await until(pilot, lambda: "robot (stale)" in str(live_map.border_subtitle))
+
+
+async def test_a_large_terminal_shows_the_dashboard_and_the_arrows_still_drive():
+    app = still_app()
+    async with app.run_test(size=(200, 60)) as pilot:
+        screen = app.screen
+        assert isinstance(screen, ControlScreen) and screen.dashboard and screen.has_class("dashboard")
+        table = screen.query_one(CompareTable)
+        cards = screen.query_one(TrackerCards)
+        assert table.display and table.row_count > 0  # the seeded runs, ranked
+        assert cards.region.height > 0 and "one-way, last" in text_of(cards)
+        assert screen.query_one(LatencyPlot).draws >= 1
+        assert app.focused is None or app.focused is not table
+        await pilot.press("up")  # drives: the table never takes the arrows here
+        assert app.loop.command[0] > 0 and app.link.sent[-1][0] > 0
+        await pilot.press("space")
+    small = still_app()
+    async with small.run_test(size=(159, 45)) as pilot:
+        assert not small.screen.dashboard and not small.screen.query_one("#dash").display
+
+
+async def test_the_dashboard_comes_and_goes_with_the_terminal_size():
+    app = still_app()
+    async with app.run_test(size=(100, 30)) as pilot:
+        assert not app.screen.dashboard
+        await pilot.resize_terminal(200, 60)
+        assert await until(pilot, lambda: app.screen.dashboard)
+        assert await until(pilot, lambda: app.screen.query_one(CompareTable).row_count > 0)
+        await pilot.resize_terminal(100, 30)
+        assert await until(pilot, lambda: not app.screen.dashboard)
