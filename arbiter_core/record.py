@@ -10,7 +10,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from .envelope import StampedCommand
-from .stats import summarize
+from .stats import Summary, summarize
 
 NS_PER_MS = 1_000_000
 
@@ -160,3 +160,22 @@ def latency_stats(latencies: Sequence[float]) -> dict[str, Any]:
         "p95_ms": round(s.p95, 4),
         "stddev_ms": round(s.stddev, 4),
     }
+
+
+def parse_latency_stats(obj: Any) -> Summary:
+    """A tracker's stats block (:func:`latency_stats`) back into a :class:`Summary`; a block with count 0
+    is the empty summary. Raises :class:`RecordError` naming the field that is not a number."""
+    if not isinstance(obj, dict):
+        raise RecordError(f"stats must be an object, got {type(obj).__name__}")
+    count = obj.get("count")
+    if not isinstance(count, int) or isinstance(count, bool) or count < 0:
+        raise RecordError(f"stats.count must be a whole number >= 0, got {count!r:.40}")
+    if count == 0:
+        return summarize(())
+    values = []
+    for key in ("mean_ms", "min_ms", "max_ms", "p95_ms", "stddev_ms"):
+        v = obj.get(key)
+        if not isinstance(v, (int, float)) or isinstance(v, bool) or not math.isfinite(v):
+            raise RecordError(f"stats.{key} must be a finite number, got {v!r:.40}")
+        values.append(float(v))
+    return Summary(count, *values)

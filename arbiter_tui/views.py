@@ -11,17 +11,18 @@ from __future__ import annotations
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
-from typing import Any
 
 import numpy as np
 
 from arbiter_core import stats as S
 from arbiter_core.kinematics import distance_error, heading_error
+from arbiter_core.record import LatencyRecord
 from arbiter_core.stats import Summary
 
 from .analytics.runs import MANUAL, AlgorithmSummary, RunSummary
 from .analytics.store import EMPTY_STATS, AnalyticsStats, AnalyticsStore
 from .control.loop import ControlLoop
+from .latency.clocksync import MeterSummary
 from .latency.tracker_client import LatencyView
 from .link.base import CONNECTED, DISCONNECTED, RECONNECTING, STARTING, Link
 
@@ -153,7 +154,7 @@ class LatencySnapshot:
     failures: int = 0
     reachable: bool | None = None
     error: str | None = None
-    stats: tuple[tuple[str, Any], ...] = ()  # the tracker's own block, over every record it keeps
+    kept: int | None = None  # records the tracker keeps (its own stats block's count); None: no answer
     summary: Summary | None = None  # count/mean/min/max/p95/std over ``window``: the cards and the plot
     span_s: float = 0.0  # the time ``window`` covers
     deploy: str = "?"
@@ -162,17 +163,11 @@ class LatencySnapshot:
     max_command_age_ms: float | None = None
     window: tuple[float, ...] = field(default=(), compare=False)
     window_t: tuple[float, ...] = field(default=(), compare=False)  # receive times, epoch s
-    records: tuple[Any, ...] = field(default=(), compare=False)  # LatencyRecord, newest first, <= 30
+    records: tuple[LatencyRecord, ...] = field(default=(), compare=False)  # newest first, at most 30
     link_state: str = STARTING
     link_down: bool = False
-    meter: tuple[tuple[str, Any], ...] = ()  # the meter's summary, rounded
+    meter: MeterSummary = field(default_factory=MeterSummary)  # this console's round trips, offset, loss
     offset_warn_ms: float = 10.0
-
-    def stat(self, key: str) -> Any:
-        return dict(self.stats).get(key)
-
-    def client(self) -> dict[str, Any]:
-        return dict(self.meter)
 
 
 # -- builders ----------------------------------------------------------------------------------
@@ -367,15 +362,13 @@ def latency_snapshot(
     state = link.state
     if simulated or view is None:
         return LatencySnapshot(simulated=True, link_state=state, offset_warn_ms=offset_warn_ms)
-    meter = link.telemetry.meter.summary()
-    meter.pop("in_flight", None)  # changes with every command; not shown
     return LatencySnapshot(
         url=url,
         polled=view.version,
         failures=view.failures,
         reachable=view.reachable,
         error=view.error,
-        stats=tuple(view.stats.items()),
+        kept=view.stats.count if view.reachable else None,
         summary=S.summarize(view.window) if view.window else None,
         span_s=(view.window_t[-1] - view.window_t[0]) if len(view.window_t) > 1 else 0.0,
         deploy=view.deploy_mode,
@@ -387,6 +380,6 @@ def latency_snapshot(
         records=tuple(reversed(view.records))[:30],
         link_state=state,
         link_down=state in (DISCONNECTED, RECONNECTING),
-        meter=tuple(meter.items()),
+        meter=link.telemetry.meter.summary().shown(),
         offset_warn_ms=offset_warn_ms,
     )

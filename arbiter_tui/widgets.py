@@ -16,7 +16,6 @@ from textual.widget import Widget
 from .analytics.labels import STAT_LABELS, format_stat
 from .analytics.store import STATS_FIELDS
 from .control.teleop import legend_compact
-from .latency.clocksync import OffsetEstimate
 from .views import AnalyticsView, LatencySnapshot, RobotView, StatusView
 
 LINK_DOWN = (  # two lines of the 36 columns inside the panel: the rows below stay in view
@@ -149,7 +148,7 @@ class TrackerLine(Bound):
             state.append(f"TRACKER UNREACHABLE{at}: {v.error} — retrying every 0.5 s", "bold red")
         else:
             state.append("tracker reachable", "bold green")
-            kept = v.stat("count")
+            kept = v.kept
             state.append(f" · deploy mode {v.deploy}" + ("" if kept is None else f" · tracker keeps {kept}"))
             if v.stale:  # the robot ignores these: the operator must know why it does not move
                 limit = "" if v.max_command_age_ms is None else f" > {v.max_command_age_ms:g} ms"
@@ -195,31 +194,27 @@ class ClientLine(Bound):
         out = Text()
         if v.simulated:
             return out
-        s = v.client()
+        s = v.meter
         out.append("this console", "bold")
         if v.link_down:
-            out.append(
-                f" · ROSBRIDGE LINK {v.link_state}: no commands, no round trips"
-                f" · sent {s['sent']} · lost {s['lost']}",
-                "bold red",
-            )
+            down = f" · ROSBRIDGE LINK {v.link_state}: no commands, no round trips"
+            out.append(f"{down} · sent {s.sent} · lost {s.lost}", "bold red")
             return out
-        if not s["n"]:
-            out.append(f" · no round trips yet · sent {s['sent']} · lost {s['lost']}")
+        if not s.n:
+            out.append(f" · no round trips yet · sent {s.sent} · lost {s.lost}")
             return out
-        out.append(f" · rtt p50 {fmt_ms(s['rtt_p50_ms'])} p95 {fmt_ms(s['rtt_p95_ms'])}")
-        out.append(
-            f" · one-way corrected p50 {fmt_ms(s['corrected_p50_ms'])} (raw {fmt_ms(s['raw_p50_ms'])})\n"
-        )
-        off, unc = s["offset_ms"], s["offset_uncertainty_ms"]
-        out.append(f"clock offset {fmt_signed(off)} ± {fmt_ms(unc)}")
-        out.append(f" · negative {s['negative']} · lost {s['lost_in_window']} in 10 s ({s['lost']} total)")
-        if s.get("late"):
-            out.append(f" · late {s['late']} (queued, not lost)")
+        out.append(f" · rtt p50 {fmt_ms(s.rtt_p50_ms)} p95 {fmt_ms(s.rtt_p95_ms)}")
+        out.append(f" · one-way corrected p50 {fmt_ms(s.corrected_p50_ms)} (raw {fmt_ms(s.raw_p50_ms)})\n")
+        off = s.offset
+        out.append(f"clock offset {fmt_signed(None if off is None else off.offset_ms)}")
+        out.append(f" ± {fmt_ms(None if off is None else off.uncertainty_ms)}")
+        out.append(f" · negative {s.negative} · lost {s.lost_in_window} in 10 s ({s.lost} total)")
+        if s.late:
+            out.append(f" · late {s.late} (queued, not lost)")
         warn = v.offset_warn_ms
-        if off is not None and unc is not None and OffsetEstimate(off, unc, 2 * unc, 1).significant(warn):
+        if off is not None and off.significant(warn):
             out.append(
-                f"\nCLOCK OFFSET {off:+.1f} ms exceeds {warn:g} ms: raw one-way figures include it",
+                f"\nCLOCK OFFSET {off.offset_ms:+.1f} ms exceeds {warn:g} ms: raw one-way figures include it",
                 "bold red",
             )
         return out

@@ -30,8 +30,7 @@ from __future__ import annotations
 
 import threading
 from collections import deque
-from dataclasses import dataclass
-from typing import Any
+from dataclasses import dataclass, replace
 
 from arbiter_core import stats
 from arbiter_core.record import LatencyRecord
@@ -49,6 +48,33 @@ class OffsetEstimate:
     def significant(self, threshold_ms: float) -> bool:
         """The offset surely exceeds ``threshold_ms``: even at the edge of its error bound."""
         return abs(self.offset_ms) - self.uncertainty_ms > threshold_ms
+
+
+@dataclass(frozen=True)
+class MeterSummary:
+    """This console's own view of the link: round trip, one-way (raw and offset-corrected), the clock
+    offset in use, and what became of the commands sent."""
+
+    n: int = 0  # matched round trips in the sample window
+    raw_p50_ms: float | None = None
+    raw_p95_ms: float | None = None
+    corrected_p50_ms: float | None = None
+    corrected_p95_ms: float | None = None
+    rtt_p50_ms: float | None = None
+    rtt_p95_ms: float | None = None
+    offset: OffsetEstimate | None = None
+    sent: int = 0
+    matched: int = 0
+    negative: int = 0
+    lost: int = 0
+    late: int = 0
+    lost_in_window: int = 0
+    in_flight: int = 0
+
+    def shown(self) -> MeterSummary:
+        """Without what changes with every command and is never shown (commands in flight): equal
+        summaries then mean an unchanged screen."""
+        return replace(self, in_flight=0)
 
 
 @dataclass(frozen=True)
@@ -187,8 +213,8 @@ class LatencyMeter:
         with self._lock:
             return len(self._lost_at)
 
-    def summary(self) -> dict[str, Any]:
-        """Figures for display and benchmarks (ms; percentiles by the seed's rule)."""
+    def summary(self) -> MeterSummary:
+        """Figures for display and benchmarks (ms, rounded to 4 places; percentiles by the seed's rule)."""
         samples = self.samples()
         est = self.offset()
         raw = [s.raw_ms for s in samples]
@@ -198,21 +224,24 @@ class LatencyMeter:
         def pct(values: list[float], q: float) -> float | None:
             return round(stats.percentile(values, q), 4) if values else None
 
-        return {
-            "n": len(samples),
-            "raw_p50_ms": pct(raw, 0.5),
-            "raw_p95_ms": pct(raw, 0.95),
-            "corrected_p50_ms": pct(cor, 0.5),
-            "corrected_p95_ms": pct(cor, 0.95),
-            "rtt_p50_ms": pct(rtt, 0.5),
-            "rtt_p95_ms": pct(rtt, 0.95),
-            "offset_ms": None if est is None else round(est.offset_ms, 4),
-            "offset_uncertainty_ms": None if est is None else round(est.uncertainty_ms, 4),
-            "sent": self.sent,
-            "matched": self.matched,
-            "negative": self.negative,
-            "lost": self.lost,
-            "late": self.late,
-            "lost_in_window": self.lost_in_window(),
-            "in_flight": len(self._pending),
-        }
+        return MeterSummary(
+            n=len(samples),
+            raw_p50_ms=pct(raw, 0.5),
+            raw_p95_ms=pct(raw, 0.95),
+            corrected_p50_ms=pct(cor, 0.5),
+            corrected_p95_ms=pct(cor, 0.95),
+            rtt_p50_ms=pct(rtt, 0.5),
+            rtt_p95_ms=pct(rtt, 0.95),
+            offset=None
+            if est is None
+            else OffsetEstimate(
+                round(est.offset_ms, 4), round(est.uncertainty_ms, 4), round(est.rtt_ms, 4), est.samples
+            ),
+            sent=self.sent,
+            matched=self.matched,
+            negative=self.negative,
+            lost=self.lost,
+            late=self.late,
+            lost_in_window=self.lost_in_window(),
+            in_flight=len(self._pending),
+        )

@@ -14,7 +14,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from arbiter_core.failures import connect_failure, http_failure
-from arbiter_core.record import LatencyRecord, RecordError
+from arbiter_core.record import LatencyRecord, RecordError, parse_latency_stats
+from arbiter_core.stats import Summary, summarize
 
 if TYPE_CHECKING:
     import httpx
@@ -30,7 +31,7 @@ class LatencyView:
 
     reachable: bool | None = None  # None: not polled yet
     error: str | None = None
-    stats: dict[str, Any] = field(default_factory=dict)
+    stats: Summary = field(default_factory=lambda: summarize(()))  # over every record the tracker keeps
     records: deque[LatencyRecord] = field(default_factory=lambda: deque(maxlen=RECENT))  # oldest first
     deploy_mode: str = "?"
     window: deque[float] = field(default_factory=lambda: deque(maxlen=WINDOW))
@@ -55,6 +56,10 @@ class LatencyView:
     def apply(self, body: Any) -> None:
         if not isinstance(body, dict) or not isinstance(body.get("stats"), dict):
             raise ValueError("unexpected response shape")
+        try:
+            stats = parse_latency_stats(body["stats"])
+        except RecordError as exc:
+            raise ValueError(str(exc)) from None
         raw = body.get("records")
         if not isinstance(raw, list):
             raise ValueError("records missing")
@@ -64,7 +69,7 @@ class LatencyView:
                 records.append(LatencyRecord.from_obj(obj))
             except RecordError:
                 self.bad_records += 1
-        self.stats = body["stats"]
+        self.stats = stats
         self.deploy_mode = str(body.get("deploy_mode", "?"))
         # our tracker's extras; a seed tracker has none of them
         self.stale = _count(body.get("stale"))

@@ -111,7 +111,7 @@ async def test_console_link_and_poller_send_the_token(secured):
         assert wait_for(lambda: link.telemetry.reports >= 1)
         assert total_seen(secured) == before + 1
         view = await tracker.poll()
-        assert view.reachable and view.stats["count"] >= 1
+        assert view.reachable and view.stats.count >= 1
         bare = TrackerClient(secured.api)
         assert (await bare.poll()).error.startswith("token rejected") and "HTTP 401" in bare.view.error
         await bare.aclose()

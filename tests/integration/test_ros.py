@@ -311,7 +311,7 @@ async def test_tui_in_embedded_ros_mode_drives_the_robot(tmp_path):
             assert all(r["linear_x"] in (0.5, 0.0) for r in body["records"])
             assert await until(lambda: link.telemetry.v == 0.0, timeout=3)
             await pilot.press("3")
-            assert await until(lambda: tracker.view.reachable and tracker.view.stats["count"] >= 10)
+            assert await until(lambda: tracker.view.reachable and tracker.view.stats.count >= 10)
             assert any(p.latencyMs is not None for p in store.points())
             await pilot.press("ctrl+q")
     finally:

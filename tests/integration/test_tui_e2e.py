@@ -46,7 +46,7 @@ async def test_keys_to_tracker_records_to_odometry_to_data_points(tmp_path):
             assert any(p.latencyMs is not None for p in pts)
             # the latency screen shows the tracker's figures
             await pilot.press("3")
-            assert await until(pilot, lambda: tracker.view.reachable and tracker.view.stats["count"] >= 15)
+            assert await until(pilot, lambda: tracker.view.reachable and tracker.view.stats.count >= 15)
             await pilot.pause(0.3)
             assert "tracker reachable" in str(app.screen.query_one("#lat-state").render())
 

@@ -26,12 +26,12 @@ async def test_unreachable_then_recovered_then_down_again():
         assert b.api_port == port
         view = await client.poll()
         assert view.reachable is True and view.error is None
-        assert view.stats["count"] == 0 and view.deploy_mode == "native"
+        assert view.stats.count == 0 and view.deploy_mode == "native"
     finally:
         b.stop()
     view = await client.poll()
     assert view.reachable is False
-    assert view.stats["count"] == 0  # the last good answer stays on screen
+    assert view.stats.count == 0  # the last good answer stays on screen
     await client.aclose()
 
 

@@ -44,7 +44,7 @@ async def test_wss_with_a_private_ca_drives_the_robot_and_https_polls_the_tracke
             assert link.send(0.2, 0.0)
         assert await async_until(lambda: link.telemetry.reports >= 5, timeout=5)  # reports came back over TLS
         view = await tracker.poll()
-        assert view.reachable and view.stats["count"] == 5, view.error
+        assert view.reachable and view.stats.count == 5, view.error
         with pytest.raises(httpx.HTTPError):  # plain http to the TLS port is not answered as http
             httpx.get(f"http://localhost:{backend.api_port}/api/health", timeout=2)
     finally:

@@ -29,10 +29,10 @@ def test_offset_comes_from_the_lowest_rtt_sample_and_its_bound_holds():
     assert est.offset_ms == pytest.approx(6.975)
     assert abs(est.offset_ms - true_offset) <= est.uncertainty_ms
     s = m.summary()
-    assert s["raw_p50_ms"] == pytest.approx(7.4)  # the seed's figure keeps the offset
+    assert s.raw_p50_ms == pytest.approx(7.4)  # the seed's figure keeps the offset
     # each sample is corrected with the best estimate at its arrival (live, not hindsight)
-    assert s["corrected_p50_ms"] == pytest.approx(0.4)
-    assert s["rtt_p50_ms"] == pytest.approx(1.2) and s["matched"] == 5 and s["negative"] == 0
+    assert s.corrected_p50_ms == pytest.approx(0.4)
+    assert s.rtt_p50_ms == pytest.approx(1.2) and s.matched == 5 and s.negative == 0
 
 
 def test_negative_raw_latencies_are_kept_and_counted():
@@ -40,8 +40,8 @@ def test_negative_raw_latencies_are_kept_and_counted():
     for i in range(4):
         exchange(m, i, 10.0 + i, 1e12 + i, offset_ms=-3.0, up_ms=0.2, down_ms=0.2)
     s = m.summary()
-    assert s["negative"] == 4 and s["raw_p50_ms"] == pytest.approx(-2.8)
-    assert s["corrected_p50_ms"] == pytest.approx(0.2)
+    assert s.negative == 4 and s.raw_p50_ms == pytest.approx(-2.8)
+    assert s.corrected_p50_ms == pytest.approx(0.2)
 
 
 def test_reports_not_ours_are_ignored_and_counted():
@@ -66,6 +66,6 @@ def test_unreported_commands_are_lost_per_window_and_on_disconnect():
     assert m.expire(101.25) == 2  # sent at 100.1 and 100.2
     assert m.lost == 2 and m.lost_in_window() == 2
     m.reset_pending(101.3)  # the link dropped: the rest can never be reported
-    assert m.lost == 4 and m.summary()["in_flight"] == 0
+    assert m.lost == 4 and m.summary().in_flight == 0
     m.expire(115.0)
     assert m.lost_in_window() == 0 and m.lost == 4  # the window forgets, the total does not

@@ -91,3 +91,38 @@ def test_the_listening_line_round_trips_with_and_without_the_bridge():
     assert (found.host, found.bridge_port, found.api_port) == ("::1", None, 0)
     assert parse_listening("arbiter-backend: WARNING something") is None
     assert parse_listening("arbiter-backend listening: api=ftp://x:1") is None
+
+
+def test_the_tracker_stats_block_reads_back_as_the_summary_it_was_made_from():
+    from arbiter_core.record import latency_stats, parse_latency_stats
+    from arbiter_core.stats import summarize
+
+    values = [0.31, 0.2, 0.45, 0.33, 0.29]
+    back = parse_latency_stats(latency_stats(values))
+    want = summarize(values)
+    assert back.count == want.count == 5
+    for name in ("mean", "min", "max", "p95", "stddev"):
+        assert getattr(back, name) == pytest.approx(getattr(want, name), abs=1e-4)
+    assert parse_latency_stats(latency_stats([])).count == 0
+
+
+@pytest.mark.parametrize(
+    "block, field",
+    [
+        ([], "object"),
+        ({"count": "3"}, "stats.count"),
+        ({"count": -1}, "stats.count"),
+        ({"count": True}, "stats.count"),
+        ({"count": 2, "mean_ms": 1, "min_ms": 1, "max_ms": 1, "p95_ms": "x", "stddev_ms": 0}, "stats.p95_ms"),
+        (
+            {"count": 2, "mean_ms": float("nan"), "min_ms": 1, "max_ms": 1, "p95_ms": 1, "stddev_ms": 0},
+            "stats.mean_ms",
+        ),
+        ({"count": 2, "mean_ms": 1, "min_ms": 1, "max_ms": 1, "p95_ms": 1}, "stats.stddev_ms"),
+    ],
+)
+def test_a_malformed_stats_block_is_refused_naming_the_field(block, field):
+    from arbiter_core.record import RecordError, parse_latency_stats
+
+    with pytest.raises(RecordError, match=field):
+        parse_latency_stats(block)
