@@ -20,8 +20,10 @@ HELP = f"""[b]arbiter-tui[/b] — teleop console, analytics and latency monitor
   a algorithm (manual, go_to_goal, pure_pursuit)   n mission
   g go (after a movement key took over: resume from the current waypoint)
   G restart the mission   t type a goal x y   click the map: drive there
+  The map shows o waypoints and G goal where g takes the robot; * stale.
   A held key ends on leaving this screen; a mission run keeps driving on
   screens 2 and 3. Focus loss or a too-small window stops the robot.
+  160x45 and more: this screen is the dashboard (comparison, latency too).
 
 [b]Analytics[/b]  r record/pause  v per algorithm / per run  s sort (or click
   a header)  ctrl+s export  delete clear (asks first)  arrows scroll

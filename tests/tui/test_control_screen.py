@@ -105,3 +105,33 @@ async def test_the_dashboard_comes_and_goes_with_the_terminal_size():
         assert await until(pilot, lambda: app.screen.query_one(CompareTable).row_count > 0)
         await pilot.resize_terminal(100, 30)
         assert await until(pilot, lambda: not app.screen.dashboard)
+
+
+def key_words(key: str) -> str:
+    """A binding's key as README and help write it."""
+    return {"question_mark": "?", "space": "space", "delete": "delete"}.get(key, key)
+
+
+def test_readme_and_help_name_every_key_the_screens_bind():
+    """README's key table, the help screen and the bindings (what the footer shows) agree: every bound
+    key is named in its screen's README row and in the help text, with the screen's action."""
+    from pathlib import Path
+
+    from arbiter_tui.app import ArbiterApp
+    from arbiter_tui.screens.analytics import AnalyticsScreen
+    from arbiter_tui.screens.help import HELP
+
+    readme = Path(__file__).resolve().parents[2].joinpath("README.md").read_text()
+    table = readme[readme.index("## Keys") :].split("\n\n", 1)[0]
+    rows = {line.split("|")[1].strip(): line for line in table.splitlines() if line.startswith("| ")}
+    where = {ArbiterApp: "everywhere", ControlScreen: "control", AnalyticsScreen: "analytics"}
+    checked = 0
+    for owner, row_name in where.items():
+        row = rows[row_name]
+        for binding in owner.BINDINGS:
+            for key in binding.key.split(","):
+                words = key_words(key)
+                assert f"`{words}" in row or f"/{words}`" in row, f"README {row_name} row lacks {words}"
+                assert words in HELP, f"help lacks {words}"
+                checked += 1
+    assert checked >= 18
