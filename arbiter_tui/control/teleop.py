@@ -174,5 +174,5 @@ def legend_long() -> str:
     up_f, down_f = factors()
     pairs = scale_pairs()
     first = f"{pairs[0][0]}/{pairs[0][1]}  {pairs[0][3]} x{up_f:g} / x{down_f:g}"
-    rest = "   ".join(f"{up}/{down} {long}" for up, down, _, long in pairs[1:])
+    rest = "  ".join(f"{up}/{down} {long}" for up, down, _, long in pairs[1:])
     return f"  {' / '.join(grid_rows())}   move;  arrows too;  k or space: stop\n  {first}   {rest}"

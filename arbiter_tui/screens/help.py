@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from textual.app import ComposeResult
 from textual.binding import Binding
-from textual.containers import Vertical
+from textual.containers import VerticalScroll
 from textual.screen import ModalScreen
 from textual.widgets import Static
 
@@ -12,24 +12,26 @@ from ..control.teleop import legend_long
 
 HELP = f"""[b]arbiter-tui[/b] — teleop console, analytics and latency monitor
 
-[b]Screens[/b]   1 control  2 analytics  3 latency  ? help  ctrl+p palette
-[b]Stop[/b]      space or k, on every screen   [b]Quit[/b] ctrl+q/ctrl+c, stops first
+[b]Screens[/b]  1 control  2 analytics  3 latency  ? help  ctrl+p palette
+[b]Stop[/b]     space or k, on every screen
+[b]Quit[/b]     ctrl+q or ctrl+c (stops the robot first)
 
 [b]Control[/b] (teleop_twist_keyboard keys; hold a key to keep moving)
 {legend_long()}
-  a algorithm (manual, go_to_goal, pure_pursuit)   n mission
-  g go (after a movement key took over: resume from the current waypoint)
-  G restart the mission   t type a goal x y   click the map: drive there
-  The map shows o waypoints and G goal where g takes the robot; * stale.
-  A held key ends on leaving this screen; a mission run keeps driving on
-  screens 2 and 3. Focus loss or a too-small window stops the robot.
-  160x45 and more: this screen is the dashboard (comparison, latency too).
+  a algorithm (manual, go_to_goal, pure_pursuit)  n mission
+  g go (resumes an interrupted mission)  G restart the mission
+  t type a goal x y   click the map: drive there
+  Map: o waypoints and G goal where g takes the robot; * is stale.
+  A held key ends on leaving this screen; a mission keeps driving.
+  Focus loss or a too-small window stops the robot.
+  At 160x45 and more this screen is the dashboard.
 
-[b]Analytics[/b]  r record/pause  v per algorithm / per run  s sort (or click
-  a header)  ctrl+s export  delete clear (asks first)  arrows scroll
-  ranked per mission; overall: over missions all algorithms completed
+[b]Analytics[/b]  r record/pause  v per algorithm / per run
+  s sort (or click a header)  ctrl+s export  delete clear (asks)
+  arrows scroll; ranked per mission, overall over missions that
+  every algorithm completed
 
-[b]Latency[/b]    polls GET /api/latency at 2 Hz; one-way = receive - stamp
+[b]Latency[/b]  polls GET /api/latency at 2 Hz; one-way = receive - stamp
 
 Press escape or ? to close."""
 
@@ -37,12 +39,13 @@ Press escape or ? to close."""
 class HelpScreen(ModalScreen[None]):
     DEFAULT_CSS = """
     HelpScreen { align: center middle; }
-    HelpScreen > Vertical {
-        width: 78; height: auto; border: thick $primary; background: $surface; padding: 1 2;
+    HelpScreen > VerticalScroll {
+        width: 78; height: auto; max-height: 100%; border: thick $primary; background: $surface;
+        padding: 1 2;
     }
     """
     BINDINGS = [Binding("escape,question_mark,q", "dismiss", "Close")]
 
     def compose(self) -> ComposeResult:
-        with Vertical():
+        with VerticalScroll():
             yield Static(HELP)
