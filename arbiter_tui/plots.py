@@ -8,11 +8,13 @@ alone. The plots take no focus and no keys: the screens' keys stay the screens'.
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Sequence
 from typing import Any, ClassVar
 
 import numpy as np
 from textual import events
+from textual.timer import Timer
 from textual_plot import HiResMode, PlotWidget
 from textual_plot.axis_formatter import AxisFormatter
 
@@ -80,6 +82,8 @@ class Plot(PlotWidget, can_focus=False):
         super().__init__(allow_pan_and_zoom=False, **kwargs)
         self.border_title = title
         self._key: object = None
+        self._drawn_at = float("-inf")  # monotonic s
+        self._later: Timer | None = None
 
     def on_mount(self) -> None:
         # axis names and units are in the border title: the margins hold just the tick labels
@@ -92,10 +96,24 @@ class Plot(PlotWidget, can_focus=False):
         key = self.data_key(view)
         if key == self._key:
             return  # nothing this plot draws changed
+        wait = self.follow_period(self._key, key) - (time.monotonic() - self._drawn_at)
+        if wait > 0:  # drawn again once the period is over, with what is newest then
+            if self._later is None:
+                self._later = self.set_timer(wait, self._catch_up)
+            return
         self._key = key
+        self._drawn_at = time.monotonic()
         self.draws += 1
         self.clear()
         self.draw(view)
+
+    def _catch_up(self) -> None:
+        self._later = None
+        self._receive(getattr(self.app, self.SOURCE))
+
+    def follow_period(self, old: object, new: object) -> float:
+        """How long after the last draw a change from ``old`` to ``new`` may wait (0: draw at once)."""
+        return 0.0
 
     def on_resize(self) -> None:
         self._key = None  # limits that keep an aspect depend on the size
@@ -240,6 +258,14 @@ class LiveMap(MapPlot):
             cell = (axes.cell(x, x_axis, cols), axes.cell(y, y_axis, rows), heading_arrow(theta))
         return (x_axis, y_axis, cell, view.goal, view.waypoints, view.stale)
 
+    def follow_period(self, old: object, new: object) -> float:
+        """The robot moving by a cell is drawn at most every ``FOLLOW_S`` (a plot repaint was most of the
+        control screen's CPU under a Pi-class quota: bench/pi.py); a new mission, goal, axes or a stale
+        pose are drawn at once. The panel beside it shows the pose at the full UI rate."""
+        if isinstance(old, tuple) and isinstance(new, tuple) and old[:2] + old[3:] == new[:2] + new[3:]:
+            return FOLLOW_S
+        return 0.0
+
     def _axes(self, view: MapView) -> tuple[axes.Axis, axes.Axis]:
         xs, ys = [0.0], [0.0]  # the origin is always on the map
         if view.bounds is not None:
@@ -280,6 +306,7 @@ class LiveMap(MapPlot):
 
 
 ARROWS = "→↗↑↖←↙↓↘"
+FOLLOW_S = 0.5  # the live map follows the robot at most this often
 
 
 def heading_arrow(theta: float) -> str:

@@ -135,3 +135,22 @@ def test_readme_and_help_name_every_key_the_screens_bind():
                 assert words in HELP, f"help lacks {words}"
                 checked += 1
     assert checked >= 18
+
+
+async def test_the_map_follows_the_robot_at_most_every_follow_period_and_ends_where_it_is():
+    from arbiter_tui.plots import FOLLOW_S
+
+    app = still_app()
+    async with app.run_test(size=(100, 30)) as pilot:
+        live_map = app.screen.query_one(LiveMap)
+        app.publish_views(force=True)
+        assert await until(pilot, lambda: live_map.view is not None)
+        await pilot.pause(FOLLOW_S)  # the first draw is behind us
+        before = live_map.draws
+        for i in range(1, 6):  # five cells and more in a tenth of a second, inside the axes shown
+            app.link.telemetry.pose = Pose(1.25 - 0.2 * i, -0.5, 0.6)
+            app.publish_views()
+            await pilot.pause(0.02)
+        assert live_map.draws <= before + 1  # the first move at once, the rest wait
+        assert await until(pilot, lambda: live_map.view.pose[0] == 0.25, timeout=3 * FOLLOW_S)
+        assert live_map.draws <= before + 2
