@@ -21,6 +21,8 @@ from collections.abc import Callable, Iterable
 from textual import events, on, work
 from textual.app import App, SystemCommand
 from textual.binding import Binding
+from textual.driver import Driver
+from textual.message import Message
 from textual.reactive import var
 from textual.screen import Screen
 
@@ -29,7 +31,7 @@ from .analytics.store import AnalyticsStore
 from .config import save_theme
 from .control.algorithms import ALGORITHMS, MISSIONS
 from .control.loop import ControlLoop
-from .control.teleop import Teleop
+from .control.teleop import TELEOP_KEYS, Teleop, key_name
 from .latency.tracker_client import LatencyView, TrackerClient
 from .link.base import STARTING, Link, PendingLink
 from .messages import (
@@ -80,6 +82,21 @@ def freeze_heap() -> None:
 
 
 EXIT_DEADLINE_S = 2.0  # after SIGHUP/SIGTERM the process is gone by then, whatever the terminal does
+
+
+def direct_keys(base: type[Driver]) -> type[Driver]:
+    """``base`` (the terminal driver Textual chose) with teleop keys offered to the app on the driver's
+    input thread, before they join the UI's queue (``ArbiterApp.key_on_input_thread``)."""
+
+    class DirectKeysDriver(base):  # type: ignore[misc, valid-type]
+        def process_message(self, message: Message) -> None:
+            if isinstance(message, events.Key) and isinstance(self._app, ArbiterApp):
+                self._app.key_on_input_thread(message)
+            super().process_message(message)
+
+    DirectKeysDriver.__name__ = f"DirectKeys{base.__name__}"
+    return DirectKeysDriver
+
 
 Connector = Callable[[], tuple[Link, "TrackerClient | None", Callable[[], None]]]
 
@@ -135,6 +152,11 @@ class ArbiterApp(App[None]):
         self._shown_command: tuple[object, ...] = ()
         self._analytics_at = float("-inf")
         self._frozen_modes: set[str] = set()
+        # Teleop keys straight from the input thread (see key_on_input_thread)
+        self._keys_lock = threading.Lock()
+        self._keys_direct = False  # the control screen is in front, no dialog over it, no key queued
+        self._keys_queued = 0  # keys passed to the UI that it has not answered yet
+        self._keys_taken: set[int] = set()  # ids of key events the session already answered
 
     # The session's parts, for the screens and the views (the session owns them).
     @property
@@ -373,6 +395,73 @@ class ArbiterApp(App[None]):
             # a new command or limit shows at once; a held key's repeats wait for the UI tick
             self.publish_views()
         return used
+
+    # -- keys that do not wait for a paint ------------------------------------------------------
+    def get_driver_class(self) -> type[Driver]:
+        return direct_keys(super().get_driver_class())
+
+    def set_keys_direct(self, direct: bool) -> None:
+        """The control screen came to the front (True) or went behind a screen or dialog (False)."""
+        with self._keys_lock:
+            self._keys_direct = direct
+
+    def key_on_input_thread(self, event: events.Key) -> None:
+        """A key on Textual's input thread, before it joins the UI's queue.
+
+        A teleop key (movement, scale, stop) on the control screen goes to the session at once: under a
+        Pi-class CPU quota a paint in progress held a key 20-45 ms (bench/pi.py, key-to-wire), and the
+        robot should not wait for the screen. It still goes on to the UI, marked as answered, so the
+        screen shows it and nothing answers it twice. Keys keep their order: while a key the UI must
+        answer (g, a, 1, ...) is queued and not yet handled, the keys after it queue behind it."""
+        key = key_name(event.character, event.key)
+        with self._keys_lock:
+            take = self._keys_direct and self._keys_queued == 0 and key in TELEOP_KEYS
+            if not take:
+                self._queue_key()
+        if not take:
+            return
+        try:
+            used = self.session.key(key)
+        except Exception:  # never let a key take the input thread down: the UI gets it instead
+            log.exception("a key on the input thread failed")
+            used = False
+        with self._keys_lock:
+            if used:
+                self._keys_taken.add(id(event))
+            else:
+                self._queue_key()
+
+    def _queue_key(self) -> None:
+        """A key goes to the UI (under ``_keys_lock``): the keys after it wait for it, and until the UI
+        has answered it nothing goes direct (it may open a dialog, or leave the control screen)."""
+        self._keys_queued += 1
+        self._keys_direct = False
+
+    async def on_event(self, event: events.Event) -> None:
+        if isinstance(event, events.Key) and not event.is_forwarded:
+            with self._keys_lock:
+                taken = id(event) in self._keys_taken
+                self._keys_taken.discard(id(event))
+            if taken:  # answered on the input thread: show it; nobody answers it again
+                self.app_focus = True
+                if (self.loop.command, self.teleop.speed, self.teleop.turn) != self._shown_command:
+                    self.publish_views()
+                return
+            try:
+                await super().on_event(event)
+            finally:
+                # The screen answers it from its own queue; a key its handler does not use bubbles back to
+                # the app's queue, where the bindings answer it. So: handled once the screen's queue,
+                # then the app's, reach this point.
+                self.screen.call_later(self.call_later, self._key_handled)
+            return
+        await super().on_event(event)
+
+    def _key_handled(self) -> None:
+        with self._keys_lock:
+            self._keys_queued = max(0, self._keys_queued - 1)
+            if self._keys_queued == 0 and isinstance(self.screen, ControlScreen):
+                self._keys_direct = True  # still the control screen, no dialog over it
 
     def get_system_commands(self, screen: Screen[object]) -> Iterable[SystemCommand]:
         yield from super().get_system_commands(screen)

@@ -21,7 +21,7 @@ from textual_plot.axis_formatter import AxisFormatter
 from . import axes
 from .analytics.runs import MANUAL
 from .messages import GoalPicked
-from .views import AnalyticsView, LatencySnapshot, MapView, thin
+from .views import PLOT_PERIOD_S, AnalyticsView, LatencySnapshot, MapView, thin
 
 # one marker shape (and colour) per algorithm; later names reuse them in order
 ALGORITHM_STYLES: dict[str, tuple[str, str]] = {
@@ -320,6 +320,14 @@ class _LatencyWindow(Plot):
 
     def data_key(self, view: LatencySnapshot) -> object:
         return (view.polled, view.simulated)
+
+    def follow_period(self, old: object, new: object) -> float:
+        """While records stream in, the plots follow at most every ``PLOT_PERIOD_S``, as the analytics
+        plots do (the cards and records above them: every poll); a plot repaint costs more than the
+        numbers, and this screen must cost no more than the analytics screen (bench/pi.py)."""
+        if isinstance(old, tuple) and isinstance(new, tuple) and old[1] == new[1]:
+            return PLOT_PERIOD_S
+        return 0.0
 
 
 class LatencyPlot(_LatencyWindow):

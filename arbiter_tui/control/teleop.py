@@ -43,6 +43,14 @@ SCALE_KEYS: dict[str, tuple[float, float]] = {
     "c": (1.0, 0.9),
 }
 STOP_KEYS = frozenset({"k", " ", "space"})
+
+
+def key_name(character: str | None, key: str) -> str:
+    """The name teleop knows a key press by: its character when it prints one (``i``, ``,``, `` ``),
+    else the terminal's key name (``up``, ``left``)."""
+    return character if character and character.isprintable() else key
+
+
 MIN_SPEED = 0.05  # m/s: z/x never scale the max speed below this (a robot that cannot move says nothing)
 MIN_TURN = 0.05  # rad/s: likewise for c/z and the turn rate
 # Where the movement keys sit on the keyboard (teleop_twist_keyboard's picture; k in the middle stops).
@@ -176,3 +184,6 @@ def legend_long() -> str:
     first = f"{pairs[0][0]}/{pairs[0][1]}  {pairs[0][3]} x{up_f:g} / x{down_f:g}"
     rest = "  ".join(f"{up}/{down} {long}" for up, down, _, long in pairs[1:])
     return f"  {' / '.join(grid_rows())}   move;  arrows too;  k or space: stop\n  {first}   {rest}"
+
+
+TELEOP_KEYS = frozenset(MOVE_KEYS) | frozenset(SCALE_KEYS) | STOP_KEYS  # all that teleop answers

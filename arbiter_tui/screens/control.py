@@ -12,6 +12,7 @@ from textual.containers import Horizontal, Vertical
 from textual.widgets import Static
 
 from ..control.algorithms import ALGORITHMS
+from ..control.teleop import key_name
 from ..plots import ErrorPlot, LatencyPlot, LiveMap
 from ..widgets import KEY_HELP, ClientLine, RobotPanel, StatsCards, TrackerCards, TrackerLine
 from .analytics import CompareTable, RuleLine
@@ -52,7 +53,7 @@ class ControlScreen(BaseScreen):
                 yield LatencyPlot("one-way (ms) vs time (s)", id="dash-lat-plot")
 
     def on_resize(self, event: events.Resize) -> None:
-        super().on_resize(event)
+        # (Textual calls BaseScreen.on_resize too, after this: handlers run for each class)
         dashboard = event.size.width >= DASHBOARD_WIDTH and event.size.height >= DASHBOARD_HEIGHT
         if dashboard != self.dashboard:
             self.dashboard = dashboard
@@ -60,14 +61,15 @@ class ControlScreen(BaseScreen):
             self.arbiter.publish_views(force=True)  # its panes show what was not sampled before
 
     def on_key(self, event: events.Key) -> None:
-        key = event.character if event.character and event.character.isprintable() else event.key
-        if key is None:
-            return
-        if self.arbiter.teleop_key(key):
+        if self.arbiter.teleop_key(key_name(event.character, event.key)):
             event.stop()
             event.prevent_default()
 
+    def on_screen_resume(self) -> None:
+        self.arbiter.set_keys_direct(True)  # teleop keys may go to the session from the input thread
+
     def on_screen_suspend(self) -> None:
+        self.arbiter.set_keys_direct(False)
         # A held key must not keep the robot moving unseen; an autonomous run goes on (watch it live).
         self.arbiter.end_manual_hold("left the control screen")
 

@@ -217,6 +217,9 @@ class RobotSession:
                     # a new key (or direction) is answered at once; a key's auto-repeats only keep it
                     # held, and the control tick sends at --repeat-rate
                     self.tick_control()
+            elif result == "stop":
+                self.stop_reason = "stop key"
+                self.tick_control()  # the zero goes now, not at the next tick
             return True
 
     def select_algorithm(self, name: str) -> None:

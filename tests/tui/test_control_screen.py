@@ -154,3 +154,74 @@ async def test_the_map_follows_the_robot_at_most_every_follow_period_and_ends_wh
         assert live_map.draws <= before + 1  # the first move at once, the rest wait
         assert await until(pilot, lambda: live_map.view.pose[0] == 0.25, timeout=3 * FOLLOW_S)
         assert live_map.draws <= before + 2
+
+
+def from_input_thread(app, *keys: str) -> None:
+    """Keys as Textual's terminal driver delivers them: parsed on its input thread, then sent to the app
+    (``direct_keys`` wraps the driver Textual would choose; the headless one here)."""
+    import threading
+
+    from textual import events
+    from textual.drivers.headless_driver import HeadlessDriver
+
+    from arbiter_tui.app import direct_keys
+
+    driver = direct_keys(HeadlessDriver)(app)
+
+    def deliver() -> None:
+        for key in keys:
+            driver.process_message(events.Key(key, key if len(key) == 1 else None))
+
+    thread = threading.Thread(target=deliver)
+    thread.start()
+    thread.join()
+
+
+async def test_a_teleop_key_reaches_the_robot_without_waiting_for_the_ui_and_is_answered_once():
+    app = still_app()
+    async with app.run_test(size=(100, 30)) as pilot:
+        await pilot.pause()
+        speed = app.teleop.speed
+        # The UI's loop does not run while this test holds it: the command goes out all the same.
+        from_input_thread(app, "i")
+        assert app.link.sent and app.link.sent[-1] == (speed, 0.0)
+        from_input_thread(app, "q")  # a scale key: answered twice it would scale twice
+        assert app.teleop.speed == round(speed * 1.1, 6) or abs(app.teleop.speed - speed * 1.1) < 1e-9
+        await pilot.pause()
+        await pilot.pause()
+        assert abs(app.teleop.speed - speed * 1.1) < 1e-9  # the UI showed it and did not answer it again
+        assert await until(pilot, lambda: app.robot.speed == round(speed * 1.1, 2))
+
+
+async def test_a_teleop_key_waits_behind_a_key_the_ui_answers():
+    """``a`` (the UI's) then ``i``: ``i`` does not overtake ``a`` on the input thread; both reach the UI.
+    Once the UI has answered them, teleop keys go direct again."""
+    app = still_app()
+    async with app.run_test(size=(100, 30)) as pilot:
+        await pilot.pause()
+        sent = len(app.link.sent)
+        from_input_thread(app, "a", "i")
+        assert len(app.link.sent) == sent  # nothing went direct: i is queued behind a
+        assert await until(pilot, lambda: len(app.link.sent) > sent)  # the UI answered i
+        assert await until(pilot, lambda: app._keys_queued == 0 and app._keys_direct)
+        # each answered on the input thread, before the UI runs again: the zero at once, then the move
+        from_input_thread(app, "space")
+        assert not app.teleop.moving and app.link.sent[-1] == (0.0, 0.0)
+        from_input_thread(app, "i")
+        assert app.teleop.moving and app.link.sent[-1] == (app.teleop.speed, 0.0)
+
+
+async def test_no_key_goes_direct_while_a_dialog_is_open_or_another_screen_shows():
+    app = still_app()
+    async with app.run_test(size=(100, 30)) as pilot:
+        await pilot.press("t")  # the goal prompt: "." is a digit's neighbour there, not a movement key
+        assert await until(pilot, lambda: app.screen.__class__.__name__ == "GoalPrompt")
+        sent = len(app.link.sent)
+        from_input_thread(app, ".", "i")
+        assert len(app.link.sent) == sent
+        await pilot.press("escape")
+        await pilot.press("3")
+        assert await until(pilot, lambda: app.current_mode == "latency")
+        from_input_thread(app, "i")
+        await pilot.pause()
+        assert len(app.link.sent) == sent and not app.teleop.moving
