@@ -17,6 +17,7 @@ import signal
 import threading
 import time
 from collections.abc import Callable, Iterable
+from dataclasses import replace
 
 from textual import events, on, work
 from textual.app import App, SystemCommand
@@ -67,6 +68,7 @@ from .views import (
 
 log = logging.getLogger(__name__)
 FREEZE_AFTER_S = 2.0
+COUNT_PERIOD_S = 1.0  # the status line's sample count follows at most this often
 
 
 def freeze_heap() -> None:
@@ -129,6 +131,7 @@ class ArbiterApp(App[None]):
     trajectory: var[MapView] = var(MapView)
     analytics: var[AnalyticsView] = var(AnalyticsView)
     latency: var[LatencySnapshot] = var(LatencySnapshot)
+    ui_tick: var[int] = var(0)  # one more at the end of every sampling: one frame for all that changed
 
     def __init__(
         self,
@@ -151,6 +154,7 @@ class ArbiterApp(App[None]):
         self._link_state: str | None = None
         self._shown_command: tuple[object, ...] = ()
         self._analytics_at = float("-inf")
+        self._count_at = float("-inf")  # when the status line's sample count last changed
         self._frozen_modes: set[str] = set()
         # Teleop keys straight from the input thread (see key_on_input_thread)
         self._keys_lock = threading.Lock()
@@ -289,9 +293,11 @@ class ArbiterApp(App[None]):
 
     @on(LatencyPolled)
     def _polled(self) -> None:
+        if self.settings.live:
+            return  # the next UI tick shows it, in the same frame as everything else that changed
         if self.current_mode == "latency" or self.dashboard_shown():  # elsewhere nobody shows it
             self.latency = self._latency_snapshot()
-        self.status = self._status_view()
+        self._publish_status()
 
     async def on_unmount(self) -> None:
         self.session.close()  # one zero, and the clocked work ends
@@ -315,7 +321,7 @@ class ArbiterApp(App[None]):
         if self._link_state is not None and state != self._link_state:
             self.post_message(LinkStateChanged(self._link_state, state))
         self._link_state = state
-        self.status = self._status_view()
+        self._publish_status(force)
         mode = self.current_mode
         dashboard = self.dashboard_shown()
         if mode == "control":
@@ -328,6 +334,28 @@ class ArbiterApp(App[None]):
                 self.analytics = analytics_view(self.store, self.analytics, self.loop)
         if mode == "latency" or dashboard:
             self.latency = self._latency_snapshot()
+        self.ui_tick += 1  # what waited for its period (plots) is drawn now, in this same frame
+
+    def _publish_status(self, force: bool = False) -> None:
+        """The status line; a change of the sample count alone shows at most every ``COUNT_PERIOD_S``.
+
+        While recording, the count changes with every sample (10 a second), and a status line repainted
+        that often made every repaint span the whole screen: Textual renders every widget inside the box
+        around all dirty regions, and the status line is the top row (py-spy and render counts at
+        200x60, bench/pi.py)."""
+        status = self._status_view()
+        shown = self.status
+        now = time.monotonic()
+        if (
+            not force
+            and status != shown
+            and replace(status, points=shown.points) == shown
+            and now - self._count_at < COUNT_PERIOD_S
+        ):
+            return
+        if status.points != shown.points:
+            self._count_at = now
+        self.status = status
 
     def dashboard_shown(self) -> bool:
         """The control screen is showing as the dashboard (a large terminal): it shows every view."""

@@ -14,7 +14,6 @@ from typing import Any, ClassVar
 
 import numpy as np
 from textual import events
-from textual.timer import Timer
 from textual_plot import HiResMode, PlotWidget
 from textual_plot.axis_formatter import AxisFormatter
 
@@ -83,7 +82,7 @@ class Plot(PlotWidget, can_focus=False):
         self.border_title = title
         self._key: object = None
         self._drawn_at = float("-inf")  # monotonic s
-        self._later: Timer | None = None
+        self._pending = False  # a change waits for its follow period
 
     def on_mount(self) -> None:
         # axis names and units are in the border title: the margins hold just the tick labels
@@ -91,25 +90,33 @@ class Plot(PlotWidget, can_focus=False):
         self.margin_bottom = 1
         self.margin_left = 7
         self.watch(self.app, self.SOURCE, self._receive, init=True)
+        self.watch(self.app, "ui_tick", self._tick, init=False)
 
     def _receive(self, view: Any) -> None:
         key = self.data_key(view)
         if key == self._key:
             return  # nothing this plot draws changed
         wait = self.follow_period(self._key, key) - (time.monotonic() - self._drawn_at)
-        if wait > 0:  # drawn again once the period is over, with what is newest then
-            if self._later is None:
-                self._later = self.set_timer(wait, self._catch_up)
+        if wait > 0:  # drawn at the first UI tick after the period, with what is newest then
+            self._pending = True
             return
+        self._pending = False
         self._key = key
         self._drawn_at = time.monotonic()
         self.draws += 1
         self.clear()
         self.draw(view)
+        if self.size.area:
+            # Draw onto the canvases now rather than in the next paint: textual-plot does it in render(),
+            # during a frame, and the canvases it dirties then take a frame of their own.
+            self.render()
 
-    def _catch_up(self) -> None:
-        self._later = None
-        self._receive(getattr(self.app, self.SOURCE))
+    def _tick(self) -> None:
+        """The app sampled its sources (``ui_tick``): a change that waited is drawn now, in the same frame
+        as the widgets that changed with this tick (a plot's own timer made a frame of its own, and each
+        frame renders every widget in the box around what changed)."""
+        if self._pending:
+            self._receive(getattr(self.app, self.SOURCE))
 
     def follow_period(self, old: object, new: object) -> float:
         """How long after the last draw a change from ``old`` to ``new`` may wait (0: draw at once)."""

@@ -1,6 +1,8 @@
 """The screen a user drives from: the map shows where g will take the robot, values that are not live are
 marked stale, and a large terminal shows the dashboard (control, comparison and latency at once)."""
 
+import time
+
 from arbiter_core.kinematics import Pose
 from arbiter_tui.link.base import CONNECTED, RECONNECTING
 from arbiter_tui.plots import LatencyPlot, LiveMap
@@ -147,12 +149,19 @@ async def test_the_map_follows_the_robot_at_most_every_follow_period_and_ends_wh
         assert await until(pilot, lambda: live_map.view is not None)
         await pilot.pause(FOLLOW_S)  # the first draw is behind us
         before = live_map.draws
+        started = time.monotonic()
         for i in range(1, 6):  # five cells and more in a tenth of a second, inside the axes shown
             app.link.telemetry.pose = Pose(1.25 - 0.2 * i, -0.5, 0.6)
             app.publish_views()
             await pilot.pause(0.02)
-        assert live_map.draws <= before + 1  # the first move at once, the rest wait
-        assert await until(pilot, lambda: live_map.view.pose[0] == 0.25, timeout=3 * FOLLOW_S)
+        # the first move at once, the rest wait (a loaded machine may take longer over the five)
+        assert live_map.draws - before <= 1 + (time.monotonic() - started) / FOLLOW_S
+
+        def drawn_where_it_is() -> bool:
+            app.publish_views()  # the UI tick, as the live console runs it
+            return live_map.view.pose[0] == 0.25
+
+        assert await until(pilot, drawn_where_it_is, timeout=3 * FOLLOW_S)
         assert live_map.draws <= before + 2
 
 
