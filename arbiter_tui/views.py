@@ -155,6 +155,7 @@ class LatencySnapshot:
     reachable: bool | None = None
     error: str | None = None
     kept: int | None = None  # records the tracker keeps (its own stats block's count); None: no answer
+    stats_error: str | None = None  # the tracker's stats block was malformed (its records still shown)
     summary: Summary | None = None  # count/mean/min/max/p95/std over ``window``: the cards and the plot
     span_s: float = 0.0  # the time ``window`` covers
     deploy: str = "?"
@@ -368,7 +369,8 @@ def latency_snapshot(
         failures=view.failures,
         reachable=view.reachable,
         error=view.error,
-        kept=view.stats.count if view.reachable else None,
+        kept=view.stats.count if view.reachable and view.stats is not None else None,
+        stats_error=view.stats_error,
         summary=S.summarize(view.window) if view.window else None,
         span_s=(view.window_t[-1] - view.window_t[0]) if len(view.window_t) > 1 else 0.0,
         deploy=view.deploy_mode,

@@ -155,6 +155,8 @@ class TrackerLine(Bound):
                 state.append(f" · {v.stale} STALE{limit}, not forwarded", "bold red")
             if v.rejected:
                 state.append(f" · {v.rejected} rejected", "bold yellow")
+            if v.stats_error:
+                state.append(f" · its stats block is malformed ({v.stats_error})", "bold yellow")
         return state
 
 

@@ -174,7 +174,7 @@ def main() -> int:
             "slope_mb_per_h": round(slope_per_hour(series[name]), 2),
         }
     lost = sent - recorded
-    ok = lost == 0 and meter["lost"] == 0 and all(p["growth_mb"] <= MAX_GROWTH_MB for p in processes.values())
+    ok = lost == 0 and meter.lost == 0 and all(p["growth_mb"] <= MAX_GROWTH_MB for p in processes.values())
     emit(
         {
             "bench": "soak",
@@ -186,8 +186,8 @@ def main() -> int:
             "sent": sent,
             "recorded": recorded,
             "lost": lost,
-            "unreported": meter["lost"],
-            "rtt_p50_ms": meter["rtt_p50_ms"],
+            "unreported": meter.lost,
+            "rtt_p50_ms": meter.rtt_p50_ms,
             "store_points": len(store),
             "polls": tracker.view.polls,
             "poll_failures": tracker.view.failures,

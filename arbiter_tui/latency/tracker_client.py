@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Any
 
 from arbiter_core.failures import connect_failure, http_failure
 from arbiter_core.record import LatencyRecord, RecordError, parse_latency_stats
-from arbiter_core.stats import Summary, summarize
+from arbiter_core.stats import Summary
 
 if TYPE_CHECKING:
     import httpx
@@ -31,7 +31,8 @@ class LatencyView:
 
     reachable: bool | None = None  # None: not polled yet
     error: str | None = None
-    stats: Summary = field(default_factory=lambda: summarize(()))  # over every record the tracker keeps
+    stats: Summary | None = None  # over every record the tracker keeps; None: not answered, or malformed
+    stats_error: str | None = None  # why the last stats block was not one (its records were still taken)
     records: deque[LatencyRecord] = field(default_factory=lambda: deque(maxlen=RECENT))  # oldest first
     deploy_mode: str = "?"
     window: deque[float] = field(default_factory=lambda: deque(maxlen=WINDOW))
@@ -57,9 +58,10 @@ class LatencyView:
         if not isinstance(body, dict) or not isinstance(body.get("stats"), dict):
             raise ValueError("unexpected response shape")
         try:
-            stats = parse_latency_stats(body["stats"])
-        except RecordError as exc:
-            raise ValueError(str(exc)) from None
+            stats: Summary | None = parse_latency_stats(body["stats"])
+            self.stats_error = None
+        except RecordError as exc:  # the records are still good: keep them, say the block was not
+            stats, self.stats_error = None, str(exc)
         raw = body.get("records")
         if not isinstance(raw, list):
             raise ValueError("records missing")

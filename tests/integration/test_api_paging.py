@@ -131,6 +131,8 @@ async def test_a_tracker_without_rx_seq_is_polled_by_limit():
         add(6)
         view = await client.poll()
         assert list(view.window) == [3.0, 4.0, 5.0, 6.0] and not view.pages_by_rx_seq
+        # its stats block has only a count: said, and the records are taken all the same
+        assert view.reachable and view.stats is None and "stats.mean_ms" in (view.stats_error or "")
         add(2)
         view = await client.poll()
         view = await client.poll()
