@@ -198,7 +198,7 @@ def main() -> int:
     p.add_argument("--seconds", type=float, default=15.0, help="measured per screen")
     p.add_argument("--quota", type=float, default=0.25, help="CPU quota of each cgroup, in cores")
     p.add_argument("--size", default="100x30", help="terminal size, COLSxROWS")
-    p.add_argument("--presses", type=int, default=20, help="key presses for key-to-wire")
+    p.add_argument("--presses", type=int, default=40, help="key presses for key-to-wire")
     p.add_argument("--pythonpath", help="measure the code of another checkout (its root)")
     a = p.parse_args()
     if os.geteuid() != 0:
@@ -258,7 +258,9 @@ def main() -> int:
             n1, th1 = console_group.throttling()
             recs, since = records_since(api, since)
             g = gaps_ms(recs)
-            screens[name] = {
+            # on a terminal of 160x45 and more the control screen is the dashboard
+            big = int(cols) >= 160 and int(rows) >= 45
+            screens["dashboard" if name == "control" and big else name] = {
                 "commands": len(recs),
                 "gap_p50_ms": pct(g, 0.5), "gap_p95_ms": pct(g, 0.95), "gap_max_ms": top(g),
                 "cpu_percent_of_quota": round(100 * cpu / dt / a.quota, 1),

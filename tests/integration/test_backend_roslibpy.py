@@ -3,6 +3,8 @@
 import itertools
 import json
 import math
+import socket
+import threading
 import time
 
 import httpx
@@ -15,8 +17,29 @@ from ..support.backend import get_json, start_backend, wait_for
 
 def connect(port: int) -> roslibpy.Ros:
     ros = roslibpy.Ros("127.0.0.1", port)
-    ros.run(timeout=10)
+    try:
+        ros.run(timeout=10)
+    except roslibpy.core.RosTimeoutError as exc:
+        # Once seen under load in a fresh clone and not reproduced since: say what state things were in
+        raise AssertionError(f"roslibpy did not connect in 10 s: {why_not_connected(ros, port)}") from exc
     return ros
+
+
+def why_not_connected(ros: roslibpy.Ros, port: int) -> str:
+    """Evidence for a connect that timed out: does the port accept, how often did roslibpy retry."""
+    from twisted.internet import reactor
+
+    try:
+        socket.create_connection(("127.0.0.1", port), timeout=2).close()
+        accepts = "the port accepts TCP"
+    except OSError as exc:
+        accepts = f"the port refuses TCP ({exc})"
+    f = ros.factory
+    return (
+        f"{accepts}; reactor running {reactor.running}; factory retries {getattr(f, 'retries', '?')}, "
+        f"next delay {float(getattr(f, 'delay', float('nan'))):.3g} s; connector state "
+        f"{getattr(f.connector, 'state', None)}; threads {threading.active_count()}"
+    )
 
 
 def command_publisher(ros: roslibpy.Ros) -> roslibpy.Topic:
