@@ -154,6 +154,7 @@ class ArbiterApp(App[None]):
         self._link_state: str | None = None
         self._shown_command: tuple[object, ...] = ()
         self._analytics_at = float("-inf")
+        self._latency_at = float("-inf")
         self._count_at = float("-inf")  # when the status line's sample count last changed
         self._frozen_modes: set[str] = set()
         # Teleop keys straight from the input thread (see key_on_input_thread)
@@ -327,12 +328,15 @@ class ArbiterApp(App[None]):
         if mode == "control":
             self.robot = robot_view(self.link, self.loop, self.too_small)
             self.trajectory = map_view(self.link, self.loop, self.trajectory)
-        if mode == "analytics" or dashboard:
-            now = time.monotonic()
-            if force or now - self._analytics_at >= 1.0 / self.settings.analytics_rate:
-                self._analytics_at = now
-                self.analytics = analytics_view(self.store, self.analytics, self.loop)
-        if mode == "latency" or dashboard:
+        now = time.monotonic()
+        rate = self.settings.analytics_rate
+        if (mode == "analytics" or dashboard) and (force or now - self._analytics_at >= 1.0 / rate):
+            self._analytics_at = now
+            self.analytics = analytics_view(self.store, self.analytics, self.loop)
+        if (mode == "latency" or dashboard) and (force or now - self._latency_at >= 1.0 / rate):
+            # at the analytics rate too: the console's own figures change with every round trip, and a
+            # line repainted at the UI rate made every frame span the screen below it (bench/pi.py)
+            self._latency_at = now
             self.latency = self._latency_snapshot()
         self.ui_tick += 1  # what waited for its period (plots) is drawn now, in this same frame
 

@@ -266,10 +266,12 @@ class LiveMap(MapPlot):
         return (x_axis, y_axis, cell, view.goal, view.waypoints, view.stale)
 
     def follow_period(self, old: object, new: object) -> float:
-        """The robot moving by a cell is drawn at most every ``FOLLOW_S`` (a plot repaint was most of the
-        control screen's CPU under a Pi-class quota: bench/pi.py); a new mission, goal, axes or a stale
-        pose are drawn at once. The panel beside it shows the pose at the full UI rate."""
-        if isinstance(old, tuple) and isinstance(new, tuple) and old[:2] + old[3:] == new[:2] + new[3:]:
+        """The robot moving (by a cell, or out of the axes, which then grow) is drawn at most every
+        ``FOLLOW_S``: a plot repaint was most of the control screen's CPU under a Pi-class quota
+        (bench/pi.py), and a robot driving out of the map changed the axes at almost every tick. A new
+        mission or goal, or a pose turning stale, is drawn at once. The panel beside it shows the pose at
+        the full UI rate."""
+        if isinstance(old, tuple) and isinstance(new, tuple) and old[3:] == new[3:]:
             return FOLLOW_S
         return 0.0
 

@@ -32,7 +32,7 @@ class Settings:
     repeat_rate: float = 10.0
     key_timeout: float = 0.6
     ui_rate: float = 5.0  # redraws per second, however fast data arrives
-    analytics_rate: float = 2.0  # the analytics screen's stats and plots: summaries need not flicker
+    analytics_rate: float = 2.0  # analytics and latency figures (screens 2, 3, the dashboard): no flicker
     poll_period: float = 0.5  # tracker API poll, 2 Hz
     live: bool = True  # timers and workers on; snapshot tests turn it off for still frames
     handle_signals: bool = True
