@@ -250,10 +250,11 @@ class ArbiterApp(App[None]):
             return
         self.post_message(BackendStarted(link, tracker, cleanup))
 
-    def screen_shown(self) -> None:
-        """A screen came to the front (its ``on_screen_resume``)."""
-        if self.current_mode not in self._frozen_modes:  # a screen's widgets, made once, kept for good
-            self._frozen_modes.add(self.current_mode)
+    def screen_shown(self, name: str | None = None) -> None:
+        """A screen (or the dashboard's panes, ``name``) came to the front for the first time or again."""
+        name = name or self.current_mode
+        if name not in self._frozen_modes:  # its widgets, made once, kept for good
+            self._frozen_modes.add(name)
             self.set_timer(FREEZE_AFTER_S, freeze_heap)
 
     @on(BackendStarted)

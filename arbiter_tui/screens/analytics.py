@@ -48,7 +48,8 @@ class CompareTable(DataTable[Text]):
     def on_mount(self) -> None:
         self._shown: tuple[object, ...] | None = None
         self.table = T.build(self.mode, (), ())
-        self.watch(self.app, "analytics", self._refill, init=True)
+        self.watch(self.app, "analytics", self._refill, init=False)
+        self.call_after_refresh(self._refill)  # filled once mounted (the dashboard mounts it late)
 
     def watch_mode(self) -> None:
         self._refill()

@@ -38,27 +38,34 @@ class ControlScreen(BaseScreen):
                 yield RobotPanel(id="robot")
                 yield Static(KEY_HELP, id="keys")  # painted once: the legend never changes
             yield LiveMap("map (m)", id="map")
-        with Horizontal(id="dash"):
-            with Vertical(id="dash-compare"):
-                yield StatsCards(id="dash-cards")
-                table = CompareTable(id="dash-table", show_cursor=False, zebra_stripes=True)
-                table.can_focus = False  # the arrow keys drive here: they must never scroll a table
-                yield table
-                yield RuleLine(id="dash-rule")
-                yield ErrorPlot("e_d (m) vs time (s)", id="dash-err")
-            with Vertical(id="dash-latency"):
-                yield TrackerLine(id="dash-lat-state")
-                yield TrackerCards(id="dash-lat-cards")
-                yield ClientLine(id="dash-lat-client")
-                yield LatencyPlot("one-way (ms) vs time (s)", id="dash-lat-plot")
+
+    @staticmethod
+    def dashboard_panes() -> Horizontal:
+        """What the dashboard adds below the panel and the map: the same widgets as screens 2 and 3."""
+        table = CompareTable(id="dash-table", show_cursor=False, zebra_stripes=True)
+        table.can_focus = False  # the arrow keys drive here: they must never scroll a table
+        compare = Vertical(
+            StatsCards(id="dash-cards"), table, RuleLine(id="dash-rule"),
+            ErrorPlot("e_d (m) vs time (s)", id="dash-err"), id="dash-compare",
+        )  # fmt: skip
+        latency = Vertical(
+            TrackerLine(id="dash-lat-state"), TrackerCards(id="dash-lat-cards"),
+            ClientLine(id="dash-lat-client"), LatencyPlot("one-way (ms) vs time (s)", id="dash-lat-plot"),
+            id="dash-latency",
+        )  # fmt: skip
+        return Horizontal(compare, latency, id="dash")
 
     def on_resize(self, event: events.Resize) -> None:
         # (Textual calls BaseScreen.on_resize too, after this: handlers run for each class)
         dashboard = event.size.width >= DASHBOARD_WIDTH and event.size.height >= DASHBOARD_HEIGHT
+        if dashboard and not self.query("#dash"):
+            # made the first time it is needed: a small terminal does not pay for it at start
+            self.query_one("#body").mount(self.dashboard_panes())
         if dashboard != self.dashboard:
             self.dashboard = dashboard
             self.set_class(dashboard, "dashboard")
             self.arbiter.publish_views(force=True)  # its panes show what was not sampled before
+            self.arbiter.screen_shown("dashboard")  # its widgets, once made, live as long as the console
 
     def on_key(self, event: events.Key) -> None:
         if self.arbiter.teleop_key(key_name(event.character, event.key)):
