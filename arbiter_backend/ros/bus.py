@@ -14,6 +14,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
+from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -45,6 +46,9 @@ class _Sub:
     type_name: str
     subscription: Subscription
     callbacks: list[Callback] = field(default_factory=list)
+    # a transient-local (latched) topic: its last ``depth`` samples, replayed to each client that
+    # subscribes after the shared DDS subscription got them (as a late-joining DDS reader would get them)
+    latched: deque[dict[str, Any]] | None = None
 
 
 def default_qos() -> QoSProfile:
@@ -154,11 +158,18 @@ class RosBus:
         sub = self._subs.get(topic)
         if sub is None:
             cls = message_class(t)
+            qos = self._qos_for(topic)
             ros_sub = self.node.create_subscription(
-                cls, topic, lambda m, name=topic: self._on_message(name, m), self._qos_for(topic)
+                cls, topic, lambda m, name=topic: self._on_message(name, m), qos
             )
-            sub = _Sub(t, ros_sub)
+            latched = deque(maxlen=qos.depth) if qos.durability == DurabilityPolicy.TRANSIENT_LOCAL else None
+            sub = _Sub(t, ros_sub, latched=latched)
             self._subs[topic] = sub
+        elif sub.latched:
+            # DDS delivered the latched samples once, to the shared subscription: this client gets them
+            # from the relay, and only this client
+            kept = tuple(sub.latched)
+            self.loop.call_soon(self._replay, topic, callback, kept)
         sub.callbacks.append(callback)
 
         def unsubscribe() -> None:
@@ -201,10 +212,22 @@ class RosBus:
         with contextlib.suppress(RuntimeError):  # the loop is closed: shutting down
             self.loop.call_soon_threadsafe(self._fanout, topic, data)
 
+    def _replay(self, topic: str, callback: Callback, kept: tuple[dict[str, Any], ...]) -> None:  # loop
+        current = self._subs.get(topic)
+        if current is None or callback not in current.callbacks:
+            return  # unsubscribed meanwhile
+        for data in kept:
+            try:
+                callback(data)
+            except Exception:
+                log.exception("subscriber of %s failed", topic)
+
     def _fanout(self, topic: str, data: dict[str, Any]) -> None:  # asyncio loop
         sub = self._subs.get(topic)
         if sub is None:
             return
+        if sub.latched is not None:
+            sub.latched.append(data)
         for cb in tuple(sub.callbacks):
             try:
                 cb(data)

@@ -27,6 +27,7 @@ from ..support.ros import (
     Odometry,
     Peer,
     PoseStamped,
+    QoSProfile,
     ReliabilityPolicy,
     String,
     Twist,
@@ -199,6 +200,37 @@ def test_roslibpy_through_our_endpoint_relays_any_installed_type(peer):
         assert pairs["/arbiter_test/goal"] == "geometry_msgs/msg/PoseStamped"
     finally:
         ros.close()
+        backend.stop()
+
+
+def test_a_latched_sample_reaches_every_client_that_subscribes_later(peer):
+    """A transient-local publisher's sample (a map, a robot description) reaches each WebSocket client
+    that subscribes, one after another, as the stock rosbridge_server delivers it: one DDS subscription
+    is shared by the clients, so the relay keeps the sample and replays it to each newcomer."""
+    backend = ros_backend()
+    qos = QoSProfile(
+        depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
+    )
+    latched = peer.node.create_publisher(String, "/arbiter_test/latched", qos)
+    msg = String()
+    msg.data = "map v1"
+    latched.publish(msg)
+    clients, received = [], []
+    try:
+        for i in range(3):
+            ros = roslibpy.Ros("127.0.0.1", backend.bridge_port)
+            ros.run(timeout=10)
+            clients.append(ros)
+            got: list[str] = []
+            received.append(got)
+            topic = roslibpy.Topic(ros, "/arbiter_test/latched", "std_msgs/String")
+            topic.subscribe(lambda m, got=got: got.append(m["data"]))
+            assert wait_for(lambda got=got: got == ["map v1"], 10), f"client {i + 1} got {got}"
+        time.sleep(0.3)  # an absence: nobody got it twice
+        assert received == [["map v1"]] * 3
+    finally:
+        for ros in clients:
+            ros.close()
         backend.stop()
 
 

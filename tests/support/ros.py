@@ -19,7 +19,7 @@ try:
     from nav_msgs.msg import Odometry  # noqa: F401
     from rclpy.context import Context
     from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
-    from rclpy.qos import DurabilityPolicy, ReliabilityPolicy  # noqa: F401
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy  # noqa: F401
     from std_msgs.msg import String  # noqa: F401
 except ImportError as exc:  # pragma: no cover - depends on the install
     if os.environ.get("ARBITER_REQUIRE_ROS"):
