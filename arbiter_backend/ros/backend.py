@@ -63,6 +63,7 @@ class RosBackend(Servers):
             self._shutdown_ros()
             raise
         self.bus: RosBus | None = None
+        self._watch: asyncio.Task[None] | None = None
         self.endpoint: bridge.RosbridgeEndpoint | None = None
         self.executor = SingleThreadedExecutor(context=self.context)
         for node in self.nodes:
@@ -84,11 +85,14 @@ class RosBackend(Servers):
             stamped = self.tracker_node.stamped_sub.topic_name
             self.bus.local_handlers[stamped] = self.tracker_node.on_local_command
             self.endpoint = bridge.RosbridgeEndpoint(self.bus, token=self.config.token)
+            self._watch = asyncio.create_task(self.bus.watch_publishers())  # QoS follows the publishers
         await self.start_servers(self.endpoint, self.tracker)
         self._thread = threading.Thread(target=self._spin, name="rclpy-executor", daemon=True)
         self._thread.start()
 
     async def stop(self) -> None:
+        if self._watch is not None:
+            self._watch.cancel()
         await self.stop_servers(self.endpoint)
         if self.bus is not None:
             self.bus.close()

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import json
 import logging
 from collections import deque
 from collections.abc import Callable
@@ -32,6 +33,9 @@ from .convert import message_class, to_json, to_ros
 from .local import HandledLocally
 
 log = logging.getLogger(__name__)
+SWAP_MEMORY = 256  # messages of a replaced subscription remembered while its successor catches up
+REMATCH_S = 1.0  # how often the publishers of relayed topics are looked at: a driver that starts late is
+# matched within a second of being discovered, for one graph query per subscribed topic a second
 
 
 @dataclass
@@ -45,10 +49,49 @@ class _Pub:
 class _Sub:
     type_name: str
     subscription: Subscription
+    qos: QoSProfile
     callbacks: list[Callback] = field(default_factory=list)
+    generation: int = 0  # bumped when the DDS subscription is replaced (publishers' QoS changed)
+    retiring: Subscription | None = None  # the one replaced, kept until the new one delivers
+    swap: _Swap | None = None  # while both deliver: which of their messages are handed on
     # a transient-local (latched) topic: its last ``depth`` samples, replayed to each client that
     # subscribes after the shared DDS subscription got them (as a late-joining DDS reader would get them)
     latched: deque[dict[str, Any]] | None = None
+
+
+class _Swap:
+    """The overlap of a replaced DDS subscription and its successor (executor thread only).
+
+    The old one's messages are handed on until the new one delivers; from then on only the new one's,
+    except a message the old one already handed on (both were matched to its publisher): the texts the
+    old one handed on are kept, and the new one's copy of each is skipped once."""
+
+    def __init__(self, old_generation: int) -> None:
+        self.old = old_generation
+        self.new_started = False
+        self.fresh = False
+        self.seen: deque[str] = deque(maxlen=SWAP_MEMORY)
+
+    def admit(self, generation: int, data: dict[str, Any]) -> bool:
+        if generation < self.old:
+            return False
+        key = json.dumps(data, sort_keys=True, default=str)
+        if generation == self.old:
+            if self.new_started:
+                return False  # the new one delivers now
+            self.seen.append(key)
+            return True
+        self.new_started = True
+        if key in self.seen:
+            self.seen.remove(key)
+            return False
+        self.fresh = True  # past what the old one handed on (a publisher's messages keep their order)
+        return True
+
+    @property
+    def over(self) -> bool:
+        """The new one delivers, and nothing the old one handed on is still to come from it."""
+        return self.new_started and (self.fresh or not self.seen)
 
 
 def default_qos() -> QoSProfile:
@@ -137,19 +180,62 @@ class RosBus:
 
     # -- subscribing ---------------------------------------------------------------------------
     def _qos_for(self, topic: str) -> QoSProfile:
-        """Match the publishers, as rosbridge does: best effort if they all are; latched if they all are."""
+        """The QoS that matches every publisher there is, as rosbridge chooses it: best effort if any
+        publisher is (a best-effort reader matches reliable writers too, a reliable one no best-effort
+        writer); transient-local only if every publisher is (a transient-local reader matches no volatile
+        writer). No publisher yet: reliable and volatile."""
         qos = default_qos()
         try:
             infos = self.node.get_publishers_info_by_topic(topic)
         except Exception:  # the graph query is best effort; the default works for most topics
             return qos
+        infos = [i for i in infos if i.node_name != self.node.get_name()]  # not our own relay publisher
         if infos:
             profiles = [i.qos_profile for i in infos]
-            if all(p.reliability == ReliabilityPolicy.BEST_EFFORT for p in profiles):
+            if any(p.reliability == ReliabilityPolicy.BEST_EFFORT for p in profiles):
                 qos.reliability = ReliabilityPolicy.BEST_EFFORT
             if all(p.durability == DurabilityPolicy.TRANSIENT_LOCAL for p in profiles):
                 qos.durability = DurabilityPolicy.TRANSIENT_LOCAL
         return qos
+
+    def _create_subscription(
+        self, topic: str, type_name: str, qos: QoSProfile, generation: int
+    ) -> Subscription:
+        return self.node.create_subscription(
+            message_class(type_name), topic, lambda m: self._on_message(topic, m, generation), qos
+        )
+
+    def rematch(self) -> None:  # asyncio loop
+        """Follow the publishers: where the QoS that matches them all changed (a best-effort driver
+        started after the client subscribed, a publisher restarted with other settings), replace the
+        DDS subscription. The new one is made first; the old one keeps delivering until the new one
+        delivers its first message, and is then dropped, so the swap loses nothing the middleware
+        delivers and a message is not handed on twice (see ``_on_message``)."""
+        for topic, sub in list(self._subs.items()):
+            want = self._qos_for(topic)
+            if (want.reliability, want.durability) == (sub.qos.reliability, sub.qos.durability):
+                continue
+            log.info(
+                "%s: its publishers changed; subscribing %s, %s", topic, want.reliability, want.durability
+            )
+            if sub.retiring is not None:  # replaced twice before the first new message: drop the oldest
+                self.node.destroy_subscription(sub.retiring)
+            sub.swap = _Swap(sub.generation)
+            sub.generation += 1
+            sub.retiring = sub.subscription
+            sub.subscription = self._create_subscription(topic, sub.type_name, want, sub.generation)
+            sub.qos = want
+            latched = want.durability == DurabilityPolicy.TRANSIENT_LOCAL
+            sub.latched = (sub.latched or deque(maxlen=want.depth)) if latched else None
+
+    async def watch_publishers(self, period: float = REMATCH_S) -> None:
+        """Call :meth:`rematch` every ``period`` seconds until cancelled."""
+        while True:
+            await asyncio.sleep(period)
+            try:
+                self.rematch()
+            except Exception:  # never let the graph take the relay down
+                log.exception("following the publishers failed")
 
     def subscribe(self, topic: str, callback: Callback, type_name: str | None = None) -> Callable[[], None]:
         t = self.declare(topic, type_name) if type_name is not None else self.type_of(topic)
@@ -157,13 +243,9 @@ class RosBus:
             raise MessageError(f"cannot subscribe to {topic}: type unknown")
         sub = self._subs.get(topic)
         if sub is None:
-            cls = message_class(t)
             qos = self._qos_for(topic)
-            ros_sub = self.node.create_subscription(
-                cls, topic, lambda m, name=topic: self._on_message(name, m), qos
-            )
             latched = deque(maxlen=qos.depth) if qos.durability == DurabilityPolicy.TRANSIENT_LOCAL else None
-            sub = _Sub(t, ros_sub, latched=latched)
+            sub = _Sub(t, self._create_subscription(topic, t, qos, 0), qos, latched=latched)
             self._subs[topic] = sub
         elif sub.latched:
             # DDS delivered the latched samples once, to the shared subscription: this client gets them
@@ -180,6 +262,8 @@ class RosBus:
             if not current.callbacks:
                 del self._subs[topic]
                 self.node.destroy_subscription(current.subscription)
+                if current.retiring is not None:
+                    self.node.destroy_subscription(current.retiring)
 
         return unsubscribe
 
@@ -199,16 +283,31 @@ class RosBus:
         with contextlib.suppress(RuntimeError):  # the loop is closed: shutting down
             self.loop.call_soon_threadsafe(self._fanout, topic, {"data": text})
 
-    def _on_message(self, topic: str, msg: Any) -> None:  # executor thread
-        text = getattr(msg, "data", None)
-        handled = self._local.get(topic)
-        if handled is not None and isinstance(text, str) and handled.take(text):
-            return  # already delivered in-process
+    def _on_message(self, topic: str, msg: Any, generation: int = 0) -> None:  # executor thread
+        sub = self._subs.get(topic)
+        if sub is None:
+            return
         try:
             data = to_json(msg)
         except Exception:
             log.exception("cannot convert a message on %s", topic)
             return
+        swap = sub.swap
+        if swap is not None:
+            if not swap.admit(generation, data):
+                return
+            if swap.new_started and sub.retiring is not None:  # the new one delivers: drop the old one
+                retired, sub.retiring = sub.retiring, None
+                with contextlib.suppress(RuntimeError):
+                    self.loop.call_soon_threadsafe(self.node.destroy_subscription, retired)
+            if swap.over:
+                sub.swap = None
+        elif generation != sub.generation:
+            return  # a replaced subscription's last messages, after the swap ended
+        text = getattr(msg, "data", None)
+        handled = self._local.get(topic)
+        if handled is not None and isinstance(text, str) and handled.take(text):
+            return  # already delivered in-process
         with contextlib.suppress(RuntimeError):  # the loop is closed: shutting down
             self.loop.call_soon_threadsafe(self._fanout, topic, data)
 
@@ -237,6 +336,8 @@ class RosBus:
     def close(self) -> None:
         for sub in self._subs.values():
             self.node.destroy_subscription(sub.subscription)
+            if sub.retiring is not None:
+                self.node.destroy_subscription(sub.retiring)
         for pub in self._pubs.values():
             self.node.destroy_publisher(pub.publisher)
         self._subs.clear()

@@ -234,6 +234,74 @@ def test_a_latched_sample_reaches_every_client_that_subscribes_later(peer):
         backend.stop()
 
 
+def odometry(x: float) -> "Odometry":
+    msg = Odometry()
+    msg.pose.pose.position.x = x
+    return msg
+
+
+def publish_until(pub, got: list, first: float, timeout: float = 10.0) -> float:
+    """Publish odometry x = first, first + 1, ... at 20 Hz until the client got one of them (the relay
+    follows a publisher within a second of discovering it); returns the next x."""
+    x, deadline = first, time.monotonic() + timeout
+    while time.monotonic() < deadline and not any(v >= first for v in got):
+        pub.publish(odometry(x))
+        x += 1.0
+        time.sleep(0.05)
+    return x
+
+
+def test_the_relay_follows_publishers_that_start_late_or_restart_with_another_qos(peer):
+    """Sensor-data QoS (best effort) is what many drivers publish odometry with, and drivers often start
+    after the console or restart: the relay re-derives its QoS as publishers come and go, replaces its
+    DDS subscription, and the client neither loses the stream nor sees a message twice."""
+    backend = ros_backend()
+    ros = roslibpy.Ros("127.0.0.1", backend.bridge_port)
+    ros.run(timeout=10)
+    topic = "/arbiter_test/late_odom"
+    got: list[float] = []
+    try:
+        roslibpy.Topic(ros, topic, "nav_msgs/msg/Odometry").subscribe(
+            lambda m: got.append(m["pose"]["pose"]["position"]["x"])
+        )
+        assert wait_for(lambda: peer.node.count_subscribers(topic) > 0, 10)  # the relay subscribed
+        best_effort = QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT)
+        late = peer.node.create_publisher(Odometry, topic, best_effort)  # after the client subscribed
+        x = publish_until(late, got, 0.0)
+        assert got, "a best-effort publisher that started late never reached the client"
+        # the driver restarts with reliable QoS, then again best effort: followed each time
+        peer.node.destroy_publisher(late)
+        reliable = peer.node.create_publisher(Odometry, topic, 10)
+        x = publish_until(reliable, got, x + 1000.0)
+        peer.node.destroy_publisher(reliable)
+        again = peer.node.create_publisher(Odometry, topic, best_effort)
+        x = publish_until(again, got, x + 1000.0)
+        assert any(v >= 2000.0 for v in got), got[-5:]
+        for _ in range(10):  # and steady: these all arrive, once each, in order
+            again.publish(odometry(x))
+            x += 1.0
+            time.sleep(0.05)
+        assert wait_for(lambda: got[-1] == x - 1.0, 5), got[-5:]
+        assert got == sorted(got) and len(got) == len(set(got)), "a message was handed on twice"
+    finally:
+        ros.close()
+        backend.stop()
+
+
+def test_a_swap_hands_each_message_on_once():
+    """The overlap of a replaced subscription (generation 0) and its successor (1), message by message."""
+    from arbiter_backend.ros.bus import _Swap
+
+    swap = _Swap(0)
+    a, b, c, d = ({"x": v} for v in (1, 2, 3, 4))
+    assert swap.admit(0, a) and swap.admit(0, b)  # only the old one delivers so far
+    assert not swap.admit(1, b)  # the new one's copy of what the old one handed on
+    assert not swap.over
+    assert not swap.admit(0, c)  # the new one delivers: the old one's messages are not handed on
+    assert swap.admit(1, c) and swap.over  # the new one's own, past the overlap
+    assert not swap.admit(-1, d)  # an older generation still
+
+
 def test_bad_types_and_messages_get_status_errors_in_ros_mode():
     import asyncio
 
