@@ -341,10 +341,11 @@ class RosbridgeEndpoint:
     def _advertise(self, client: Client, frame: dict[str, Any]) -> None:
         topic = self._topic(frame)
         type_name = self._field(frame, "type", str)
+        latch = self._field(frame, "latch", bool, required=False) is True  # rosbridge's field
         if topic in client.advertised:
             client.advertised[topic] = self.bus.declare(topic, type_name)
         else:
-            client.advertised[topic] = self.bus.advertise(topic, type_name)
+            client.advertised[topic] = self.bus.advertise(topic, type_name, latch=latch)
 
     def _unadvertise(self, client: Client, frame: dict[str, Any]) -> None:
         topic = self._topic(frame)

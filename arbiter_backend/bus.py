@@ -8,6 +8,7 @@ skipped; it never breaks delivery to the others.
 
 from __future__ import annotations
 
+import asyncio
 import logging
 from collections.abc import Callable
 from typing import Any, Protocol
@@ -27,7 +28,7 @@ class Bus(Protocol):
     """What the rosbridge endpoint needs of a bus: this module's TopicBus, or ``ros.bus.RosBus`` (DDS)."""
 
     def declare(self, topic: str, type_name: str) -> str: ...
-    def advertise(self, topic: str, type_name: str) -> str: ...
+    def advertise(self, topic: str, type_name: str, latch: bool = False) -> str: ...
     def unadvertise(self, topic: str) -> None: ...
     def type_of(self, topic: str) -> str | None: ...
     def topics(self) -> list[tuple[str, str]]: ...
@@ -42,6 +43,10 @@ class TopicBus:
         self._types: dict[str, str] = {}
         self._subs: dict[str, list[Callback]] = {}
         self.published = 0
+        # topics advertised with ``latch``: their last message, handed to each subscriber that comes
+        # later (and only to it), as a transient-local publisher's sample reaches a late DDS reader
+        self._latch: set[str] = set()
+        self._latched: dict[str, dict[str, Any]] = {}
 
     def declare(self, topic: str, type_name: str) -> str:
         """Give ``topic`` a type (normalised), or check it against the one it has."""
@@ -52,8 +57,11 @@ class TopicBus:
         self._types[topic] = t
         return t
 
-    def advertise(self, topic: str, type_name: str) -> str:
-        return self.declare(topic, type_name)
+    def advertise(self, topic: str, type_name: str, latch: bool = False) -> str:
+        t = self.declare(topic, type_name)
+        if latch:
+            self._latch.add(topic)
+        return t
 
     def unadvertise(self, topic: str) -> None:
         """Nothing to release: the in-process bus keeps a topic's type for its lifetime."""
@@ -68,6 +76,9 @@ class TopicBus:
         if type_name is not None:
             self.declare(topic, type_name)
         self._subs.setdefault(topic, []).append(callback)
+        kept = self._latched.get(topic)
+        if kept is not None:
+            self._later(self._replay, topic, callback, kept)
 
         def unsubscribe() -> None:
             subs = self._subs.get(topic)
@@ -79,6 +90,21 @@ class TopicBus:
     def subscriber_count(self, topic: str) -> int:
         return len(self._subs.get(topic, ()))
 
+    @staticmethod
+    def _later(fn: Callable[..., None], *args: Any) -> None:
+        """After the caller (the endpoint, setting up the subscription) is done: on the running loop."""
+        try:
+            asyncio.get_running_loop().call_soon(fn, *args)
+        except RuntimeError:  # no loop (a test of the bus alone)
+            fn(*args)
+
+    def _replay(self, topic: str, callback: Callback, msg: dict[str, Any]) -> None:
+        if callback in self._subs.get(topic, ()):
+            try:
+                callback(msg)
+            except Exception:
+                log.exception("subscriber of %s failed", topic)
+
     def publish(self, topic: str, msg: Any, type_name: str | None = None) -> dict[str, Any]:
         """Check ``msg`` against the topic's type and deliver it; returns the normalised message."""
         t = self.declare(topic, type_name) if type_name is not None else self._types.get(topic)
@@ -86,6 +112,8 @@ class TopicBus:
             raise MessageError(f"cannot infer the type of {topic}: not yet advertised")
         checked = check_message(t, msg)
         self.published += 1
+        if topic in self._latch:
+            self._latched[topic] = checked
         for cb in tuple(self._subs.get(topic, ())):
             try:
                 cb(checked)

@@ -143,12 +143,16 @@ class RosBus:
         return sorted(merged.items())
 
     # -- publishing ---------------------------------------------------------------------------
-    def advertise(self, topic: str, type_name: str) -> str:
-        """Create (or share) the DDS publisher now, so subscribers match before the first message."""
+    def advertise(self, topic: str, type_name: str, latch: bool = False) -> str:
+        """Create (or share) the DDS publisher now, so subscribers match before the first message;
+        ``latch`` (rosbridge's field) makes it transient-local: a late reader gets its last samples."""
         t = self.declare(topic, type_name)
         pub = self._pubs.get(topic)
         if pub is None:
-            pub = _Pub(t, self.node.create_publisher(message_class(t), topic, default_qos()))
+            qos = default_qos()
+            if latch:
+                qos.durability = DurabilityPolicy.TRANSIENT_LOCAL
+            pub = _Pub(t, self.node.create_publisher(message_class(t), topic, qos))
             self._pubs[topic] = pub
         pub.users += 1
         return t

@@ -279,3 +279,37 @@ def test_stale_commands_are_reported_but_never_reach_the_robot(backend):
         assert 1000.0 <= health["last_stale_age_ms"] < 1500.0
     finally:
         ros.close()
+
+
+def test_a_latched_advertise_reaches_clients_that_subscribe_later(backend):
+    """rosbridge's ``latch: true`` on advertise: the last message reaches each later subscriber, once;
+    a topic advertised without it gives a late subscriber nothing."""
+    talker = connect(backend.bridge_port)
+    listeners = []
+    try:
+        status = roslibpy.Topic(talker, "/arbiter_test/status", "std_msgs/String", latch=True)
+        status.advertise()
+        status.publish(roslibpy.Message({"data": "ready"}))
+        plain = roslibpy.Topic(talker, "/arbiter_test/chatter", "std_msgs/String")
+        plain.advertise()
+        plain.publish(roslibpy.Message({"data": "gone"}))
+        received, missed = [], []
+        for _ in range(2):
+            ros = connect(backend.bridge_port)
+            listeners.append(ros)
+            got: list[str] = []
+            received.append(got)
+            roslibpy.Topic(ros, "/arbiter_test/status", "std_msgs/String").subscribe(
+                lambda m, got=got: got.append(m["data"])
+            )
+            roslibpy.Topic(ros, "/arbiter_test/chatter", "std_msgs/String").subscribe(
+                lambda m: missed.append(m["data"])
+            )
+            assert wait_for(lambda got=got: got == ["ready"], 5), got
+        time.sleep(0.3)  # an absence: once each, and nothing from the unlatched topic
+        assert received == [["ready"], ["ready"]] and missed == []
+        status.publish(roslibpy.Message({"data": "busy"}))  # the latest is what the next one gets
+        assert wait_for(lambda: received == [["ready", "busy"], ["ready", "busy"]], 5), received
+    finally:
+        for ros in (talker, *listeners):
+            ros.close()

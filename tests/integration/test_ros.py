@@ -288,6 +288,31 @@ def test_the_relay_follows_publishers_that_start_late_or_restart_with_another_qo
         backend.stop()
 
 
+def test_a_latched_advertise_is_a_transient_local_publisher_on_dds(peer):
+    """``latch: true`` from a WebSocket client: an rclpy reader that joins after the publish still gets
+    the sample, as from any transient-local publisher."""
+    backend = ros_backend()
+    ros = roslibpy.Ros("127.0.0.1", backend.bridge_port)
+    ros.run(timeout=10)
+    try:
+        topic = roslibpy.Topic(ros, "/arbiter_test/latched_from_ws", "std_msgs/String", latch=True)
+        topic.advertise()
+        topic.publish(roslibpy.Message({"data": "calibrated"}))
+        assert wait_for(lambda: peer.node.count_publishers("/arbiter_test/latched_from_ws") > 0, 10)
+        time.sleep(0.2)  # the publish has been written (the publisher exists before it)
+        late: list[str] = []
+        qos = QoSProfile(
+            depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
+        )
+        peer.node.create_subscription(
+            String, "/arbiter_test/latched_from_ws", lambda m: late.append(m.data), qos
+        )
+        assert wait_for(lambda: late == ["calibrated"], 10), late
+    finally:
+        ros.close()
+        backend.stop()
+
+
 def test_a_swap_hands_each_message_on_once():
     """The overlap of a replaced subscription (generation 0) and its successor (1), message by message."""
     from arbiter_backend.ros.bus import _Swap
