@@ -203,9 +203,11 @@ def status_view(
 
 
 def odometry_warning(link: Link, now: float) -> str | None:
-    """``no odometry on TOPIC`` while the link is up and odometry has not come for a while."""
+    """``no odometry on TOPIC`` while the link is up and odometry has not come for a while, with the
+    cause when the server named one (e.g. the topic has another type)."""
     if link.state == CONNECTED and link.telemetry.odometry_missing(now):
-        return f"no odometry on {getattr(link, 'topic_odom', '/odom')}"
+        cause = getattr(link, "odometry_problem", None)
+        return f"no odometry on {getattr(link, 'topic_odom', '/odom')}" + (f": {cause}" if cause else "")
     return None
 
 

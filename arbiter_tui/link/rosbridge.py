@@ -80,6 +80,7 @@ class RosLink:
         self._zero_first = False
         self._ever_connected = False
         self._error: str | None = None
+        self._odom_problem: str | None = None  # what the server said when it refused our odometry
         self._reactor: Any = reactor
         # relative names resolve under the namespace, absolute ones are used as given (ROS rules)
         self.topic_stamped = topics.resolve(topics.STAMPED, namespace)
@@ -189,6 +190,7 @@ class RosLink:
         self.ros.factory.maxDelay = MAX_RECONNECT_DELAY_S  # a token accepted: back to fast retries
         with self._lock:
             self._error = None
+            self._odom_problem = None  # subscribed again: what the server says now counts
         with self.telemetry.lock:
             self.telemetry.connected_at = time.monotonic()
         with self._lock:
@@ -206,7 +208,19 @@ class RosLink:
         self.telemetry.meter.reset_pending(time.monotonic())  # in flight: never reported
 
     def _on_status(self, message: dict[str, Any]) -> None:
-        log.warning("rosbridge status %s: %s", message.get("level", "?"), str(message.get("msg", ""))[:200])
+        text = str(message.get("msg", ""))[:200]
+        log.warning("rosbridge status %s: %s", message.get("level", "?"), text)
+        if self.topic_odom in text or self.topic_odom in str(message.get("id", "")):
+            # the server refused our odometry subscription (e.g. the topic has another type): the status
+            # line names this cause rather than only "no odometry"
+            with self._lock:
+                self._odom_problem = text.removeprefix("subscribe: ")
+
+    @property
+    def odometry_problem(self) -> str | None:
+        """Why the server would not give us odometry, as it said it (None: it said nothing)."""
+        with self._lock:
+            return self._odom_problem
 
     @property
     def state(self) -> str:

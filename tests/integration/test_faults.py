@@ -209,3 +209,31 @@ def test_export_onto_a_full_disk_leaves_nothing_and_keeps_the_data(tmp_path):
         assert "too large" in out[fmt].lower() or "space" in out[fmt].lower(), out[fmt]
     assert out["points"] == out["before"] == 1000  # the store's default size, untouched
     assert list(tmp_path.iterdir()) == []  # no partial file, no temporary left behind
+
+
+async def test_the_status_line_names_why_odometry_does_not_come(tmp_path):
+    """The robot's odometry topic carries another type: the server refuses the console's subscription,
+    and the status line says so instead of only "no odometry"."""
+    import roslibpy
+
+    backend = start_backend()
+    other = roslibpy.Ros("127.0.0.1", backend.bridge_port)
+    other.run(timeout=10)
+    wrong = roslibpy.Topic(other, "/wheel_odom", "std_msgs/String")
+    wrong.advertise()  # a node that publishes it as a string
+    ask = roslibpy.Service(other, "/rosapi/topic_type", "rosapi/TopicType")
+    answer = ask.call(roslibpy.ServiceRequest({"topic": "/wheel_odom"}), timeout=5)
+    assert answer["type"] == "std_msgs/msg/String"
+    link = RosLink("127.0.0.1", backend.bridge_port, odom_topic="/wheel_odom")
+    app = make_app(live_settings(tmp_path), link, TrackerClient(backend.api))
+    try:
+        async with app.run_test(size=(100, 30)) as pilot:
+            assert await until(pilot, lambda: link.state == CONNECTED, timeout=15)
+            assert await until(pilot, lambda: link.odometry_problem is not None, timeout=5)
+            assert "std_msgs/msg/String" in link.odometry_problem
+            said = "no odometry on /wheel_odom: topic /wheel_odom has type std_msgs/msg/String"
+            assert await until(pilot, lambda: said in text_of(app, "#status"), timeout=5)
+    finally:
+        link.close()
+        other.close()
+        backend.stop()
