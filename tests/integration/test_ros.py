@@ -313,6 +313,38 @@ def test_a_latched_advertise_is_a_transient_local_publisher_on_dds(peer):
         backend.stop()
 
 
+async def test_best_effort_odometry_that_starts_after_the_console_reaches_its_control_screen(peer, tmp_path):
+    """The usual order on a robot: the console (and so the relay's subscription) first, then a driver
+    whose odometry is best effort (sensor-data QoS). The console's own link gets it, and the control
+    screen shows the pose it carries."""
+    backend = ros_backend("--no-sim")
+    topic = "/arbiter_test/driver_odom"
+    link = RosLink("127.0.0.1", backend.bridge_port, odom_topic=topic)
+    settings = Settings(live=True, handle_signals=False, export_dir=tmp_path, mode="connect")
+    app = make_app(settings, link, TrackerClient(backend.api))
+    try:
+        async with app.run_test(size=(100, 30)) as pilot:
+            assert await until(pilot, lambda: link.state == CONNECTED, timeout=15)
+            assert await until(pilot, lambda: peer.node.count_subscribers(topic) > 0, timeout=10)
+            driver = peer.node.create_publisher(
+                Odometry, topic, QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT)
+            )
+            msg = Odometry()
+            msg.pose.pose.position.x = 1.5
+
+            def published_and_received() -> bool:
+                driver.publish(msg)
+                return link.telemetry.odom_count > 0
+
+            arrived = await until(pilot, published_and_received, timeout=10)
+            assert arrived, "best-effort odometry never arrived"
+            assert await until(pilot, lambda: app.robot.x == 1.5, timeout=5)
+            assert "no odometry" not in app.status.text()
+    finally:
+        link.close()
+        backend.stop()
+
+
 def test_a_swap_hands_each_message_on_once():
     """The overlap of a replaced subscription (generation 0) and its successor (1), message by message."""
     from arbiter_backend.ros.bus import _Swap
