@@ -226,8 +226,10 @@ def test_a_latched_sample_reaches_every_client_that_subscribes_later(peer):
             topic = roslibpy.Topic(ros, "/arbiter_test/latched", "std_msgs/String")
             topic.subscribe(lambda m, got=got: got.append(m["data"]))
             assert wait_for(lambda got=got: got == ["map v1"], 10), f"client {i + 1} got {got}"
-        time.sleep(0.3)  # an absence: nobody got it twice
-        assert received == [["map v1"]] * 3
+        # a newer sample: once every client has it, a second copy of the first would have come before
+        msg.data = "map v2"
+        latched.publish(msg)
+        assert wait_for(lambda: received == [["map v1", "map v2"]] * 3, 10), received
     finally:
         for ros in clients:
             ros.close()
@@ -297,9 +299,12 @@ def test_a_latched_advertise_is_a_transient_local_publisher_on_dds(peer):
     try:
         topic = roslibpy.Topic(ros, "/arbiter_test/latched_from_ws", "std_msgs/String", latch=True)
         topic.advertise()
+        echo: list[str] = []  # the client hears its own sample back through DDS: it has been written
+        roslibpy.Topic(ros, "/arbiter_test/latched_from_ws", "std_msgs/String").subscribe(
+            lambda m: echo.append(m["data"])
+        )
         topic.publish(roslibpy.Message({"data": "calibrated"}))
-        assert wait_for(lambda: peer.node.count_publishers("/arbiter_test/latched_from_ws") > 0, 10)
-        time.sleep(0.2)  # the publish has been written (the publisher exists before it)
+        assert wait_for(lambda: "calibrated" in echo, 10), echo
         late: list[str] = []
         qos = QoSProfile(
             depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
