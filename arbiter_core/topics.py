@@ -24,6 +24,16 @@ TYPE_ODOM = "nav_msgs/msg/Odometry"
 MEASURED_TYPES = {"twist": TYPE_TWIST, "twist_stamped": TYPE_TWIST_STAMPED}
 QOS_DEPTH = 10  # reliable, volatile, keep last 10: a late subscriber never gets old commands
 
+# Velocity commands: whoever relays them (our bridge in ROS mode) keeps them volatile, so that a subscriber
+# that joins late never receives a command from before it joined; other relayed topics may be kept briefly.
+COMMAND_NAMES = frozenset({STAMPED, MEASURED, "cmd_vel"})
+COMMAND_TYPES = frozenset({TYPE_TWIST, TYPE_TWIST_STAMPED})
+
+
+def is_command(topic: str, type_name: str) -> bool:
+    """A velocity command, by its topic's last name (any namespace) or its type."""
+    return topic.rstrip("/").rsplit("/", 1)[-1] in COMMAND_NAMES or type_name in COMMAND_TYPES
+
 
 def absolute(name: str) -> str:
     return name if name.startswith("/") else "/" + name

@@ -33,8 +33,11 @@ def frame(seq: int) -> str:
     return json.dumps({"op": "publish", "topic": "/stamped_cmd_vel", "msg": {"data": data}})
 
 
+API_TIMEOUT_S = 30.0  # an overloaded backend (ROS mode past its rate) answers late, not never
+
+
 async def trial(bridge: int, api: str, clients: int, rate: float, duration: float) -> dict:
-    async with httpx.AsyncClient() as http:
+    async with httpx.AsyncClient(timeout=API_TIMEOUT_S) as http:
         before = (await http.get(f"{api}/api/health")).json()
         async with aiohttp.ClientSession() as session:
             sockets = [await session.ws_connect(f"ws://127.0.0.1:{bridge}") for _ in range(clients)]
@@ -58,7 +61,11 @@ async def trial(bridge: int, api: str, clients: int, rate: float, duration: floa
             # a backlog still draining is not loss: wait until the count stops moving for 1 s
             seen, last_change, deadline = -1, time.monotonic(), time.monotonic() + 60
             while time.monotonic() < deadline:
-                h = (await http.get(f"{api}/api/health")).json()
+                try:
+                    h = (await http.get(f"{api}/api/health")).json()
+                except httpx.TimeoutException:  # the API cannot answer while the backlog drains
+                    await asyncio.sleep(0.1)
+                    continue
                 now_seen = h["total_seen"] - before["total_seen"]
                 if now_seen != seen:
                     seen, last_change = now_seen, time.monotonic()

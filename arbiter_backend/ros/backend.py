@@ -15,6 +15,7 @@ import logging
 import threading
 
 import rclpy
+from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.context import Context
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
@@ -87,6 +88,11 @@ class RosBackend(Servers):
             self.endpoint = bridge.RosbridgeEndpoint(self.bus, token=self.config.token)
             self._watch = asyncio.create_task(self.bus.watch_publishers())  # QoS follows the publishers
         await self.start_servers(self.endpoint, self.tracker)
+        if self.bridge_node is not None:
+            # as rosbridge_websocket does: the port bound (``port`` may be 0), for tools that ask the graph
+            self.bridge_node.declare_parameter(
+                "actual_port", self.bridge_port, ParameterDescriptor(read_only=True)
+            )
         self._thread = threading.Thread(target=self._spin, name="rclpy-executor", daemon=True)
         self._thread.start()
 

@@ -15,18 +15,21 @@ import asyncio
 import contextlib
 import json
 import logging
+import time
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+from rclpy.duration import Duration
+from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.node import Node
 from rclpy.publisher import Publisher
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.subscription import Subscription
 
 from arbiter_core.msgtypes import MessageError, normalize_type
-from arbiter_core.topics import QOS_DEPTH
+from arbiter_core.topics import QOS_DEPTH, is_command
 
 from ..bus import Callback, TypeClash
 from .convert import message_class, to_json, to_ros
@@ -34,6 +37,7 @@ from .local import HandledLocally
 
 log = logging.getLogger(__name__)
 SWAP_MEMORY = 256  # messages of a replaced subscription remembered while its successor catches up
+EARLY_LIFESPAN_S = 1.0  # what a non-command publisher of a client keeps for readers still matching
 REMATCH_S = 1.0  # how often the publishers of relayed topics are looked at: a driver that starts late is
 # matched within a second of being discovered, for one graph query per subscribed topic a second
 
@@ -56,7 +60,8 @@ class _Sub:
     swap: _Swap | None = None  # while both deliver: which of their messages are handed on
     # a transient-local (latched) topic: its last ``depth`` samples, replayed to each client that
     # subscribes after the shared DDS subscription got them (as a late-joining DDS reader would get them)
-    latched: deque[dict[str, Any]] | None = None
+    latched: deque[tuple[float, dict[str, Any]]] | None = None  # (monotonic time received, message)
+    lifespan: float | None = None  # the shortest of the publishers' lifespans: older samples are not replayed
 
 
 class _Swap:
@@ -98,6 +103,34 @@ def default_qos() -> QoSProfile:
     return QoSProfile(
         depth=QOS_DEPTH, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE
     )
+
+
+def publisher_qos(topic: str, type_name: str, latch: bool) -> QoSProfile:
+    """The QoS of a publisher a WebSocket client made (``advertise``, or a ``publish`` without one).
+
+    - ``latch``: transient-local, its last ``depth`` samples kept for every late reader, as long as it
+      lives (rosbridge's latched publisher).
+    - a velocity command (``topics.is_command``: stamped_cmd_vel, cmd_vel_measured, cmd_vel, Twist,
+      TwistStamped): volatile, so that no reader, however late it matches, ever gets a command
+      published before it matched; a robot acts on commands as they come, never on old ones.
+    - anything else: transient-local with a lifespan of ``EARLY_LIFESPAN_S``, as the stock rosbridge
+      server makes them: a transient-local reader still matching while a client publishes (discovery
+      takes up to a few seconds on a loaded machine) gets what was published in the last second, and
+      never anything older. A volatile reader gets only what follows its match, as DDS defines."""
+    qos = default_qos()
+    if latch:
+        qos.durability = DurabilityPolicy.TRANSIENT_LOCAL
+    elif not is_command(topic, type_name):
+        qos.durability = DurabilityPolicy.TRANSIENT_LOCAL
+        qos.lifespan = Duration(nanoseconds=int(EARLY_LIFESPAN_S * 1e9))
+    return qos
+
+
+def lifespan_s(profile: QoSProfile) -> float | None:
+    """A profile's lifespan in seconds; None when samples never expire (rmw reports that as 0 or the
+    largest duration)."""
+    ns = profile.lifespan.nanoseconds
+    return ns / 1e9 if 0 < ns < 2**63 - 1 else None
 
 
 class RosBus:
@@ -149,10 +182,7 @@ class RosBus:
         t = self.declare(topic, type_name)
         pub = self._pubs.get(topic)
         if pub is None:
-            qos = default_qos()
-            if latch:
-                qos.durability = DurabilityPolicy.TRANSIENT_LOCAL
-            pub = _Pub(t, self.node.create_publisher(message_class(t), topic, qos))
+            pub = _Pub(t, self.node.create_publisher(message_class(t), topic, publisher_qos(topic, t, latch)))
             self._pubs[topic] = pub
         pub.users += 1
         return t
@@ -176,38 +206,59 @@ class RosBus:
             handler(ros_msg.data)  # in-process first: it registers the text before the DDS copy exists
         pub = self._pubs.get(topic)
         if pub is None:  # published without advertise: keep a publisher, as rosbridge does
-            pub = _Pub(t, self.node.create_publisher(message_class(t), topic, default_qos()))
+            pub = _Pub(t, self.node.create_publisher(message_class(t), topic, publisher_qos(topic, t, False)))
             self._pubs[topic] = pub
         pub.publisher.publish(ros_msg)
         self.published += 1
         return msg if isinstance(msg, dict) else {}
 
     # -- subscribing ---------------------------------------------------------------------------
-    def _qos_for(self, topic: str) -> QoSProfile:
+    def _qos_for(self, topic: str) -> tuple[QoSProfile, float | None]:
         """The QoS that matches every publisher there is, as rosbridge chooses it: best effort if any
         publisher is (a best-effort reader matches reliable writers too, a reliable one no best-effort
         writer); transient-local only if every publisher is (a transient-local reader matches no volatile
-        writer). No publisher yet: reliable and volatile."""
+        writer). No publisher yet: reliable and volatile. With it, the shortest lifespan of the
+        publishers (None: their samples never expire), which the relay's replay honours."""
         qos = default_qos()
         try:
             infos = self.node.get_publishers_info_by_topic(topic)
         except Exception:  # the graph query is best effort; the default works for most topics
-            return qos
+            return qos, None
         infos = [i for i in infos if i.node_name != self.node.get_name()]  # not our own relay publisher
-        if infos:
-            profiles = [i.qos_profile for i in infos]
-            if any(p.reliability == ReliabilityPolicy.BEST_EFFORT for p in profiles):
-                qos.reliability = ReliabilityPolicy.BEST_EFFORT
-            if all(p.durability == DurabilityPolicy.TRANSIENT_LOCAL for p in profiles):
-                qos.durability = DurabilityPolicy.TRANSIENT_LOCAL
-        return qos
+        if not infos:
+            return qos, None
+        profiles = [i.qos_profile for i in infos]
+        if any(p.reliability == ReliabilityPolicy.BEST_EFFORT for p in profiles):
+            qos.reliability = ReliabilityPolicy.BEST_EFFORT
+        if all(p.durability == DurabilityPolicy.TRANSIENT_LOCAL for p in profiles):
+            qos.durability = DurabilityPolicy.TRANSIENT_LOCAL
+        spans = [s for s in map(lifespan_s, profiles) if s is not None]
+        return qos, min(spans) if spans else None
 
     def _create_subscription(
         self, topic: str, type_name: str, qos: QoSProfile, generation: int
     ) -> Subscription:
-        return self.node.create_subscription(
-            message_class(type_name), topic, lambda m: self._on_message(topic, m, generation), qos
+        log.debug("%s: subscribing (%s, %s)", topic, qos.reliability.name, qos.durability.name)
+        events = SubscriptionEventCallbacks(
+            matched=lambda info: log.debug(
+                "%s: reader matched %d writers (%+d)", topic, info.current_count, info.current_count_change
+            ),
+            incompatible_qos=lambda info: self._on_incompatible(topic, info),
         )
+        return self.node.create_subscription(
+            message_class(type_name),
+            topic,
+            lambda m: self._on_message(topic, m, generation),
+            qos,
+            event_callbacks=events,
+        )
+
+    def _on_incompatible(self, topic: str, info: Any) -> None:  # executor thread
+        """A publisher our reader cannot match appeared: follow it now, not at the next poll."""
+        kind = info.last_policy_kind
+        log.info("%s: a publisher's QoS does not match the relay's (%s); re-matching", topic, kind)
+        with contextlib.suppress(RuntimeError):  # the loop is closed: shutting down
+            self.loop.call_soon_threadsafe(self.rematch)
 
     def rematch(self) -> None:  # asyncio loop
         """Follow the publishers: where the QoS that matches them all changed (a best-effort driver
@@ -216,7 +267,7 @@ class RosBus:
         delivers its first message, and is then dropped, so the swap loses nothing the middleware
         delivers and a message is not handed on twice (see ``_on_message``)."""
         for topic, sub in list(self._subs.items()):
-            want = self._qos_for(topic)
+            want, sub.lifespan = self._qos_for(topic)
             if (want.reliability, want.durability) == (sub.qos.reliability, sub.qos.durability):
                 continue
             log.info(
@@ -247,14 +298,16 @@ class RosBus:
             raise MessageError(f"cannot subscribe to {topic}: type unknown")
         sub = self._subs.get(topic)
         if sub is None:
-            qos = self._qos_for(topic)
+            qos, lifespan = self._qos_for(topic)
             latched = deque(maxlen=qos.depth) if qos.durability == DurabilityPolicy.TRANSIENT_LOCAL else None
-            sub = _Sub(t, self._create_subscription(topic, t, qos, 0), qos, latched=latched)
+            created = self._create_subscription(topic, t, qos, 0)
+            sub = _Sub(t, created, qos, latched=latched, lifespan=lifespan)
             self._subs[topic] = sub
         elif sub.latched:
             # DDS delivered the latched samples once, to the shared subscription: this client gets them
-            # from the relay, and only this client
-            kept = tuple(sub.latched)
+            # from the relay, and only this client; not those past their publisher's lifespan
+            now = time.monotonic()
+            kept = tuple(d for at, d in sub.latched if sub.lifespan is None or now - at <= sub.lifespan)
             self.loop.call_soon(self._replay, topic, callback, kept)
         sub.callbacks.append(callback)
 
@@ -330,7 +383,7 @@ class RosBus:
         if sub is None:
             return
         if sub.latched is not None:
-            sub.latched.append(data)
+            sub.latched.append((time.monotonic(), data))
         for cb in tuple(sub.callbacks):
             try:
                 cb(data)

@@ -350,6 +350,125 @@ async def test_best_effort_odometry_that_starts_after_the_console_reaches_its_co
         backend.stop()
 
 
+def graph_qos(peer, topic: str):
+    """The QoS the peer's graph reports for the (one) publisher on ``topic``, once discovered."""
+    assert wait_for(lambda: peer.node.get_publishers_info_by_topic(topic), 10), f"no publisher on {topic}"
+    return peer.node.get_publishers_info_by_topic(topic)[0].qos_profile
+
+
+def test_client_publishes_reach_readers_still_matching_but_commands_stay_volatile(peer):
+    """Discovery can take seconds on a loaded machine: a client's publisher keeps its samples for one
+    second (transient-local, lifespan 1 s, as the stock rosbridge server), so a transient-local reader
+    still matching gets what was just published, never anything older. Velocity commands stay
+    volatile: however late a reader matches, it never gets a command from before."""
+    from arbiter_backend.ros.bus import EARLY_LIFESPAN_S
+
+    backend = ros_backend("--no-sim")
+    ros = roslibpy.Ros("127.0.0.1", backend.bridge_port)
+    ros.run(timeout=10)
+    early_topic, cmd_topic = "/arbiter_test/early", "/arbiter_test/cmd_vel"
+    transient = QoSProfile(
+        depth=10, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
+    )
+    try:
+        early = roslibpy.Topic(ros, early_topic, "std_msgs/String")
+        early.advertise()
+        roslibpy.Topic(ros, cmd_topic, "geometry_msgs/Twist").advertise()
+        qos = graph_qos(peer, early_topic)
+        assert qos.durability == DurabilityPolicy.TRANSIENT_LOCAL
+        assert qos.lifespan.nanoseconds == int(EARLY_LIFESPAN_S * 1e9)
+        assert graph_qos(peer, cmd_topic).durability == DurabilityPolicy.VOLATILE
+
+        echo: list[str] = []  # the client hears its own samples back: they have been written to DDS
+        roslibpy.Topic(ros, early_topic, "std_msgs/String").subscribe(lambda m: echo.append(m["data"]))
+
+        def publish_echoed(text: str) -> float:
+            early.publish(roslibpy.Message({"data": text}))
+            assert wait_for(lambda: text in echo, 10), echo
+            return time.monotonic()
+
+        # published before any reader of the peer exists: a transient-local reader made now gets it
+        publish_echoed("early")
+        first: list[str] = []
+        peer.node.create_subscription(String, early_topic, lambda m: first.append(m.data), transient)
+        assert wait_for(lambda: first == ["early"], 10), first
+        # past the lifespan, a new reader does not get it: the first thing it gets is what follows
+        stale_at = publish_echoed("stale")
+        assert wait_for(lambda: time.monotonic() - stale_at > EARLY_LIFESPAN_S + 0.5, 5)
+        later: list[str] = []
+        reader = peer.node.create_subscription(String, early_topic, lambda m: later.append(m.data), transient)
+        assert wait_for(lambda: reader.get_publisher_count() > 0, 10)
+        publish_echoed("fresh")
+        assert wait_for(lambda: "fresh" in later, 10), later
+        assert later == ["fresh"], f"a sample past its lifespan reached a late reader: {later}"
+    finally:
+        ros.close()
+        backend.stop()
+
+
+def test_the_relay_replays_a_latched_sample_only_within_its_publishers_lifespan(peer):
+    """The relay's replay to later WebSocket subscribers honours the publisher's lifespan, as DDS would
+    for a late reader: a sample past it is not handed to a client that subscribes afterwards."""
+    from rclpy.duration import Duration
+
+    backend = ros_backend("--no-sim")
+    topic = "/arbiter_test/short_lived"
+    qos = QoSProfile(
+        depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
+    )
+    qos.lifespan = Duration(seconds=1)
+    pub = peer.node.create_publisher(String, topic, qos)
+    clients = []
+
+    def client() -> list[str]:
+        ros = roslibpy.Ros("127.0.0.1", backend.bridge_port)
+        ros.run(timeout=10)
+        clients.append(ros)
+        got: list[str] = []
+        roslibpy.Topic(ros, topic, "std_msgs/String").subscribe(lambda m: got.append(m["data"]))
+        return got
+
+    def relay_is_transient_local() -> bool:
+        infos = peer.node.get_subscriptions_info_by_topic(topic)
+        return any(i.qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL for i in infos)
+
+    try:
+        first = client()
+        assert wait_for(relay_is_transient_local, 10), "the relay never matched the transient-local publisher"
+        assert wait_for(lambda: pub.get_subscription_count() > 0, 10)
+        pub.publish(String(data="soon stale"))
+        sent = time.monotonic()
+        assert wait_for(lambda: first == ["soon stale"], 10), first
+        assert wait_for(lambda: time.monotonic() - sent > 1.5, 5)  # past the publisher's lifespan
+        second = client()
+        pub.publish(String(data="new"))
+        assert wait_for(lambda: "new" in second, 10), second
+        assert second == ["new"], f"the relay replayed a sample past its lifespan: {second}"
+    finally:
+        for ros in clients:
+            ros.close()
+        backend.stop()
+
+
+def test_the_bridge_node_tells_its_actual_port_as_rosbridge_does(peer):
+    """Tools (and rosbridge_server's own tests) ask the bridge node's ``actual_port`` parameter for the
+    port bound when ``port`` was 0."""
+    from rcl_interfaces.srv import GetParameters
+
+    backend = ros_backend("--no-sim")
+    client = peer.node.create_client(GetParameters, "/arbiter_bridge/get_parameters")
+    try:
+        assert client.wait_for_service(timeout_sec=15), "the bridge node's parameter service never appeared"
+        future = client.call_async(GetParameters.Request(names=["actual_port", "port"]))
+        assert wait_for(future.done, 10)
+        actual, asked = future.result().values
+        assert actual.integer_value == backend.bridge_port
+        assert asked.integer_value == 0
+    finally:
+        peer.node.destroy_client(client)
+        backend.stop()
+
+
 def test_a_swap_hands_each_message_on_once():
     """The overlap of a replaced subscription (generation 0) and its successor (1), message by message."""
     from arbiter_backend.ros.bus import _Swap

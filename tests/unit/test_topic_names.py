@@ -2,7 +2,7 @@
 
 import pytest
 
-from arbiter_core.topics import TopicNameError, namespace, resolve
+from arbiter_core.topics import TopicNameError, is_command, namespace, resolve
 
 
 @pytest.mark.parametrize(
@@ -38,3 +38,19 @@ def test_bad_topic_names(bad):
     with pytest.raises(TopicNameError) as err:
         resolve(bad, "/robot1", what="odom-topic")
     assert "\n" not in str(err.value)
+
+
+@pytest.mark.parametrize(
+    ("topic", "type_name", "command"),
+    [
+        ("/stamped_cmd_vel", "std_msgs/msg/String", True),  # our stamped envelope is a String
+        ("/robot1/cmd_vel_measured", "geometry_msgs/msg/TwistStamped", True),
+        ("/robot1/cmd_vel", "std_msgs/msg/String", True),
+        ("/teleop/out", "geometry_msgs/msg/Twist", True),  # a Twist is a command, whatever its name
+        ("/cmd_vel_mux/status", "std_msgs/msg/String", False),
+        ("/chatter", "std_msgs/msg/String", False),
+        ("/map", "nav_msgs/msg/OccupancyGrid", False),
+    ],
+)
+def test_velocity_commands_are_known_by_name_or_type(topic, type_name, command):
+    assert is_command(topic, type_name) is command
