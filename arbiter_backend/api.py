@@ -1,9 +1,9 @@
-"""The tracker's HTTP API (port 8085): ``GET /api/latency`` and ``GET /api/health``, JSON everywhere."""
+"""The tracker's HTTP API (port 8085): ``GET /api/latency``, ``/api/health`` and ``/api/topics``, JSON."""
 
 from __future__ import annotations
 
 import json
-from typing import Any
+from typing import Any, Protocol
 
 from aiohttp import web
 
@@ -18,6 +18,12 @@ def _json(body: Any, status: int = 200) -> web.Response:
         status=status,
         content_type="application/json",
     )
+
+
+class TopicSource(Protocol):
+    """The topic monitor of the transport (``topicwatch``): the body of ``GET /api/topics``."""
+
+    def answer(self) -> dict[str, Any]: ...
 
 
 class BadQuery(ValueError):
@@ -54,7 +60,9 @@ def bearer_required(token: str) -> Any:
     return check
 
 
-def make_app(tracker: LatencyTracker, token: str | None = None) -> web.Application:
+def make_app(
+    tracker: LatencyTracker, token: str | None = None, topics: TopicSource | None = None
+) -> web.Application:
     def _int(request: web.Request, name: str, lo: int, hi: int) -> int | None:
         raw = request.query.get(name)
         if raw is None:
@@ -81,8 +89,14 @@ def make_app(tracker: LatencyTracker, token: str | None = None) -> web.Applicati
     async def health(request: web.Request) -> web.Response:
         return _json(tracker.health())
 
+    async def topic_figures(request: web.Request) -> web.Response:
+        if topics is None:
+            return _error(404, "this backend watches no topics")
+        return _json(topics.answer())
+
     middlewares = [json_errors] if token is None else [json_errors, bearer_required(token)]
     app = web.Application(middlewares=middlewares)
     app.router.add_get("/api/latency", latency)
     app.router.add_get("/api/health", health)
+    app.router.add_get("/api/topics", topic_figures)
     return app

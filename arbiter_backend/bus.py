@@ -47,6 +47,9 @@ class TopicBus:
         # later (and only to it), as a transient-local publisher's sample reaches a late DDS reader
         self._latch: set[str] = set()
         self._latched: dict[str, dict[str, Any]] = {}
+        self._advertisers: dict[str, int] = {}
+        # called with (topic, type, message) on every publish, after delivery: the topic monitor
+        self.taps: list[Callable[[str, str, dict[str, Any]], None]] = []
 
     def declare(self, topic: str, type_name: str) -> str:
         """Give ``topic`` a type (normalised), or check it against the one it has."""
@@ -61,10 +64,16 @@ class TopicBus:
         t = self.declare(topic, type_name)
         if latch:
             self._latch.add(topic)
+        self._advertisers[topic] = self._advertisers.get(topic, 0) + 1
         return t
 
     def unadvertise(self, topic: str) -> None:
-        """Nothing to release: the in-process bus keeps a topic's type for its lifetime."""
+        """One publisher fewer; the in-process bus keeps a topic's type for its lifetime."""
+        if self._advertisers.get(topic, 0) > 0:
+            self._advertisers[topic] -= 1
+
+    def publisher_count(self, topic: str) -> int:
+        return self._advertisers.get(topic, 0)
 
     def type_of(self, topic: str) -> str | None:
         return self._types.get(topic)
@@ -119,4 +128,9 @@ class TopicBus:
                 cb(checked)
             except Exception:
                 log.exception("subscriber of %s failed", topic)
+        for tap in self.taps:
+            try:
+                tap(topic, t, checked)
+            except Exception:
+                log.exception("topic monitor failed on %s", topic)
         return checked

@@ -25,6 +25,7 @@ from arbiter_core.cliargs import (
 from arbiter_core.kinematics import Limits
 from arbiter_core.logs import log_to_file
 from arbiter_core.topics import MEASURED_TYPES
+from arbiter_core.topicstats import WINDOW_S
 
 from .server import Backend, BackendConfig
 
@@ -124,6 +125,22 @@ def build_parser() -> argparse.ArgumentParser:
         default="twist",
         help="type of /cmd_vel_measured: twist (geometry_msgs/Twist, default) or twist_stamped "
         "(TwistStamped with the tracker's receive time, for Jazzy+ diff_drive_controller)",
+    )
+    p.add_argument(
+        "--topics",
+        metavar="GLOBS",
+        help="topics GET /api/topics measures: comma-separated globs, e.g. '/scan,/odom,/camera/*' "
+        "(default: every topic)",
+    )
+    p.add_argument(
+        "--topics-exclude", metavar="GLOBS", help="topics not to measure, e.g. '/rosout,/parameter_events'"
+    )
+    p.add_argument(
+        "--topics-window",
+        type=positive_float,
+        default=WINDOW_S,
+        metavar="S",
+        help=f"the sliding window of /api/topics' rates, bandwidths and delays (default: {WINDOW_S:g} s)",
     )
     p.add_argument("--log-file", help="write logs to this file, rotated at 1 MB, 3 kept (default: stderr)")
     add_log_level(p)
@@ -268,6 +285,9 @@ def main(argv: list[str] | None = None) -> int:
         ),
         measured_type=args.measured_type,
         transport=args.transport,
+        topics_include=args.topics,
+        topics_exclude=args.topics_exclude,
+        topics_window=args.topics_window,
     )
     try:
         config.ssl_context()

@@ -23,9 +23,11 @@ from arbiter_core import auth, topics
 from arbiter_core.kinematics import DEFAULT_LIMITS, Limits
 from arbiter_core.listening import format_listening
 from arbiter_core.simulator import RATE_HZ, DiffDriveSimulator
+from arbiter_core.topicstats import WINDOW_S
 
 from . import api, bridge
 from .bus import TopicBus
+from .topicwatch import EmbeddedTopics, TopicFilter, TopicWatch
 from .tracker import DEFAULT_MAX_COMMAND_AGE_MS, LatencyTracker
 
 log = logging.getLogger(__name__)
@@ -50,6 +52,12 @@ class BackendConfig:
     namespace: str = ""  # every topic of the backend under it (arbiter_core.topics.namespace form)
     tls_cert: Path | None = None  # with tls_key: serve wss:// and https:// (PEM files)
     tls_key: Path | None = None
+    topics_include: str | None = None  # comma-separated globs of the topics /api/topics watches (None: all)
+    topics_exclude: str | None = None
+    topics_window: float = WINDOW_S
+
+    def make_topic_watch(self) -> TopicWatch:
+        return TopicWatch(TopicFilter.parse(self.topics_include, self.topics_exclude), self.topics_window)
 
     def ssl_context(self) -> ssl.SSLContext | None:
         if self.tls_cert is None:
@@ -92,13 +100,19 @@ class Servers:
         assert server is not None and server.sockets  # type: ignore[union-attr]
         return int(server.sockets[0].getsockname()[1])  # type: ignore[union-attr]
 
-    async def start_servers(self, endpoint: bridge.RosbridgeEndpoint | None, tracker: LatencyTracker) -> None:
+    async def start_servers(
+        self,
+        endpoint: bridge.RosbridgeEndpoint | None,
+        tracker: LatencyTracker,
+        topics: api.TopicSource | None = None,
+    ) -> None:
         # Here, not in the CLI: in ROS mode a parameter may have changed the host.
         auth.check_exposure(self.config.host, self.config.allow_remote, self.config.token)
         try:
             if endpoint is not None:
                 self.bridge_port = await self._serve(bridge.make_app(endpoint), self.config.bridge_port)
-            self.api_port = await self._serve(api.make_app(tracker, self.config.token), self.config.api_port)
+            api_app = api.make_app(tracker, self.config.token, topics)
+            self.api_port = await self._serve(api_app, self.config.api_port)
         except BaseException:
             await self.stop_servers(endpoint)
             raise
@@ -149,7 +163,12 @@ class Backend(Servers):
         ):
             self.bus.declare(topic, type_name)
         self.bus.subscribe(self.topic_stamped, self._on_stamped)
+        # the backend's own publishers, so that the topic monitor counts them
+        self.bus.advertise(self.topic_measured, topics.MEASURED_TYPES[config.measured_type])
+        self.bus.advertise(self.topic_report, topics.TYPE_STRING)
+        self.topics = EmbeddedTopics(self.bus, config.make_topic_watch())
         if self.simulator is not None:
+            self.bus.advertise(self.topic_odom, topics.TYPE_ODOM)
             sim = self.simulator
             self.bus.subscribe(self.topic_measured, lambda m: sim.on_twist(m, time.monotonic()))
 
@@ -191,7 +210,7 @@ class Backend(Servers):
             await asyncio.sleep(max(0.0, delay))
 
     async def start(self) -> None:
-        await self.start_servers(self.endpoint if self.config.bridge else None, self.tracker)
+        await self.start_servers(self.endpoint if self.config.bridge else None, self.tracker, self.topics)
         loop = asyncio.get_running_loop()
         self._tasks.append(loop.create_task(self._watchdog()))
         if self.simulator is not None:

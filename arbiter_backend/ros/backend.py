@@ -22,6 +22,7 @@ from rclpy.node import Node
 
 from .. import bridge
 from ..server import BackendConfig, Servers
+from . import topicwatch
 from .bus import RosBus
 from .nodes import SimulatorNode, TrackerNode
 
@@ -60,6 +61,9 @@ class RosBackend(Servers):
                 port = int(self.bridge_node.declare_parameter("port", config.bridge_port).value)
                 self.config.bridge_port = port
                 self.nodes.append(self.bridge_node)
+            monitor = Node(topicwatch.NODE_NAME, context=self.context)
+            self.nodes.append(monitor)
+            self.topics = topicwatch.RosTopics(monitor, config.make_topic_watch())
         except BaseException:
             self._shutdown_ros()
             raise
@@ -87,7 +91,7 @@ class RosBackend(Servers):
             self.bus.local_handlers[stamped] = self.tracker_node.on_local_command
             self.endpoint = bridge.RosbridgeEndpoint(self.bus, token=self.config.token)
             self._watch = asyncio.create_task(self.bus.watch_publishers())  # QoS follows the publishers
-        await self.start_servers(self.endpoint, self.tracker)
+        await self.start_servers(self.endpoint, self.tracker, self.topics)
         if self.bridge_node is not None:
             # as rosbridge_websocket does: the port bound (``port`` may be 0), for tools that ask the graph
             self.bridge_node.declare_parameter(
@@ -102,6 +106,7 @@ class RosBackend(Servers):
         await self.stop_servers(self.endpoint)
         if self.bus is not None:
             self.bus.close()
+        self.topics.close()
         self.executor.shutdown(timeout_sec=2.0)
         if self._thread is not None:
             self._thread.join(timeout=2.0)

@@ -1,0 +1,157 @@
+"""The backend's topic monitor: every topic's rate, bandwidth, delay and age, for ``GET /api/topics``.
+
+``TopicWatch`` holds one ``arbiter_core.topicstats.TopicWindow`` per watched topic behind a lock (in ROS
+mode messages arrive on the executor's thread, the API reads on the asyncio loop). What feeds it is the
+transport's: ``EmbeddedTopics`` taps every publish on the embedded bus (size = the message's JSON, the
+only form it has there); ``ros.topicwatch.RosTopics`` subscribes to every topic on the graph with raw
+(serialized) messages.
+"""
+
+from __future__ import annotations
+
+import fnmatch
+import json
+import math
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+from arbiter_core.topicstats import WINDOW_S, TopicFigures, TopicWindow
+
+from .bus import TopicBus
+
+
+@dataclass(frozen=True)
+class TopicFilter:
+    """Which topics are watched: those matching any ``include`` glob and no ``exclude`` glob."""
+
+    include: tuple[str, ...] = ("*",)
+    exclude: tuple[str, ...] = ()
+
+    @classmethod
+    def parse(cls, include: str | None, exclude: str | None) -> TopicFilter:
+        def globs(text: str | None) -> tuple[str, ...]:
+            return tuple(g.strip() for g in (text or "").split(",") if g.strip())
+
+        return cls(globs(include) or ("*",), globs(exclude))
+
+    def wants(self, topic: str) -> bool:
+        return any(fnmatch.fnmatchcase(topic, g) for g in self.include) and not any(
+            fnmatch.fnmatchcase(topic, g) for g in self.exclude
+        )
+
+
+@dataclass
+class _Graph:
+    """What the graph says of a topic, refreshed by the transport (not per message)."""
+
+    publishers: int = 0
+    subscribers: int = 0
+    qos_note: str | None = None
+
+
+@dataclass
+class TopicWatch:
+    filter: TopicFilter = field(default_factory=TopicFilter)
+    window_s: float = WINDOW_S
+    clock: Callable[[], float] = time.monotonic
+    _lock: threading.Lock = field(default_factory=threading.Lock)
+    _windows: dict[str, TopicWindow] = field(default_factory=dict)
+    _graph: dict[str, _Graph] = field(default_factory=dict)
+
+    def watch(self, topic: str, type_name: str, stamped: bool = False, unmeasured: str | None = None) -> bool:
+        """Start watching ``topic`` (if the filter wants it); False when it does not."""
+        if not self.filter.wants(topic):
+            return False
+        with self._lock:
+            w = self._windows.get(topic)
+            if w is None or w.type != type_name:
+                w = self._windows[topic] = TopicWindow(topic, type_name, self.window_s, stamped)
+            w.stamped, w.unmeasured = stamped, unmeasured
+        return True
+
+    def forget(self, topic: str) -> None:
+        with self._lock:
+            self._windows.pop(topic, None)
+            self._graph.pop(topic, None)
+
+    def watched(self) -> set[str]:
+        with self._lock:
+            return set(self._windows)
+
+    def note(self, topic: str, size: int, delay_s: float | None = None, bad_stamp: bool = False) -> None:
+        """One message of ``topic``: its size and, for a stamped type, its delay or a malformed stamp."""
+        now = self.clock()
+        with self._lock:
+            w = self._windows.get(topic)
+            if w is None:
+                return
+            w.add(now, size, delay_s)
+            if bad_stamp:
+                w.bad_stamp()
+
+    def set_graph(self, topic: str, publishers: int, subscribers: int, qos_note: str | None = None) -> None:
+        with self._lock:
+            self._graph[topic] = _Graph(publishers, subscribers, qos_note)
+
+    def figures(self) -> list[TopicFigures]:
+        now = self.clock()
+        with self._lock:
+            out = []
+            for name, w in sorted(self._windows.items()):
+                g = self._graph.get(name, _Graph())
+                out.append(w.figures(now, g.publishers, g.subscribers, g.qos_note))
+        return out
+
+    def answer(self) -> dict[str, Any]:
+        """The body of ``GET /api/topics``."""
+        return {"window_s": self.window_s, "topics": [f.to_json() for f in self.figures()]}
+
+
+def header_delay(msg: dict[str, Any], wall_now: float) -> tuple[float | None, bool]:
+    """(now - header.stamp, malformed) for a rosbridge-JSON message; (None, False) without a header."""
+    header = msg.get("header")
+    if not isinstance(header, dict) or "stamp" not in header:
+        return None, False
+    stamp = header.get("stamp")
+    if not isinstance(stamp, dict):
+        return None, True
+    sec, nsec = stamp.get("sec", stamp.get("secs")), stamp.get("nanosec", stamp.get("nsecs", 0))
+    ok = all(isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v) for v in (sec, nsec))
+    if not ok or not 0 <= nsec < 1e9:
+        return None, True
+    return wall_now - (sec + nsec / 1e9), False
+
+
+class EmbeddedTopics:
+    """Feeds a ``TopicWatch`` from the embedded bus: every publish, whatever its topic."""
+
+    def __init__(self, bus: TopicBus, watch: TopicWatch) -> None:
+        self.bus = bus
+        self.watch = watch
+        bus.taps.append(self._on_publish)
+
+    def _on_publish(self, topic: str, type_name: str, msg: dict[str, Any]) -> None:
+        if topic not in self._known():
+            self.watch.watch(topic, type_name, stamped="header" in msg)
+        size = len(json.dumps(msg, separators=(",", ":"), default=str))
+        delay, bad = header_delay(msg, time.time())
+        self.watch.note(topic, size, delay, bad)
+        self.refresh(topic)
+
+    def _known(self) -> set[str]:
+        return self.watch.watched()
+
+    def answer(self) -> dict[str, Any]:
+        self.refresh()
+        return self.watch.answer()
+
+    def refresh(self, topic: str | None = None) -> None:
+        """Counts from the bus: advertisers (and the backend's own publishers) and subscribers."""
+        names = [topic] if topic is not None else [t for t, _ in self.bus.topics()]
+        for name in names:
+            if topic is None and self.watch.filter.wants(name) and name not in self._known():
+                self.watch.watch(name, self.bus.type_of(name) or "?")
+            self.watch.set_graph(name, self.bus.publisher_count(name), self.bus.subscriber_count(name))

@@ -1,0 +1,291 @@
+"""Is every topic alive: rate, bandwidth, delay and age of each topic, over a sliding window. Pure.
+
+The backend feeds one :class:`TopicWindow` per topic with (receive time, size in bytes, header delay)
+per message and answers ``GET /api/topics`` with :meth:`TopicWindow.figures`; the console parses the
+answer with :func:`parse_topics` into frozen :class:`TopicFigures`. One definition of each figure:
+
+- rate: ``(n - 1) / (t_last - t_first)`` over the ``n`` messages received in the window (as
+  ``ros2 topic hz``: the reciprocal of the mean period), with the period's min / max / std;
+- bandwidth: the window's bytes over the time they span, ``sum(size) / (t_last - t_first) * (n - 1) / n``
+  (for a steady publisher this is mean size x rate, as ``ros2 topic bw`` reports it), and the mean size;
+- delay: receive wall time - ``header.stamp`` of each stamped message (as ``ros2 topic delay``), mean
+  and p95;
+- age: now - the last message's receive time;
+- state: ``waiting`` (never a message), ``silent`` (none for a whole window), ``slow`` (the rate fell
+  below ``SLOW_FRACTION`` of the usual rate: the highest rate seen, decaying with a half-life of
+  ``USUAL_HALF_LIFE_S``, so a topic that settles at a new rate is usual again a minute later), else
+  ``ok``; ``unmeasured`` when the backend cannot subscribe (its type is not installed there).
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass
+from typing import Any
+
+from .stats import percentile
+
+WINDOW_S = 5.0  # the sliding window: long enough for a 1 Hz topic's rate, short enough to see it stop
+MAX_SAMPLES = 20_000  # per topic: a 4 kHz topic fills the window; beyond, the oldest go first
+SLOW_FRACTION = 0.7
+USUAL_HALF_LIFE_S = 60.0
+NOT_INSTALLED = "type not installed here"
+
+STATES = ("ok", "slow", "silent", "waiting", "unmeasured")
+
+
+class TopicsError(ValueError):
+    """A ``/api/topics`` answer that is not the documented shape."""
+
+
+@dataclass(frozen=True)
+class TopicFigures:
+    """One topic's figures over the window (times in ms, rates in Hz, sizes in bytes)."""
+
+    name: str
+    type: str
+    state: str
+    publishers: int = 0
+    subscribers: int = 0
+    count: int = 0  # messages in the window
+    total: int = 0  # messages since the topic was first watched
+    rate_hz: float | None = None
+    period_min_ms: float | None = None
+    period_max_ms: float | None = None
+    period_std_ms: float | None = None
+    bandwidth_bps: float | None = None
+    mean_size_bytes: float | None = None
+    stamped: bool = False
+    delay_mean_ms: float | None = None
+    delay_p95_ms: float | None = None
+    age_ms: float | None = None
+    usual_rate_hz: float | None = None
+    malformed_stamps: int = 0
+    qos_note: str | None = None
+    note: str | None = None
+
+    def to_json(self) -> dict[str, Any]:
+        return {k: _finite(v) for k, v in self.__dict__.items()}
+
+
+def _finite(v: Any) -> Any:
+    return None if isinstance(v, float) and not math.isfinite(v) else v
+
+
+class TopicWindow:
+    """The messages of one topic received in the last ``window_s`` seconds (receive times monotonic)."""
+
+    def __init__(self, name: str, type_name: str, window_s: float = WINDOW_S, stamped: bool = False) -> None:
+        self.name = name
+        self.type = type_name
+        self.window_s = window_s
+        self.stamped = stamped
+        self.times: deque[float] = deque(maxlen=MAX_SAMPLES)
+        self.sizes: deque[int] = deque(maxlen=MAX_SAMPLES)
+        self.delays: deque[tuple[float, float]] = deque(maxlen=MAX_SAMPLES)  # (receive time, delay s)
+        self.total = 0
+        self.malformed_stamps = 0
+        self.usual_hz: float | None = None
+        self._usual_at = 0.0
+        self.unmeasured: str | None = None  # why the backend cannot take this topic's messages
+
+    def add(self, now: float, size: int, delay_s: float | None = None) -> None:
+        """One message, received at ``now`` (monotonic s), ``size`` bytes, ``delay_s`` behind its stamp."""
+        self.times.append(now)
+        self.sizes.append(size)
+        self.total += 1
+        if delay_s is not None:
+            self.delays.append((now, delay_s))
+
+    def bad_stamp(self) -> None:
+        self.malformed_stamps += 1
+
+    def _trim(self, now: float) -> None:
+        start = now - self.window_s
+        while self.times and self.times[0] < start:
+            self.times.popleft()
+            self.sizes.popleft()
+        while self.delays and self.delays[0][0] < start:
+            self.delays.popleft()
+
+    def figures(
+        self, now: float, publishers: int = 0, subscribers: int = 0, qos_note: str | None = None
+    ) -> TopicFigures:
+        self._trim(now)
+        times, n = self.times, len(self.times)
+        rate = period_min = period_max = period_std = bw = mean_size = None
+        if n >= 2:
+            span = times[-1] - times[0]
+            if span > 0:
+                rate = (n - 1) / span
+                periods = [b - a for a, b in zip(times, list(times)[1:], strict=False)]
+                mean_p = span / (n - 1)
+                period_min, period_max = min(periods) * 1e3, max(periods) * 1e3
+                period_std = math.sqrt(sum((p - mean_p) ** 2 for p in periods) / len(periods)) * 1e3
+                bw = sum(self.sizes) / span * (n - 1) / n
+        if n:
+            mean_size = sum(self.sizes) / n
+        delays = [d for _, d in self.delays]
+        delay_mean = sum(delays) / len(delays) * 1e3 if delays else None
+        delay_p95 = percentile(delays, 0.95) * 1e3 if delays else None
+        age = (now - self.times[-1]) * 1e3 if self.times else None
+        if self.total and not self.times:  # everything fell out of the window: keep the age honest
+            age = None
+        usual = self._usual(now, rate)
+        if self.unmeasured is not None:
+            state = "unmeasured"
+        elif self.total == 0:
+            state = "waiting"
+        elif n == 0:
+            state = "silent"
+        elif rate is not None and usual is not None and rate < SLOW_FRACTION * usual:
+            state = "slow"
+        else:
+            state = "ok"
+        return TopicFigures(
+            name=self.name,
+            type=self.type,
+            state=state,
+            publishers=publishers,
+            subscribers=subscribers,
+            count=n,
+            total=self.total,
+            rate_hz=rate,
+            period_min_ms=period_min,
+            period_max_ms=period_max,
+            period_std_ms=period_std,
+            bandwidth_bps=bw,
+            mean_size_bytes=mean_size,
+            stamped=self.stamped,
+            delay_mean_ms=delay_mean,
+            delay_p95_ms=delay_p95,
+            age_ms=age,
+            usual_rate_hz=usual,
+            malformed_stamps=self.malformed_stamps,
+            qos_note=qos_note,
+            note=self.unmeasured,
+        )
+
+    def _usual(self, now: float, rate: float | None) -> float | None:
+        """The highest rate seen, decaying towards lower ones with a half-life of USUAL_HALF_LIFE_S.
+        Only a window that is full (the topic has been watched for a whole window) counts."""
+        if self.usual_hz is not None:
+            self.usual_hz *= 0.5 ** ((now - self._usual_at) / USUAL_HALF_LIFE_S)
+        self._usual_at = now
+        full = bool(self.times) and self.total > len(self.times)  # older messages fell out: a whole window
+        if rate is not None and full and (self.usual_hz is None or rate > self.usual_hz):
+            self.usual_hz = rate
+        return self.usual_hz
+
+
+# -- QoS compatibility, from the graph's endpoint profiles -------------------------------------------
+def qos_mismatch(publishers: list[tuple[str, str]], subscribers: list[tuple[str, str]]) -> str | None:
+    """A note when some subscriber cannot match some publisher, from (reliability, durability) pairs
+    (lower-case names: ``reliable``/``best_effort``, ``transient_local``/``volatile``): a reliable reader
+    matches no best-effort writer; a transient-local reader no volatile writer."""
+    notes = []
+    if any(r == "reliable" for r, _ in subscribers) and any(r == "best_effort" for r, _ in publishers):
+        notes.append("a reliable subscriber cannot match a best-effort publisher")
+    if any(d == "transient_local" for _, d in subscribers) and any(d == "volatile" for _, d in publishers):
+        notes.append("a transient-local subscriber cannot match a volatile publisher")
+    return "; ".join(notes) or None
+
+
+# -- the console's side: parse an answer ----------------------------------------------------------
+_NUMBER_FIELDS = (
+    "rate_hz", "period_min_ms", "period_max_ms", "period_std_ms", "bandwidth_bps", "mean_size_bytes",
+    "delay_mean_ms", "delay_p95_ms", "age_ms", "usual_rate_hz",
+)  # fmt: skip
+_COUNT_FIELDS = ("publishers", "subscribers", "count", "total", "malformed_stamps")
+
+
+def _topic(obj: Any) -> TopicFigures:
+    if not isinstance(obj, dict):
+        raise TopicsError("a topic is not an object")
+    name, type_name, state = obj.get("name"), obj.get("type"), obj.get("state")
+    if not isinstance(name, str) or not isinstance(type_name, str):
+        raise TopicsError("a topic has no name or type")
+    if state not in STATES:
+        raise TopicsError(f"{name}: unknown state {state!r}")
+    values: dict[str, Any] = {}
+    for key in _NUMBER_FIELDS:
+        v = obj.get(key)
+        if v is not None and (isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v)):
+            raise TopicsError(f"{name}: {key} is not a number")
+        values[key] = None if v is None else float(v)
+    for key in _COUNT_FIELDS:
+        v = obj.get(key, 0)
+        if isinstance(v, bool) or not isinstance(v, int) or v < 0:
+            raise TopicsError(f"{name}: {key} is not a count")
+        values[key] = v
+    notes = {k: obj.get(k) if isinstance(obj.get(k), str) else None for k in ("qos_note", "note")}
+    return TopicFigures(
+        name=name, type=type_name, state=state, stamped=obj.get("stamped") is True, **values, **notes
+    )
+
+
+@dataclass(frozen=True)
+class TopicsAnswer:
+    window_s: float
+    topics: tuple[TopicFigures, ...]
+    skipped: int = 0  # topics in the answer that were not the documented shape
+
+
+def parse_topics(body: Any) -> TopicsAnswer:
+    """``GET /api/topics`` -> typed figures; a malformed topic is skipped and counted, a malformed answer
+    raises :class:`TopicsError`."""
+    if not isinstance(body, dict) or not isinstance(body.get("topics"), list):
+        raise TopicsError("not a topics answer (no 'topics' list)")
+    window = body.get("window_s")
+    if isinstance(window, bool) or not isinstance(window, int | float) or not window > 0:
+        raise TopicsError("window_s is not a positive number")
+    topics, skipped = [], 0
+    for obj in body["topics"]:
+        try:
+            topics.append(_topic(obj))
+        except TopicsError:
+            skipped += 1
+    return TopicsAnswer(float(window), tuple(sorted(topics, key=lambda t: t.name)), skipped)
+
+
+# -- expectations: "is every expected topic above its rate?" ---------------------------------------
+@dataclass(frozen=True)
+class Expectation:
+    topic: str
+    min_hz: float
+
+
+def parse_expect(text: str) -> list[Expectation]:
+    """``'/scan>=9.5,/odom>=45'`` -> expectations; a bad item raises ValueError naming it."""
+    out = []
+    for item in (part.strip() for part in text.split(",")):
+        if not item:
+            continue
+        topic, sep, value = item.partition(">=")
+        try:
+            hz = float(value)
+        except ValueError:
+            hz = math.nan
+        if not sep or not topic.strip().startswith("/") or not math.isfinite(hz) or hz < 0:
+            raise ValueError(f"bad expectation {item!r}: write TOPIC>=HZ, e.g. /scan>=9.5")
+        out.append(Expectation(topic.strip(), hz))
+    if not out:
+        raise ValueError("no expectation given: write TOPIC>=HZ[,TOPIC>=HZ...]")
+    return out
+
+
+def unmet(expectations: list[Expectation], answer: TopicsAnswer) -> list[str]:
+    """One reason per expectation not met, in the order given; empty when all are."""
+    by_name = {t.name: t for t in answer.topics}
+    reasons = []
+    for e in expectations:
+        t = by_name.get(e.topic)
+        if t is None:
+            reasons.append(f"{e.topic}: not on the graph (expected >= {e.min_hz:g} Hz)")
+        elif t.rate_hz is None or t.rate_hz < e.min_hz:
+            have = "no messages" if t.rate_hz is None else f"{t.rate_hz:.2f} Hz"
+            reasons.append(
+                f"{e.topic}: {have} in the last {answer.window_s:g} s, expected >= {e.min_hz:g} Hz"
+            )
+    return reasons
