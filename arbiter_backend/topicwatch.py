@@ -81,9 +81,17 @@ class TopicWatch:
         with self._lock:
             return set(self._windows)
 
-    def note(self, topic: str, size: int, delay_s: float | None = None, bad_stamp: bool = False) -> None:
-        """One message of ``topic``: its size and, for a stamped type, its delay or a malformed stamp."""
-        now = self.clock()
+    def note(
+        self,
+        topic: str,
+        size: int,
+        delay_s: float | None = None,
+        bad_stamp: bool = False,
+        at: float | None = None,
+    ) -> None:
+        """One message of ``topic``: its size and, for a stamped type, its delay or a malformed stamp;
+        ``at``: when it was received on ``clock`` (default: now)."""
+        now = self.clock() if at is None else at
         with self._lock:
             w = self._windows.get(topic)
             if w is None:

@@ -33,6 +33,8 @@ from .config import save_theme
 from .control.algorithms import ALGORITHMS, MISSIONS
 from .control.loop import ControlLoop
 from .control.teleop import TELEOP_KEYS, Teleop, key_name
+from .latency.topics_client import PERIOD_S as TOPICS_PERIOD_S
+from .latency.topics_client import TopicsPoller, TopicsState
 from .latency.tracker_client import LatencyView, TrackerClient
 from .link.base import STARTING, Link, PendingLink
 from .messages import (
@@ -51,6 +53,7 @@ from .screens.analytics import AnalyticsScreen
 from .screens.control import ControlScreen
 from .screens.help import HelpScreen
 from .screens.latency import LatencyScreen
+from .screens.topics import TopicsScreen
 from .session.robot import MissionFinished, RobotSession
 from .settings import SIM, Settings
 from .views import (
@@ -111,7 +114,12 @@ class ArbiterApp(App[None]):
     autonomous run keeps driving while another screen is shown, and space or k stop it anywhere."""
 
     TITLE = "arbiter-tui"
-    MODES = {"control": ControlScreen, "analytics": AnalyticsScreen, "latency": LatencyScreen}
+    MODES = {
+        "control": ControlScreen,
+        "analytics": AnalyticsScreen,
+        "latency": LatencyScreen,
+        "topics": TopicsScreen,
+    }
     DEFAULT_MODE = "control"
     BINDINGS = [
         Binding("ctrl+c", "stop_and_quit", "Quit", priority=True, show=False),
@@ -120,6 +128,7 @@ class ArbiterApp(App[None]):
         Binding("1", "mode('control')", "Drive", tooltip="The control screen"),
         Binding("2", "mode('analytics')", "Stats", tooltip="The analytics screen"),
         Binding("3", "mode('latency')", "Latency", tooltip="The latency screen"),
+        Binding("4", "mode('topics')", "Topics", tooltip="The topics screen: is every topic alive?"),
         Binding("space", "stop", "Stop"),
         Binding("k", "stop", "Stop", show=False),
         Binding("question_mark", "help", "Help"),
@@ -131,6 +140,7 @@ class ArbiterApp(App[None]):
     trajectory: var[MapView] = var(MapView)
     analytics: var[AnalyticsView] = var(AnalyticsView)
     latency: var[LatencySnapshot] = var(LatencySnapshot)
+    topics: var[TopicsState] = var(TopicsState)
     ui_tick: var[int] = var(0)  # one more at the end of every sampling: one frame for all that changed
 
     def __init__(
@@ -216,6 +226,7 @@ class ArbiterApp(App[None]):
                 self._connect()
             elif self.tracker is not None:
                 self._poll_forever()
+                self._poll_topics_forever()
         if self.settings.handle_signals:
             loop = asyncio.get_running_loop()
             for sig in (signal.SIGHUP, signal.SIGTERM):
@@ -264,6 +275,7 @@ class ArbiterApp(App[None]):
         self._cleanup = event.cleanup
         if self.tracker is not None and self.settings.live:
             self._poll_forever()
+            self._poll_topics_forever()
         self.publish_views()
 
     @on(BackendFailed)
@@ -292,6 +304,18 @@ class ArbiterApp(App[None]):
             await tracker.poll()
             self.post_message(LatencyPolled())
             await asyncio.sleep(max(0.0, period - (time.monotonic() - started)))
+
+    @work(exclusive=True, group="topics")
+    async def _poll_topics_forever(self) -> None:
+        """``GET /api/topics`` at most every ``topics_client.PERIOD_S``, and only while screen 4 is shown."""
+        tracker = self.tracker
+        assert tracker is not None
+        poller = TopicsPoller(tracker)
+        while True:
+            started = time.monotonic()
+            if self.current_mode == "topics":
+                self.topics = await poller.poll()
+            await asyncio.sleep(max(0.0, TOPICS_PERIOD_S - (time.monotonic() - started)))
 
     @on(LatencyPolled)
     def _polled(self) -> None:

@@ -15,6 +15,10 @@ def main(argv: list[str] | None = None) -> int:
         from .session.compare_cmd import run as run_compare
 
         return run_compare(argv[1:])
+    if argv and argv[0] == "topics":
+        from .latency.topics_cmd import run as run_topics
+
+        return run_topics(argv[1:])
     from .launch import run_app
 
     return run_app(argv)

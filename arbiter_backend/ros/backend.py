@@ -61,9 +61,11 @@ class RosBackend(Servers):
                 port = int(self.bridge_node.declare_parameter("port", config.bridge_port).value)
                 self.config.bridge_port = port
                 self.nodes.append(self.bridge_node)
-            monitor = Node(topicwatch.NODE_NAME, context=self.context)
-            self.nodes.append(monitor)
-            self.topics = topicwatch.RosTopics(monitor, config.make_topic_watch())
+            # in no executor: the monitor's own thread takes its messages (see ros/topicwatch.py)
+            self.monitor_node = Node(
+                topicwatch.NODE_NAME, context=self.context, start_parameter_services=False
+            )
+            self.topics = topicwatch.RosTopics(self.monitor_node, config.make_topic_watch())
         except BaseException:
             self._shutdown_ros()
             raise
@@ -99,6 +101,7 @@ class RosBackend(Servers):
             )
         self._thread = threading.Thread(target=self._spin, name="rclpy-executor", daemon=True)
         self._thread.start()
+        self.topics.start()
 
     async def stop(self) -> None:
         if self._watch is not None:
@@ -113,7 +116,8 @@ class RosBackend(Servers):
         self._shutdown_ros()
 
     def _shutdown_ros(self) -> None:
-        for node in self.nodes:
+        monitor = getattr(self, "monitor_node", None)
+        for node in [*self.nodes, *([monitor] if monitor is not None else [])]:
             with contextlib.suppress(Exception):
                 node.destroy_node()
         self.nodes.clear()

@@ -1,20 +1,28 @@
 """The topic monitor on DDS: every topic on the graph, measured from serialized messages.
 
-One node (``arbiter_topic_monitor``) looks at the graph every ``GRAPH_S`` seconds; for each topic the
-filter wants it makes a subscription with ``raw=True`` — the callback gets the CDR bytes, never a
-deserialised message — best effort and volatile (as ``ros2 topic hz`` subscribes: it matches every
-publisher, reliable or not, and gets no history that would skew the rate). Size is ``len(bytes)``; for
-a type whose first field is a ``std_msgs/Header`` the stamp is read from the bytes right after the
-4-byte encapsulation header (``int32 sec, uint32 nanosec``, in the byte order the encapsulation names),
-so a 30 Hz camera costs one small unpack per frame. A type not installed here cannot be subscribed
-(rclpy has no generic subscription): it is listed with its type, counts and "type not installed here".
+One node (``arbiter_topic_monitor``), on a thread of its own and in no executor: every ``GRAPH_S``
+seconds it looks at the graph and subscribes to each topic the filter wants, with ``raw=True`` (the
+CDR bytes, never a deserialised message), volatile (no history to skew the rate), and reliable unless a
+publisher is best effort (then best effort, which matches every publisher). Not best effort always, as
+``ros2 topic hz`` subscribes: a best-effort reader loses a whole large message when one fragment is
+lost (a 1 MB image at 15 Hz arrived at 5 Hz), and that loss would be measured as the topic's rate.
+When the publishers' reliability changes, the subscription is made again.
+
+Every ``TAKE_S`` the thread takes what each subscription holds, straight from its handle, and notes
+each message's size and the middleware's receive time (so batching does not blur the periods). The
+executor's per-message machinery (wait set rebuilt over every entity of the process, a task per
+callback) is what made watching as dear as deserialising; it never sees these subscriptions. For a
+type whose first field is a ``std_msgs/Header`` the stamp is read from the bytes right after the
+4-byte encapsulation header (``int32 sec, uint32 nanosec``, in the byte order the encapsulation
+names). A type not installed here cannot be subscribed (rclpy has no generic subscription): it is
+listed with its type, counts and "type not installed here".
 """
 
 from __future__ import annotations
 
-import contextlib
 import logging
 import struct
+import threading
 import time
 from typing import Any
 
@@ -32,7 +40,8 @@ log = logging.getLogger(__name__)
 
 NODE_NAME = "arbiter_topic_monitor"
 GRAPH_S = 1.0  # how often the graph is looked at: topics that appear are watched within a second
-DEPTH = 100  # a burst of a fast topic between two executor passes is not dropped by the reader
+TAKE_S = 0.1  # how often the subscriptions are emptied: up to DEPTH / TAKE_S = 1 kHz per topic
+DEPTH = 100
 
 _STAMP_LE, _STAMP_BE = struct.Struct("<iI"), struct.Struct(">iI")
 
@@ -61,11 +70,51 @@ def _policy(profile: QoSProfile) -> tuple[str, str]:
 
 
 class RosTopics:
+    """Runs on its own thread (:meth:`start`): the node must not be added to an executor."""
+
     def __init__(self, node: Node, watch: TopicWatch) -> None:
         self.node = node
         self.watch = watch
-        self._subs: dict[str, tuple[str, Subscription | None]] = {}  # topic -> (type, subscription)
-        self.timer = node.create_timer(GRAPH_S, self.look)
+        # topic -> (type, best effort, subscription, stamped)
+        self._subs: dict[str, tuple[str, bool, Subscription | None, bool]] = {}
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+
+    def start(self) -> None:
+        self._thread = threading.Thread(target=self._run, name="topic-monitor", daemon=True)
+        self._thread.start()
+
+    def _run(self) -> None:
+        next_look = 0.0
+        while not self._stop.is_set():
+            if time.monotonic() >= next_look:
+                self.look()
+                next_look = time.monotonic() + GRAPH_S
+            try:
+                self.take()
+            except Exception:  # the node is being destroyed, or a handle went away: next sweep
+                log.debug("taking messages failed", exc_info=True)
+            self._stop.wait(TAKE_S)
+
+    def take(self) -> None:
+        """Everything each subscription holds: size, receive time and, when stamped, the delay."""
+        offset = time.monotonic() - time.time()  # middleware receive times are system time
+        note = self.watch.note
+        for topic, (_, _, sub, stamped) in list(self._subs.items()):
+            if sub is None:
+                continue
+            with sub.handle:
+                while (taken := sub.handle.take_message(sub.msg_type, True)) is not None:
+                    raw, info = taken
+                    received = info.get("received_timestamp", 0) / 1e9 or time.time()
+                    if not stamped:
+                        note(topic, len(raw), at=received + offset)
+                        continue
+                    stamp = cdr_stamp(raw)
+                    if stamp is None:
+                        note(topic, len(raw), None, True, at=received + offset)
+                    else:
+                        note(topic, len(raw), received - stamp, at=received + offset)
 
     def answer(self) -> dict[str, Any]:
         return self.watch.answer()
@@ -82,55 +131,49 @@ class RosTopics:
             if not self.watch.filter.wants(name):
                 continue
             type_name = normalize_type(types[0])
-            have = self._subs.get(name)
-            if have is None or have[0] != type_name:
-                if have is not None and have[1] is not None:
-                    self.node.destroy_subscription(have[1])
-                self._subs[name] = (type_name, self._subscribe(name, type_name))
-            with contextlib.suppress(Exception):
+            try:
                 pubs = [i for i in self.node.get_publishers_info_by_topic(name) if i.node_name != me]
                 subs = [i for i in self.node.get_subscriptions_info_by_topic(name) if i.node_name != me]
-                offered = [_policy(i.qos_profile) for i in pubs]
-                requested = [_policy(i.qos_profile) for i in subs]
-                self.watch.set_graph(name, len(pubs), len(subs), qos_mismatch(offered, requested))
+            except Exception:  # the graph query is best effort: next time
+                continue
+            offered = [_policy(i.qos_profile) for i in pubs]
+            requested = [_policy(i.qos_profile) for i in subs]
+            self.watch.set_graph(name, len(pubs), len(subs), qos_mismatch(offered, requested))
+            best_effort = any(r == "best_effort" for r, _ in offered)
+            have = self._subs.get(name)
+            if have is None or have[:2] != (type_name, best_effort):
+                if have is not None and have[2] is not None:
+                    self.node.destroy_subscription(have[2])
+                sub, stamped = self._subscribe(name, type_name, best_effort)
+                self._subs[name] = (type_name, best_effort, sub, stamped)
         for name in [n for n in self._subs if n not in graph]:
-            _, sub = self._subs.pop(name)
+            _, _, sub, _ = self._subs.pop(name)
             if sub is not None:
                 self.node.destroy_subscription(sub)
             self.watch.forget(name)
 
-    def _subscribe(self, topic: str, type_name: str) -> Subscription | None:
+    def _subscribe(self, topic: str, type_name: str, best_effort: bool) -> tuple[Subscription | None, bool]:
         try:
             cls = message_class(type_name)
         except MessageError:
             self.watch.watch(topic, type_name, unmeasured=NOT_INSTALLED)
-            return None
+            return None, False
         stamped = has_header(cls)
         self.watch.watch(topic, type_name, stamped=stamped)
-        qos = QoSProfile(
-            depth=DEPTH, reliability=ReliabilityPolicy.BEST_EFFORT, durability=DurabilityPolicy.VOLATILE
-        )
-        note = self.watch.note
-        if stamped:
-
-            def on_stamped(raw: bytes) -> None:
-                stamp = cdr_stamp(raw)
-                if stamp is None:
-                    note(topic, len(raw), None, True)
-                else:
-                    note(topic, len(raw), time.time() - stamp)
-
-            callback = on_stamped
-        else:
-
-            def on_message(raw: bytes) -> None:
-                note(topic, len(raw))
-
-            callback = on_message
-        return self.node.create_subscription(cls, topic, callback, qos, raw=True)
+        reliability = ReliabilityPolicy.BEST_EFFORT if best_effort else ReliabilityPolicy.RELIABLE
+        qos = QoSProfile(depth=DEPTH, reliability=reliability, durability=DurabilityPolicy.VOLATILE)
+        # the callback is never called: the monitor's thread takes the messages (see ``take``)
+        return self.node.create_subscription(cls, topic, _never, qos, raw=True), stamped
 
     def close(self) -> None:
-        for _, sub in self._subs.values():
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout=2.0)
+        for _, _, sub, _ in self._subs.values():
             if sub is not None:
                 self.node.destroy_subscription(sub)
         self._subs.clear()
+
+
+def _never(raw: bytes) -> None:  # pragma: no cover - the monitor's subscriptions are in no executor
+    raise AssertionError("the topic monitor's subscriptions are taken from directly")

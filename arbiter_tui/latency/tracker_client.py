@@ -171,5 +171,9 @@ class TrackerClient:
             self.view.fail(f"bad response: {exc}")
         return self.view
 
+    async def get(self, path: str) -> httpx.Response:
+        """Another endpoint of the same API (``/api/topics``), with the same client, token and TLS."""
+        return await self._client.get(f"{self.base_url}{path}")
+
     async def aclose(self) -> None:
         await self._client.aclose()

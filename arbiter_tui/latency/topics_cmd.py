@@ -1,0 +1,116 @@
+"""``arbiter-tui topics``: the backend's topic figures once, headless, for scripts and CI.
+
+``--expect '/scan>=9.5,/odom>=45'`` exits 1 when a topic is below its rate (or absent), with one line
+per reason on stderr; 2 on bad arguments; 3 when the backend cannot be asked.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import json
+import sys
+from pathlib import Path
+
+from arbiter_core.auth import AuthConfigError, load_token
+from arbiter_core.cliargs import OneLineParser
+from arbiter_core.topicstats import Expectation, TopicsAnswer, parse_expect, unmet
+from arbiter_core.urls import UrlError, check_token_transport, tracker_endpoint
+
+from .topics_client import TopicsPoller
+from .topics_table import COLUMNS, cells
+from .tracker_client import TrackerClient
+
+DEFAULT_TRACKER = "http://127.0.0.1:8085"
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = OneLineParser(
+        prog="arbiter-tui topics",
+        description="Print the rate, bandwidth, delay and age of every topic the backend measures "
+        "(GET /api/topics), once.",
+    )
+    p.add_argument(
+        "--tracker", default=DEFAULT_TRACKER, help=f"the backend's API (default {DEFAULT_TRACKER})"
+    )
+    p.add_argument("--json", action="store_true", help="print the answer as JSON (the API's own shape)")
+    p.add_argument(
+        "--expect",
+        metavar="TOPIC>=HZ,...",
+        help="exit 1 unless each topic is at or above its rate, e.g. '/scan>=9.5,/odom>=45' (one line per "
+        "topic that is not, on stderr)",
+    )
+    p.add_argument(
+        "--wait",
+        type=float,
+        default=0.0,
+        metavar="S",
+        help="with --expect: ask again until every expectation is met or S seconds passed (a robot that "
+        "is still starting)",
+    )
+    p.add_argument(
+        "--token-file", type=Path, help="file whose first line is the token (default $ARBITER_TOKEN)"
+    )
+    p.add_argument("--ca-file", type=Path, help="PEM certificate(s) to trust for https://")
+    p.add_argument("--timeout", type=float, default=5.0, help="seconds to wait for an answer (default 5)")
+    return p
+
+
+def table(answer: TopicsAnswer) -> str:
+    rows = [COLUMNS, *(cells(t) for t in answer.topics)]
+    widths = [max(len(r[i]) for r in rows) for i in range(len(COLUMNS))]
+    lines = []
+    for r in rows:
+        pairs = enumerate(zip(r, widths, strict=True))
+        lines.append("  ".join(v.ljust(w) if i < 3 else v.rjust(w) for i, (v, w) in pairs))
+    lines.append(f"(window {answer.window_s:g} s; {len(answer.topics)} topics)")
+    return "\n".join(line.rstrip() for line in lines)
+
+
+async def _ask(
+    client: TrackerClient, expect: list[Expectation] | None, wait: float
+) -> tuple[TopicsAnswer | None, str | None]:
+    poller = TopicsPoller(client)
+    loop = asyncio.get_running_loop()
+    deadline = loop.time() + wait
+    while True:
+        state = await poller.poll()
+        answer = TopicsAnswer(state.window_s, state.topics, state.skipped) if state.error is None else None
+        done = answer is not None and (not expect or not unmet(expect, answer))
+        if done or loop.time() >= deadline:
+            return answer, state.error
+        await asyncio.sleep(0.5)
+
+
+def run(argv: list[str]) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        expect = parse_expect(args.expect) if args.expect is not None else None
+        endpoint = tracker_endpoint(args.tracker)
+        token = load_token(args.token_file)
+        check_token_transport(endpoint, "--tracker", token)
+        if args.ca_file is not None and not args.ca_file.is_file():
+            raise UrlError(f"--ca-file {args.ca_file}: no such file")
+    except (ValueError, AuthConfigError, UrlError) as exc:
+        print(f"arbiter-tui topics: {exc}", file=sys.stderr)
+        return 2
+
+    async def main() -> tuple[TopicsAnswer | None, str | None]:
+        client = TrackerClient(endpoint.url, timeout=args.timeout, token=token, ca_file=args.ca_file)
+        try:
+            return await _ask(client, expect, max(0.0, args.wait))
+        finally:
+            await client.aclose()
+
+    answer, error = asyncio.run(main())
+    if answer is None:
+        print(f"arbiter-tui topics: {endpoint.url.rstrip('/')}/api/topics: {error}", file=sys.stderr)
+        return 3
+    if args.json:
+        print(json.dumps({"window_s": answer.window_s, "topics": [t.to_json() for t in answer.topics]}))
+    else:
+        print(table(answer))
+    reasons = unmet(expect, answer) if expect else []
+    for reason in reasons:
+        print(f"arbiter-tui topics: {reason}", file=sys.stderr)
+    return 1 if reasons else 0

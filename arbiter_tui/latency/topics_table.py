@@ -1,0 +1,102 @@
+"""The topics screen's table as data: which rows a filter keeps, in what order, each cell's text. Pure."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Iterable
+
+from arbiter_core.topicstats import TopicFigures
+
+# sort name -> (key, descending first): the busiest, most delayed, oldest first; names A to Z
+SORTS: dict[str, tuple[Callable[[TopicFigures], float | str], bool]] = {
+    "name": (lambda t: t.name, False),
+    "rate": (lambda t: -1.0 if t.rate_hz is None else t.rate_hz, True),
+    "bandwidth": (lambda t: -1.0 if t.bandwidth_bps is None else t.bandwidth_bps, True),
+    "delay": (lambda t: -1.0 if t.delay_mean_ms is None else t.delay_mean_ms, True),
+    "age": (lambda t: math.inf if t.age_ms is None else t.age_ms, True),
+}
+SORT_ORDER = tuple(SORTS)
+COLUMNS = ("topic", "type", "state", "Hz", "usual", "B/s", "size", "delay", "age", "pub/sub")
+# the state a row is marked with (a word, and a style the screen maps to colour): never colour alone
+MARKS = {"ok": "", "slow": "slow", "silent": "SILENT", "waiting": "waiting", "unmeasured": "n/a"}
+
+
+def select(topics: Iterable[TopicFigures], text: str, sort: str, reverse: bool = False) -> list[TopicFigures]:
+    """The rows whose name or type contains every word of ``text`` (case-insensitive), sorted by ``sort``
+    (ties by name); ``reverse`` flips the sort's natural order."""
+    words = text.lower().split()
+    kept = [t for t in topics if all(w in f"{t.name} {t.type}".lower() for w in words)]
+    key, descending = SORTS[sort]
+    kept.sort(key=lambda t: t.name)
+    kept.sort(key=key, reverse=descending != reverse)
+    return kept
+
+
+def short_type(type_name: str) -> str:
+    """sensor_msgs/msg/LaserScan -> sensor_msgs/LaserScan"""
+    return type_name.replace("/msg/", "/")
+
+
+def rate(hz: float | None) -> str:
+    if hz is None:
+        return "-"
+    return f"{hz:.0f}" if hz >= 100 else f"{hz:.1f}" if hz >= 10 else f"{hz:.2f}"
+
+
+def size(n: float | None) -> str:
+    """Bytes with a binary-ish unit: 512, 1.4k, 1.0M."""
+    if n is None:
+        return "-"
+    for unit, scale in (("G", 1e9), ("M", 1e6), ("k", 1e3)):
+        if n >= scale:
+            return f"{n / scale:.1f}{unit}"
+    return f"{n:.0f}"
+
+
+def ms(v: float | None) -> str:
+    if v is None:
+        return "-"
+    if v >= 10_000:
+        return f"{v / 1000:.0f}s"
+    if v >= 1000:
+        return f"{v / 1000:.1f}s"
+    return f"{v:.1f}ms" if v < 100 else f"{v:.0f}ms"
+
+
+def cells(t: TopicFigures) -> tuple[str, ...]:
+    return (
+        t.name,
+        short_type(t.type),
+        MARKS[t.state] or "ok",
+        rate(t.rate_hz),
+        rate(t.usual_rate_hz),
+        size(t.bandwidth_bps),
+        size(t.mean_size_bytes),
+        ms(t.delay_mean_ms) if t.stamped else "",
+        ms(t.age_ms),
+        f"{t.publishers}/{t.subscribers}",
+    )
+
+
+def detail(t: TopicFigures, window_s: float) -> list[str]:
+    """The detail pane's lines for one topic."""
+    lines = [t.name, f"type {t.type}", f"state {t.state}" + (f" ({t.note})" if t.note else "")]
+    lines.append(f"publishers {t.publishers}  subscribers {t.subscribers}")
+    if t.rate_hz is not None:
+        lines.append(f"rate {rate(t.rate_hz)} Hz over {t.count} msgs in {window_s:g} s")
+        lines.append(
+            f"period min {ms(t.period_min_ms)}  max {ms(t.period_max_ms)}  std {ms(t.period_std_ms)}"
+        )
+    else:
+        lines.append(f"rate - ({t.count} msgs in the last {window_s:g} s, {t.total} in all)")
+    if t.usual_rate_hz is not None:
+        lines.append(f"usual {rate(t.usual_rate_hz)} Hz")
+    lines.append(f"bandwidth {size(t.bandwidth_bps)}B/s  mean size {size(t.mean_size_bytes)}B")
+    if t.stamped:
+        lines.append(f"delay mean {ms(t.delay_mean_ms)}  p95 {ms(t.delay_p95_ms)} (now - header.stamp)")
+    if t.malformed_stamps:
+        lines.append(f"malformed stamps {t.malformed_stamps}")
+    lines.append(f"last message {ms(t.age_ms)} ago" if t.age_ms is not None else "no message in the window")
+    if t.qos_note:
+        lines.append(f"QoS: {t.qos_note}")
+    return lines

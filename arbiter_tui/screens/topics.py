@@ -1,0 +1,228 @@
+"""Topics screen: is every topic on the robot alive? Rate, bandwidth, delay and age of each, measured by the
+backend (``GET /api/topics``), filterable and sortable, with the selected topic's figures and its rate
+over the last minute."""
+
+from __future__ import annotations
+
+import numpy as np
+from rich.text import Text
+from textual import on
+from textual.app import ComposeResult
+from textual.binding import Binding
+from textual.containers import Horizontal
+from textual.reactive import reactive
+from textual.widget import Widget
+from textual.widgets import Input
+from textual_plot import HiResMode
+
+from .. import axes
+from ..latency.topics_client import TopicsState
+from ..latency.topics_table import COLUMNS, SORT_ORDER, cells, detail, select
+from ..plots import MIN_GAP_X, MIN_GAP_Y, Plot
+from .base import BaseScreen
+
+# column -> width; columns are shown in PRIORITY order while they fit, the topic column takes the rest
+WIDTHS = dict(zip(COLUMNS, (18, 20, 7, 6, 6, 6, 6, 7, 6, 7), strict=True))
+PRIORITY = ("topic", "state", "Hz", "age", "B/s", "delay", "pub/sub", "size", "usual", "type")
+
+
+def layout(width: int) -> tuple[int, ...]:
+    """Indices into COLUMNS of the columns shown at ``width``, in COLUMNS order."""
+    shown, used = [], 0
+    for name in PRIORITY:
+        need = WIDTHS[name] + (1 if shown else 0)
+        if used + need > width:
+            break
+        shown.append(name)
+        used += need
+    return tuple(i for i, c in enumerate(COLUMNS) if c in shown)
+
+
+STYLES = {"slow": "yellow", "silent": "bold red", "waiting": "dim", "unmeasured": "dim"}
+
+
+class TopicsList(Widget, can_focus=True):
+    """The table: a header and one line per topic, the selected one highlighted. Drawn as text (a
+    DataTable refilled at every poll was a third of the latency screen's CPU)."""
+
+    DEFAULT_CSS = "TopicsList { height: 1fr; }"
+    BINDINGS = [
+        Binding("up", "move(-1)", "Up", show=False),
+        Binding("down", "move(1)", "Down", show=False),
+        Binding("pageup", "move(-10)", "Page up", show=False),
+        Binding("pagedown", "move(10)", "Page down", show=False),
+        Binding("home", "move(-100000)", "First", show=False),
+        Binding("end", "move(100000)", "Last", show=False),
+    ]
+    state: reactive[TopicsState] = reactive(TopicsState)
+    text: reactive[str] = reactive("")
+    sort: reactive[str] = reactive("name")
+    reverse: reactive[bool] = reactive(False)
+    selected: reactive[str | None] = reactive(None)
+    renders = 0
+
+    def rows(self) -> list:
+        return select(self.state.topics, self.text, self.sort, self.reverse)
+
+    def action_move(self, step: int) -> None:
+        names = [t.name for t in self.rows()]
+        if not names:
+            return
+        i = names.index(self.selected) if self.selected in names else 0
+        self.selected = names[max(0, min(len(names) - 1, i + step))]
+
+    def watch_state(self) -> None:
+        names = [t.name for t in self.rows()]
+        if names and self.selected not in names:
+            self.selected = names[0]
+
+    def render(self) -> Text:
+        self.renders += 1
+        shown = layout(self.size.width)
+        widths = [WIDTHS[COLUMNS[i]] for i in shown]
+        widths[0] += max(0, self.size.width - sum(widths) - len(widths) + 1)  # the topic column
+        out = Text(no_wrap=True, overflow="ellipsis")
+        names_shown = tuple(COLUMNS[i] for i in shown)
+        out.append(_line(names_shown, widths, names_shown) + "\n", style="bold")
+        rows = self.rows()
+        if not rows:
+            out.append(self._empty(), style="dim")
+            return out
+        visible = max(1, self.size.height - 1)
+        names = [t.name for t in rows]
+        cursor = names.index(self.selected) if self.selected in names else 0
+        first = max(0, min(cursor - visible // 2, len(rows) - visible))
+        for i, t in enumerate(rows[first : first + visible]):
+            style = STYLES.get(t.state, "")
+            if first + i == cursor:
+                style = f"{style} reverse".strip() if self.has_focus else f"{style} underline".strip()
+            row = cells(t)
+            out.append(_line(tuple(row[j] for j in shown), widths, names_shown) + "\n", style=style)
+        return out
+
+    def _empty(self) -> str:
+        s = self.state
+        if s.polls == 0:
+            return "waiting for the backend's /api/topics ..."
+        if s.error and not s.topics:
+            return f"no topics: {s.error}"
+        if self.text:
+            return f"no topic matches {self.text!r}"
+        return "the backend sees no topic"
+
+
+TEXT_COLUMNS = ("topic", "type", "state")
+
+
+def _line(values: tuple[str, ...], widths: list[int], columns: tuple[str, ...]) -> str:
+    """Text columns left-aligned, figures right-aligned, each cut to its width."""
+    parts = []
+    for v, w, c in zip(values, widths, columns, strict=True):
+        v = v if len(v) <= w else v[: w - 1] + "…"
+        parts.append(v.ljust(w) if c in TEXT_COLUMNS else v.rjust(w))
+    return " ".join(parts)
+
+
+class TopicDetail(Widget):
+    """The selected topic's figures."""
+
+    DEFAULT_CSS = "TopicDetail { height: auto; }"
+    state: reactive[TopicsState] = reactive(TopicsState)
+    selected: reactive[str | None] = reactive(None)
+
+    def render(self) -> Text:
+        t = next((t for t in self.state.topics if t.name == self.selected), None)
+        if t is None:
+            return Text("select a topic (up/down)", style="dim")
+        lines = detail(t, self.state.window_s)
+        out = Text(lines[0] + "\n", style="bold")
+        out.append("\n".join(lines[1:]))
+        if self.state.error:
+            out.append(f"\nlast poll failed: {self.state.error}", style="red")
+        return out
+
+
+class RatePlot(Plot):
+    """The selected topic's rate at each of the last polls (a minute at 2 Hz)."""
+
+    SOURCE = "topics"
+    selected: reactive[str | None] = reactive(None)
+
+    def watch_selected(self) -> None:
+        if self.is_mounted:
+            self._key = None
+            self._receive(getattr(self.app, self.SOURCE))
+
+    def data_key(self, view: TopicsState) -> object:
+        return (view.polls, self.selected)
+
+    def draw(self, view: TopicsState) -> None:
+        rates = view.rates(self.selected or "")
+        values = np.array([np.nan if r is None else r for r in rates], dtype=np.float64)
+        if values.size < 2 or np.all(np.isnan(values)):
+            return
+        t = (np.arange(values.size) - (values.size - 1)) * 0.5  # seconds before the newest poll
+        ok = ~np.isnan(values)
+        self.plot(t[ok], values[ok], line_style="cyan", hires_mode=HiResMode.BRAILLE)
+        cols, rows = self.scale_size()
+        x = axes.aligned(float(t[0]), 0.0, cols, MIN_GAP_X)
+        y = axes.aligned(0.0, max(float(np.nanmax(values)) * 1.1, 1.0), rows, MIN_GAP_Y)
+        self.set_axes(x, y)
+
+
+class TopicsScreen(BaseScreen):
+    CSS_PATH = ["base.tcss", "topics.tcss"]
+    BINDINGS = [
+        Binding("slash", "filter", "Filter"),
+        Binding("s", "sort", "Sort"),
+        Binding("r", "reverse", "Reverse", show=False),
+    ]
+    state: reactive[TopicsState] = reactive(TopicsState)
+    selected: reactive[str | None] = reactive(None)
+    sort: reactive[str] = reactive("name")
+
+    def compose_body(self) -> ComposeResult:
+        yield Input(placeholder="/ filters by name or type; esc returns to the table", id="topics-filter")
+        yield TopicsList(id="topics-list").data_bind(TopicsScreen.state, TopicsScreen.sort)
+        with Horizontal(id="topics-side"):
+            yield TopicDetail(id="topics-detail").data_bind(TopicsScreen.state, TopicsScreen.selected)
+            yield RatePlot("rate (Hz) vs time (s)", id="topics-rate").data_bind(TopicsScreen.selected)
+
+    def on_mount(self) -> None:
+        super().on_mount()
+        self.watch(self.app, "topics", self._receive, init=True)
+        table = self.query_one(TopicsList)
+        self.watch(table, "selected", self._select, init=True)
+        table.focus()
+
+    def _select(self, name: str | None) -> None:
+        self.selected = name
+
+    def _receive(self, state: TopicsState) -> None:
+        self.state = state
+
+    def on_screen_resume(self) -> None:
+        super().on_screen_resume()
+        self.arbiter.set_keys_direct(False)  # this screen's keys are typed: no teleop here
+
+    @on(Input.Changed, "#topics-filter")
+    def _filtered(self, event: Input.Changed) -> None:
+        self.query_one(TopicsList).text = event.value
+
+    @on(Input.Submitted, "#topics-filter")
+    def _submitted(self) -> None:
+        self.query_one(TopicsList).focus()
+
+    def key_escape(self) -> None:
+        self.query_one(TopicsList).focus()
+
+    def action_filter(self) -> None:
+        self.query_one("#topics-filter", Input).focus()
+
+    def action_sort(self) -> None:
+        self.sort = SORT_ORDER[(SORT_ORDER.index(self.sort) + 1) % len(SORT_ORDER)]
+        self.notify(f"sorted by {self.sort}", timeout=1.5)
+
+    def action_reverse(self) -> None:
+        lst = self.query_one(TopicsList)
+        lst.reverse = not lst.reverse

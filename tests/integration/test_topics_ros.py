@@ -1,0 +1,191 @@
+"""``GET /api/topics`` in ROS mode against ground truth: real rclpy publishers of known rate, size and stamp.
+
+The publishers record when they published; the truth for a window is computed from those times with
+the same definitions (rate = (n - 1) / span; bandwidth = bytes / span * (n - 1) / n), so a loaded
+machine that publishes late does not make the test wrong, only the publishers slower.
+"""
+
+import json
+import time
+from pathlib import Path
+
+import httpx
+import pytest
+
+from ..support.backend import start_backend, wait_for
+from ..support.ros import DOMAIN, Odometry, Peer, use_test_domain
+
+ros_domain = pytest.fixture(scope="module", autouse=True)(use_test_domain)
+
+WINDOW = 3.0
+OFFSET = 0.020  # the odometry's stamps are this far in the past
+
+
+@pytest.fixture
+def peer():
+    p = Peer("arbiter_topics_peer")
+    yield p
+    p.close()
+
+
+# The publishers run in a child process: stamping and publishing in this process would compete for the GIL
+# with the test's own polling, which shows as delay. The child remembers when it published each message
+# (CLOCK_MONOTONIC is one clock for every process of the machine) and the serialized size of each kind;
+# "stop NAME" on stdin stops one, "dump" prints it all as JSON.
+PUBLISHERS = r"""
+import json, sys, threading, time, rclpy
+from rclpy.serialization import serialize_message
+from nav_msgs.msg import Odometry
+from sensor_msgs.msg import Image, LaserScan
+from std_msgs.msg import String
+OFFSET = float(sys.argv[1])
+rclpy.init()
+node = rclpy.create_node("arbiter_topics_truth")
+scan = LaserScan(); scan.ranges = [1.0] * 360
+image = Image(); image.height, image.width, image.step, image.encoding = 512, 683, 2049, "rgb8"
+image.data = bytes(512 * 2049)  # ~1 MB
+chatter = String(data="x" * 64)
+def odom():
+    msg = Odometry(); now = time.time() - OFFSET
+    msg.header.stamp.sec, msg.header.stamp.nanosec = int(now), int((now % 1) * 1e9)
+    return msg
+kinds = {"scan": (LaserScan, 10, lambda: scan), "odom": (Odometry, 50, odom),
+         "chatter": (String, 200, lambda: chatter), "image": (Image, 15, lambda: image)}
+times = {k: [] for k in kinds}
+# DDS pads the payload to a multiple of 4 bytes: what a raw subscriber gets (and `ros2 topic bw` counts)
+sizes = {k: (len(serialize_message(make())) + 3) // 4 * 4 for k, (_, _, make) in kinds.items()}
+timers = {}
+for name, (kind, hz, make) in kinds.items():
+    pub = node.create_publisher(kind, "/arbiter_test/" + name, 10)
+    def tick(pub=pub, make=make, name=name):
+        pub.publish(make())
+        times[name].append(time.monotonic())
+    timers[name] = node.create_timer(1.0 / hz, tick)
+threading.Thread(target=rclpy.spin, args=(node,), daemon=True).start()
+print("ready", flush=True)
+for line in sys.stdin:
+    cmd, _, arg = line.strip().partition(" ")
+    if cmd == "stop":
+        timers[arg].cancel()
+    elif cmd == "dump":
+        print(json.dumps({"times": times, "sizes": sizes}), flush=True)
+"""
+
+
+def truth(times: list[float], size: int, start: float, end: float) -> tuple[float, float]:
+    t = [x for x in times if start <= x <= end]
+    span = t[-1] - t[0]
+    return (len(t) - 1) / span, size * len(t) / span * (len(t) - 1) / len(t)
+
+
+def topics(api: str) -> dict[str, dict]:
+    return {t["name"]: t for t in httpx.get(f"{api}/api/topics", timeout=5).json()["topics"]}
+
+
+@pytest.mark.timeout(120)
+def test_rate_bandwidth_delay_and_silence_match_ground_truth():
+    import os
+    import subprocess
+    import sys
+
+    backend = start_backend(
+        "--transport", "ros", "--no-sim", "--topics-window", str(WINDOW), "--topics", "/arbiter_test/*",
+        timeout=30,
+    )  # fmt: skip
+    child = subprocess.Popen(
+        [sys.executable, "-c", PUBLISHERS, str(OFFSET)],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        text=True,
+        env={**os.environ, "ROS_DOMAIN_ID": str(DOMAIN)},
+    )
+    names = ("scan", "odom", "chatter", "image")
+    try:
+        assert child.stdout.readline().strip() == "ready"
+
+        def all_full() -> bool:  # a whole window measured for each
+            got = topics(backend.api)
+            return all(
+                (row := got.get(f"/arbiter_test/{n}")) and row["total"] > row["count"] > 0 for n in names
+            )
+
+        assert wait_for(all_full, 30), topics(backend.api)
+        end = time.monotonic()
+        got = topics(backend.api)
+        child.stdin.write("dump\n")
+        child.stdin.flush()
+        sent = json.loads(child.stdout.readline())
+        rows = []
+        for name in names:
+            row = got[f"/arbiter_test/{name}"]
+            rate, bw = truth(sent["times"][name], sent["sizes"][name], end - WINDOW, end)
+            rows.append((name, rate, row["rate_hz"], bw, row["bandwidth_bps"]))
+            assert row["rate_hz"] == pytest.approx(rate, rel=0.02), rows
+            assert row["bandwidth_bps"] == pytest.approx(bw, rel=0.02), rows
+            assert row["mean_size_bytes"] == pytest.approx(sent["sizes"][name]), rows
+            assert row["state"] == "ok" and row["publishers"] == 1
+        odom = got["/arbiter_test/odom"]
+        assert odom["stamped"] and got["/arbiter_test/scan"]["stamped"]
+        chatter = got["/arbiter_test/chatter"]
+        assert not chatter["stamped"] and chatter["delay_mean_ms"] is None
+        assert odom["delay_mean_ms"] == pytest.approx(OFFSET * 1e3, abs=1.0), odom
+        assert odom["malformed_stamps"] == 0
+
+        # a publisher that stops: its row turns silent within two windows
+        child.stdin.write("stop scan\n")
+        child.stdin.flush()
+        stop_at = time.monotonic()
+
+        def scan_silent() -> bool:
+            return topics(backend.api)["/arbiter_test/scan"]["state"] == "silent"
+
+        assert wait_for(scan_silent, 2 * WINDOW + 5)
+        assert time.monotonic() - stop_at <= 2 * WINDOW + 1.0  # polled every 0.05 s; an API round trip
+        assert topics(backend.api)["/arbiter_test/odom"]["state"] == "ok"
+    finally:
+        child.kill()
+        child.wait()
+        backend.stop()
+
+
+def test_a_type_not_installed_is_listed_and_a_malformed_stamp_is_counted(peer, tmp_path: Path):
+    """The backend cannot subscribe to a type it does not have (sensor_msgs hidden from it here): the topic
+    is still listed, with its type, counts and the reason. A stamp whose nanoseconds are out of range is
+    counted, not fatal."""
+    from sensor_msgs.msg import Imu
+
+    hidden = tmp_path / "hide"
+    (hidden / "sensor_msgs").mkdir(parents=True)
+    (hidden / "sensor_msgs" / "__init__.py").write_text("raise ImportError('hidden by the test')\n")
+    import os
+
+    env = {"PYTHONPATH": os.pathsep.join([str(hidden), os.environ.get("PYTHONPATH", "")])}
+    backend = start_backend(
+        "--transport", "ros", "--no-sim", "--topics-window", str(WINDOW), timeout=30, env=env
+    )
+    imu = peer.node.create_publisher(Imu, "/arbiter_test/imu", 10)
+    odom = peer.node.create_publisher(Odometry, "/arbiter_test/bad_stamp", 10)
+    bad = Odometry()
+    bad.header.stamp.sec, bad.header.stamp.nanosec = 5, 2_000_000_000
+
+    def listed_and_counted() -> bool:
+        imu.publish(Imu())
+        odom.publish(bad)
+        got = topics(backend.api)
+        return (
+            "/arbiter_test/imu" in got
+            and got.get("/arbiter_test/bad_stamp", {}).get("malformed_stamps", 0) >= 3
+        )
+
+    try:
+        assert wait_for(listed_and_counted, 20), topics(backend.api)
+        got = topics(backend.api)
+        row = got["/arbiter_test/imu"]
+        assert row["type"] == "sensor_msgs/msg/Imu"
+        assert row["state"] == "unmeasured" and row["note"] == "type not installed here"
+        assert row["publishers"] == 1 and row["rate_hz"] is None
+        assert got["/arbiter_test/bad_stamp"]["delay_mean_ms"] is None
+        assert got["/arbiter_test/bad_stamp"]["count"] >= 3  # the messages still count
+        assert backend.proc.poll() is None
+    finally:
+        backend.stop()
