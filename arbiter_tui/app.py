@@ -127,7 +127,7 @@ class ArbiterApp(App[None]):
         # short labels: the footer fits in 80 columns on every screen (full names in ? help and ctrl+p)
         Binding("1", "mode('control')", "Drive", tooltip="The control screen"),
         Binding("2", "mode('analytics')", "Stats", tooltip="The analytics screen"),
-        Binding("3", "mode('latency')", "Latency", tooltip="The latency screen"),
+        Binding("3", "mode('latency')", "Link", tooltip="The latency screen: the link's latency"),
         Binding("4", "mode('topics')", "Topics", tooltip="The topics screen: is every topic alive?"),
         Binding("space", "stop", "Stop"),
         Binding("k", "stop", "Stop", show=False),

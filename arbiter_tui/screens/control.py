@@ -28,7 +28,7 @@ class ControlScreen(BaseScreen):
         Binding("n", "cycle_mission", "Mission"),
         Binding("g", "go", "Go"),
         Binding("G", "restart", "Restart", show=False),
-        Binding("t", "goal", "Goal"),
+        Binding("t", "goal", "Goal", show=False),  # in ? help and README: the footer fits in 80 columns
     ]
     dashboard = False  # the terminal is large enough for the dashboard (set on every resize)
 

@@ -12,7 +12,7 @@ from ..control.teleop import legend_long
 
 HELP = f"""[b]arbiter-tui[/b] — teleop console, analytics and latency monitor
 
-[b]Screens[/b]  1 control  2 analytics  3 latency  ? help  ctrl+p palette
+[b]Screens[/b]  1 control  2 analytics  3 latency  4 topics  ? help  ctrl+p
 [b]Stop[/b]     space or k, on every screen
 [b]Quit[/b]     ctrl+q or ctrl+c (stops the robot first)
 
@@ -32,6 +32,10 @@ HELP = f"""[b]arbiter-tui[/b] — teleop console, analytics and latency monitor
   every algorithm completed
 
 [b]Latency[/b]  polls GET /api/latency at 2 Hz; one-way = receive - stamp
+
+[b]Topics[/b]  / filter  s sort (name, rate, bandwidth, delay, age)
+  r reverse  up/down select; rate, bandwidth, delay, age of every
+  topic as the backend measures it (GET /api/topics, 2 Hz)
 
 Press escape or ? to close."""
 

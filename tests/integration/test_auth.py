@@ -42,6 +42,10 @@ def test_http_api_needs_the_bearer_token(secured):
         assert r.json()["status"] == 401 and "bearer" in r.json()["error"]
     r = httpx.get(f"{secured.api}/api/latency", headers={"Authorization": f"Bearer {TOKEN}"}, timeout=5)
     assert r.status_code == 200 and r.json()["stats"]["count"] == 0
+    # /api/topics: the same rule
+    assert httpx.get(f"{secured.api}/api/topics", timeout=5).status_code == 401
+    r = httpx.get(f"{secured.api}/api/topics", headers={"Authorization": f"Bearer {TOKEN}"}, timeout=5)
+    assert r.status_code == 200 and "/odom" in {t["name"] for t in r.json()["topics"]}
 
 
 async def test_websocket_without_a_token_is_refused_and_nothing_reaches_the_robot(secured):

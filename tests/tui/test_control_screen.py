@@ -117,7 +117,7 @@ async def test_the_dashboard_comes_and_goes_with_the_terminal_size():
 
 def key_words(key: str) -> str:
     """A binding's key as README and help write it."""
-    return {"question_mark": "?", "space": "space", "delete": "delete"}.get(key, key)
+    return {"question_mark": "?", "space": "space", "delete": "delete", "slash": "/"}.get(key, key)
 
 
 def test_readme_and_help_name_every_key_the_screens_bind():
@@ -128,11 +128,17 @@ def test_readme_and_help_name_every_key_the_screens_bind():
     from arbiter_tui.app import ArbiterApp
     from arbiter_tui.screens.analytics import AnalyticsScreen
     from arbiter_tui.screens.help import HELP
+    from arbiter_tui.screens.topics import TopicsScreen
 
     readme = Path(__file__).resolve().parents[2].joinpath("README.md").read_text()
     table = readme[readme.index("## Keys") :].split("\n\n", 1)[0]
     rows = {line.split("|")[1].strip(): line for line in table.splitlines() if line.startswith("| ")}
-    where = {ArbiterApp: "everywhere", ControlScreen: "control", AnalyticsScreen: "analytics"}
+    where = {
+        ArbiterApp: "everywhere",
+        ControlScreen: "control",
+        AnalyticsScreen: "analytics",
+        TopicsScreen: "topics",
+    }
     checked = 0
     for owner, row_name in where.items():
         row = rows[row_name]
@@ -142,7 +148,7 @@ def test_readme_and_help_name_every_key_the_screens_bind():
                 assert f"`{words}" in row or f"/{words}`" in row, f"README {row_name} row lacks {words}"
                 assert words in HELP, f"help lacks {words}"
                 checked += 1
-    assert checked >= 18
+    assert checked >= 21
 
 
 async def test_the_map_follows_the_robot_at_most_every_follow_period_and_ends_where_it_is():

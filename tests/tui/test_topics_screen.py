@@ -1,0 +1,84 @@
+"""Screen 4, topics: snapshots at 80x24 and 100x30 with fixed figures, and the keys a user presses."""
+
+import pytest
+
+from arbiter_core.topicstats import NOT_INSTALLED, TopicFigures
+from arbiter_tui.latency.topics_client import TopicsState
+from arbiter_tui.screens.topics import RatePlot, TopicDetail, TopicsList
+
+from ..support.tui import still_app
+
+TOPICS = (
+    TopicFigures("/camera/image_raw", "sensor_msgs/msg/Image", "ok", 1, 1, 75, 900, 15.0, 62.1, 71.0, 2.2,
+                 15.7e6, 1_049_112.0, True, 3.1, 4.0, 12.0, 15.0),
+    TopicFigures("/cmd_vel", "geometry_msgs/msg/Twist", "waiting", 0, 1),
+    TopicFigures("/imu/data", "sensor_msgs/msg/Imu", "unmeasured", 1, 0, note=NOT_INSTALLED),
+    TopicFigures("/odom", "nav_msgs/msg/Odometry", "ok", 1, 2, 250, 3000, 50.0, 19.1, 21.0, 0.3, 35_400.0,
+                 708.0, True, 20.2, 20.3, 8.0, 50.0),
+    TopicFigures("/rosout", "rcl_interfaces/msg/Log", "ok", 4, 0, 3, 40, 0.6, 100.0, 2600.0, 900.0, 120.0,
+                 200.0, False, None, None, 900.0, None),
+    TopicFigures("/scan", "sensor_msgs/msg/LaserScan", "slow", 1, 1, 22, 800, 4.3, 98.0, 260.0, 40.0,
+                 6_400.0, 1_496.0, True, 1.2, 2.5, 230.0, 10.0, qos_note="a reliable subscriber cannot "
+                 "match a best-effort publisher"),
+    TopicFigures("/tf", "tf2_msgs/msg/TFMessage", "silent", 2, 3, 0, 1200, usual_rate_hz=100.0),
+)  # fmt: skip
+HISTORY = tuple(
+    (t.name, tuple((t.rate_hz or 0.0) * (1.0 if i < 40 else 0.5) for i in range(60))) for t in TOPICS
+)
+STATE = TopicsState(polls=60, window_s=5.0, topics=TOPICS, history=HISTORY)
+
+
+def topics_app(state: TopicsState = STATE):
+    app = still_app()
+    app.topics = state
+    return app
+
+
+@pytest.mark.parametrize("size", [(100, 30), (80, 24)], ids=["100x30", "80x24"])
+def test_topics_screen(snap_compare, size):
+    assert snap_compare(topics_app(), terminal_size=size, press=["4", "down", "down", "down"])
+
+
+def test_topics_screen_before_the_first_answer_and_when_the_backend_is_down(snap_compare):
+    down = TopicsState(polls=3, error="cannot connect (ConnectError: All connection attempts failed)")
+    assert snap_compare(topics_app(down), terminal_size=(80, 24), press=["4"])
+
+
+async def test_filter_sort_and_select_with_the_keys_a_user_presses():
+    app = topics_app()
+    async with app.run_test(size=(100, 30)) as pilot:
+        await pilot.press("4")
+        table = app.screen.query_one(TopicsList)
+        detail = app.screen.query_one(TopicDetail)
+        assert [t.name for t in table.rows()][:2] == ["/camera/image_raw", "/cmd_vel"]
+        assert table.selected == "/camera/image_raw" and table.has_focus
+        # s: by rate (busiest first), s again: by bandwidth
+        await pilot.press("s")
+        assert table.sort == "rate" and [t.name for t in table.rows()][:2] == ["/odom", "/camera/image_raw"]
+        await pilot.press("s")
+        assert table.rows()[0].name == "/camera/image_raw"
+        await pilot.press("r")  # reversed: the quietest first
+        assert table.rows()[-1].name == "/camera/image_raw"
+        # / then type: only the sensor topics, the selection moves into what is left
+        await pilot.press("slash", *"sensor")
+        assert {t.name for t in table.rows()} == {"/camera/image_raw", "/imu/data", "/scan"}
+        await pilot.press("escape", "home", "down")
+        assert table.has_focus
+        selected = table.selected
+        assert selected in {"/imu/data", "/camera/image_raw", "/scan"}
+        await pilot.pause()
+        assert selected in str(detail.render())
+        assert app.screen.query_one(RatePlot).selected == selected
+        # the detail of the slow topic names the QoS mismatch
+        table.selected = "/scan"
+        await pilot.pause()
+        text = str(detail.render())
+        assert "QoS: a reliable subscriber cannot match a best-effort publisher" in text
+        assert "rate 4.30 Hz" in text and "usual 10.0 Hz" in text
+        # a new answer without the selected topic: the selection moves to the first row
+        app.topics = TopicsState(polls=61, window_s=5.0, topics=TOPICS[:2])
+        await pilot.pause()
+        assert table.selected in {"/camera/image_raw", "/cmd_vel"}
+        # teleop keys do nothing here, and 1 goes back to driving
+        await pilot.press("escape", "1")
+        assert app.current_mode == "control"

@@ -1,0 +1,40 @@
+"""The topics screen's rows: filter by words of name or type, sorts, and cell text."""
+
+from arbiter_core.topicstats import TopicFigures
+from arbiter_tui.latency.topics_table import cells, select
+
+ROWS = [
+    TopicFigures("/odom", "nav_msgs/msg/Odometry", "ok", rate_hz=50.0, bandwidth_bps=30_900.0, age_ms=5.0,
+                 stamped=True, delay_mean_ms=0.1, mean_size_bytes=618.0, publishers=1, subscribers=2),
+    TopicFigures("/scan", "sensor_msgs/msg/LaserScan", "silent", rate_hz=None, age_ms=None),
+    TopicFigures("/camera/image", "sensor_msgs/msg/Image", "ok", rate_hz=15.0, bandwidth_bps=15.7e6,
+                 age_ms=40.0, stamped=True, delay_mean_ms=3.0),
+    TopicFigures("/rosout", "rcl_interfaces/msg/Log", "waiting"),
+]  # fmt: skip
+
+
+def names(rows):
+    return [t.name for t in rows]
+
+
+def test_filter_matches_every_word_in_name_or_type():
+    assert names(select(ROWS, "sensor", "name")) == ["/camera/image", "/scan"]
+    assert names(select(ROWS, "SENSOR image", "name")) == ["/camera/image"]
+    assert names(select(ROWS, "odom", "name")) == ["/odom"]
+    assert select(ROWS, "nothing", "name") == []
+
+
+def test_sorts_put_the_busiest_most_delayed_and_oldest_first():
+    assert names(select(ROWS, "", "rate")) == ["/odom", "/camera/image", "/rosout", "/scan"]
+    assert names(select(ROWS, "", "bandwidth"))[0] == "/camera/image"
+    assert names(select(ROWS, "", "delay"))[:2] == ["/camera/image", "/odom"]
+    assert names(select(ROWS, "", "age"))[:2] == ["/rosout", "/scan"]  # never heard from: oldest
+    assert names(select(ROWS, "", "name", reverse=True)) == ["/scan", "/rosout", "/odom", "/camera/image"]
+
+
+def test_cells():
+    odom = cells(ROWS[0])
+    assert odom[:4] == ("/odom", "nav_msgs/Odometry", "ok", "50.0")
+    assert odom[5:] == ("30.9k", "618", "0.1ms", "5.0ms", "1/2")
+    assert cells(ROWS[1])[2] == "SILENT" and cells(ROWS[1])[3] == "-"
+    assert cells(ROWS[2])[5] == "15.7M"

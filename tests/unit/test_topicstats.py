@@ -1,0 +1,152 @@
+"""Topic figures (rate, bandwidth, delay, age, state) from synthetic receive times; the API's parsing."""
+
+import math
+
+import pytest
+
+from arbiter_core.topicstats import (
+    NOT_INSTALLED,
+    TopicsError,
+    TopicWindow,
+    parse_expect,
+    parse_topics,
+    qos_mismatch,
+    unmet,
+)
+
+
+def fed(hz: float, seconds: float, size: int = 100, window: float = 5.0, start: float = 100.0) -> TopicWindow:
+    w = TopicWindow("/t", "std_msgs/msg/String", window)
+    n = int(seconds * hz)
+    for i in range(n):
+        w.add(start + i / hz, size)
+    return w
+
+
+def test_rate_bandwidth_and_period_of_a_steady_topic():
+    w = fed(50.0, 8.0, size=600)
+    now = 100.0 + 8.0
+    f = w.figures(now)
+    assert f.rate_hz == pytest.approx(50.0)
+    assert f.bandwidth_bps == pytest.approx(50.0 * 600)  # mean size x rate for a steady publisher
+    assert f.mean_size_bytes == 600
+    assert f.period_min_ms == pytest.approx(20.0) and f.period_max_ms == pytest.approx(20.0)
+    assert f.period_std_ms == pytest.approx(0.0, abs=1e-6)
+    assert f.count == 250 and f.total == 400  # only the last 5 s are in the window
+    assert f.state == "ok" and f.age_ms == pytest.approx(20.0)
+
+
+def test_jitter_shows_in_the_period_spread_not_the_mean_rate():
+    w = TopicWindow("/t", "x", 5.0)
+    t = 0.0
+    for i in range(100):
+        t += 0.08 if i % 2 else 0.12  # 10 Hz on average
+        w.add(t, 10)
+    f = w.figures(t)
+    assert f.rate_hz == pytest.approx(10.0, rel=0.01)
+    assert f.period_min_ms == pytest.approx(80.0) and f.period_max_ms == pytest.approx(120.0)
+    assert f.period_std_ms == pytest.approx(20.0, rel=0.01)
+
+
+def test_delay_mean_and_p95_from_stamped_messages():
+    w = TopicWindow("/t", "nav_msgs/msg/Odometry", 5.0, stamped=True)
+    for i in range(100):
+        w.add(i * 0.02, 700, delay_s=0.020 + (0.010 if i >= 95 else 0.0))
+    f = w.figures(2.0)
+    assert f.stamped
+    assert f.delay_mean_ms == pytest.approx(20.5)
+    assert f.delay_p95_ms == pytest.approx(30.0)  # the seed's percentile: sorted[floor(n * 0.95)]
+
+
+def test_states_waiting_silent_slow_ok_and_unmeasured():
+    w = TopicWindow("/t", "x", 2.0)
+    assert w.figures(0.0).state == "waiting"
+    for i in range(60):  # 10 Hz for 6 s: a full window, so the usual rate is learnt
+        w.add(i / 10, 10)
+    assert w.figures(5.95).state == "ok"
+    assert w.figures(5.95).usual_rate_hz == pytest.approx(10.0)
+    for i in range(10):  # then 2 Hz
+        w.add(6.0 + i / 2, 10)
+    assert w.figures(10.5).state == "slow"
+    assert w.figures(20.0).state == "silent"  # nothing for a whole window
+    assert w.figures(20.0).rate_hz is None and w.figures(20.0).age_ms is None
+    u = TopicWindow("/img", "sensor_msgs/msg/Image", 2.0)
+    u.unmeasured = NOT_INSTALLED
+    assert u.figures(1.0).state == "unmeasured" and u.figures(1.0).note == NOT_INSTALLED
+
+
+def test_the_usual_rate_decays_so_a_new_steady_rate_becomes_usual():
+    w = TopicWindow("/t", "x", 2.0)
+    t = 0.0
+    for _ in range(60):
+        w.add(t, 1)
+        t += 0.1
+    w.figures(t)  # usual = 10 Hz
+    for _ in range(3000):  # 5 minutes at 5 Hz
+        w.add(t, 1)
+        t += 0.2
+        if int(t * 5) % 50 == 0:
+            w.figures(t)
+    f = w.figures(t)
+    assert f.rate_hz == pytest.approx(5.0, rel=0.01)
+    assert f.state == "ok", f.usual_rate_hz
+
+
+def test_qos_mismatch_notes():
+    assert qos_mismatch([("best_effort", "volatile")], [("reliable", "volatile")]) == (
+        "a reliable subscriber cannot match a best-effort publisher"
+    )
+    assert "transient-local subscriber" in qos_mismatch(
+        [("reliable", "volatile")], [("reliable", "transient_local")]
+    )
+    assert qos_mismatch([("reliable", "transient_local")], [("best_effort", "volatile")]) is None
+
+
+def good(**over):
+    row = {"name": "/odom", "type": "nav_msgs/msg/Odometry", "state": "ok", "rate_hz": 50.0, "count": 250,
+           "total": 400, "publishers": 1, "subscribers": 2, "stamped": True,
+           "delay_mean_ms": 20.1}  # fmt: skip
+    row.update(over)
+    return row
+
+
+def test_parse_topics_takes_good_rows_and_counts_bad_ones():
+    answer = parse_topics(
+        {
+            "window_s": 5,
+            "topics": [
+                good(),
+                good(name="/scan", rate_hz=math.inf),  # not JSON, but a Python caller could: refused
+                good(name="/x", state="dead"),
+                good(name="/y", count=-1),
+                good(name="/z", rate_hz="fast"),
+                "nope",
+                good(name="/a", rate_hz=None, state="silent"),
+            ],
+        }
+    )
+    assert [t.name for t in answer.topics] == ["/a", "/odom"]
+    assert answer.skipped == 5 and answer.window_s == 5.0
+    odom = answer.topics[1]
+    assert odom.rate_hz == 50.0 and odom.stamped and odom.subscribers == 2
+
+
+@pytest.mark.parametrize("body", [None, [], {"topics": []}, {"window_s": 0, "topics": []}, {"window_s": 5}])
+def test_parse_topics_refuses_what_is_not_an_answer(body):
+    with pytest.raises(TopicsError):
+        parse_topics(body)
+
+
+def test_expectations_parse_and_name_each_unmet_topic():
+    exp = parse_expect("/scan>=9.5, /odom>=45")
+    assert [(e.topic, e.min_hz) for e in exp] == [("/scan", 9.5), ("/odom", 45.0)]
+    answer = parse_topics({"window_s": 5, "topics": [good(rate_hz=44.0), good(name="/imu", rate_hz=100.0)]})
+    reasons = unmet(exp, answer)
+    assert reasons == [
+        "/scan: not on the graph (expected >= 9.5 Hz)",
+        "/odom: 44.00 Hz in the last 5 s, expected >= 45 Hz",
+    ]
+    assert unmet(parse_expect("/imu>=99"), answer) == []
+    for bad in ("scan>=9", "/scan>9", "/scan>=fast", "/scan>=-1", "/scan>=nan", ",,"):
+        with pytest.raises(ValueError):
+            parse_expect(bad)
