@@ -35,6 +35,7 @@ from .control.loop import ControlLoop
 from .control.teleop import TELEOP_KEYS, Teleop, key_name
 from .latency.topics_client import PERIOD_S as TOPICS_PERIOD_S
 from .latency.topics_client import TopicsPoller, TopicsState
+from .latency.topics_table import echo_refusal, echo_text
 from .latency.tracker_client import LatencyView, TrackerClient
 from .link.base import STARTING, Link, PendingLink
 from .messages import (
@@ -165,6 +166,8 @@ class ArbiterApp(App[None]):
         self._shown_command: tuple[object, ...] = ()
         self._analytics_at = float("-inf")
         self._latency_at = float("-inf")
+        self._echo: tuple[str, str] | None = None  # the topics screen's echo (written on the link's thread)
+        self._echo_cancel: Callable[[], None] | None = None
         self._count_at = float("-inf")  # when the status line's sample count last changed
         self._frozen_modes: set[str] = set()
         # Teleop keys straight from the input thread (see key_on_input_thread)
@@ -314,8 +317,32 @@ class ArbiterApp(App[None]):
         while True:
             started = time.monotonic()
             if self.current_mode == "topics":
-                self.topics = await poller.poll()
+                self.topics = replace(await poller.poll(), echo=self._echo)
             await asyncio.sleep(max(0.0, TOPICS_PERIOD_S - (time.monotonic() - started)))
+
+    def echo_topic(self, name: str | None) -> None:
+        """Echo ``name``'s latest message on the topics screen (None: stop), through the link's own
+        throttled subscription; only one topic at a time, and only where the link can."""
+        if self._echo_cancel is not None:
+            with contextlib.suppress(Exception):
+                self._echo_cancel()
+            self._echo_cancel = None
+        self._echo = None
+        figures = next((t for t in self.topics.topics if t.name == name), None)
+        if name is None or figures is None:
+            return
+        echo = getattr(self.link, "echo", None)
+        refusal = echo_refusal(figures) or (None if echo is not None else "not echoed: no rosbridge link")
+        if refusal is not None:
+            self._echo = (name, refusal)
+            return
+        self._echo = (name, "waiting for a message ...")
+
+        def received(msg: dict[str, object]) -> None:  # the link's thread: a tuple swap, nothing else
+            if self._echo is not None and self._echo[0] == name:
+                self._echo = (name, echo_text(msg))
+
+        self._echo_cancel = echo(name, figures.type, received)
 
     @on(LatencyPolled)
     def _polled(self) -> None:

@@ -9,6 +9,7 @@ the same key stream:
 * ``control_key_held``: ``i`` every 0.1 s (a held key's auto-repeat: teleop commands flowing,
   the robot moving, the control screen live);
 * ``latency_screen``: the latency screen open while the tracker is polled (keys: none);
+* ``topics_screen``: the topics screen open while ``/api/topics`` is polled (keys: none);
 * ``analytics_collecting``: a go_to_goal mission driving (recording is on from the start), analytics
   screen open.
 
@@ -129,6 +130,7 @@ def main() -> int:
     steps = [
         ("control_key_held", [], "i", s),
         ("latency_screen", ["3"], None, s),
+        ("topics_screen", ["4"], None, s),  # GET /api/topics at 2 Hz while shown
         ("analytics_collecting", ["1", "a", "g", "2"], None, s),  # recording is on from the start
     ]
     bare_cmd = f"{sys.executable} {HERE / 'bare_app.py'}"
@@ -139,7 +141,7 @@ def main() -> int:
         bare_runs.append(run(bare_cmd, "bare ready", "bare ready", steps, size, tmp))
     tui, bare = median_of(tui_runs), median_of(bare_runs)
     ratios: dict = {}
-    for name in ("control_key_held", "latency_screen", "analytics_collecting"):
+    for name in ("control_key_held", "latency_screen", "topics_screen", "analytics_collecting"):
         t, b = tui[name], bare[name]
         cpu_t, cpu_b = t["cpu_percent_of_core"], b["cpu_percent_of_core"]
         ratios[name] = {

@@ -31,6 +31,7 @@ class TopicsState:
     skipped: int = 0  # topics in the answer that were not the documented shape
     # per topic, its rate at each of the last polls (None: no rate then), oldest first
     history: tuple[tuple[str, tuple[float | None, ...]], ...] = ()
+    echo: tuple[str, str] | None = None  # (topic, its latest message as text, or why there is none)
 
     def rates(self, name: str) -> tuple[float | None, ...]:
         return next((h for n, h in self.history if n == name), ())

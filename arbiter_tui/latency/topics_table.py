@@ -100,3 +100,24 @@ def detail(t: TopicFigures, window_s: float) -> list[str]:
     if t.qos_note:
         lines.append(f"QoS: {t.qos_note}")
     return lines
+
+
+ECHO_MAX_BYTES = 64_000  # larger messages are not echoed: base64 JSON of a camera frame at 2 Hz is MB/s
+ECHO_CHARS = 800
+
+
+def echo_refusal(t: TopicFigures) -> str | None:
+    """Why the latest message of ``t`` is not echoed, or None when it may be."""
+    if t.state == "unmeasured":
+        return "not echoed: the type is not installed on the backend"
+    if t.mean_size_bytes is not None and t.mean_size_bytes > ECHO_MAX_BYTES:
+        return f"not echoed: messages of {size(t.mean_size_bytes)}B (more than {size(ECHO_MAX_BYTES)}B)"
+    return None
+
+
+def echo_text(msg: object, limit: int = ECHO_CHARS) -> str:
+    """A message as compact JSON, cut to ``limit`` characters."""
+    import json
+
+    text = json.dumps(msg, separators=(",", ":"), default=str)
+    return text if len(text) <= limit else text[: limit - 1] + "…"

@@ -7,6 +7,7 @@ import json
 import logging
 import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -21,6 +22,7 @@ log = logging.getLogger(__name__)
 MAX_RECONNECT_DELAY_S = 2.0
 AUTH_RETRY_S = 30.0  # a rejected token is retried this slowly: it will be rejected again
 PING_INTERVAL_S = 1.0  # WebSocket keep-alive: a ping every second...
+ECHO_THROTTLE_MS = 500  # the topics screen's echo: at most 2 messages a second
 PING_TIMEOUT_S = 2.0  # ...and a link with no pong for this long is dropped (then reconnected)
 
 
@@ -269,6 +271,18 @@ class RosLink:
             _write_now(proto, frame.encode("utf-8"))
         except Exception:  # a socket closing under us: the meter counts it lost later
             log.debug("sending a command failed", exc_info=True)
+
+    def echo(
+        self, topic: str, type_name: str, callback: Callable[[dict[str, Any]], None]
+    ) -> Callable[[], None]:
+        """Subscribe to ``topic`` for the topics screen's echo: at most one message every
+        ``ECHO_THROTTLE_MS`` (rosbridge's ``throttle_rate``, ``queue_length`` 1, so the server drops
+        the rest). Returns the unsubscribe."""
+        import roslibpy  # imported where the link is built too: not at module level (start-up time)
+
+        sub = roslibpy.Topic(self.ros, topic, type_name, throttle_rate=ECHO_THROTTLE_MS, queue_length=1)
+        self._reactor.callFromThread(sub.subscribe, callback)
+        return lambda: self._reactor.callFromThread(sub.unsubscribe)
 
     def close(self) -> None:
         with self._lock:

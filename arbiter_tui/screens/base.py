@@ -56,6 +56,8 @@ class Console(Protocol):
 
     def export(self, *formats: str) -> list[ExportResult]: ...
 
+    def echo_topic(self, name: str | None) -> None: ...
+
 
 MIN_WIDTH, MIN_HEIGHT = 80, 24
 TOO_SMALL = (

@@ -139,6 +139,10 @@ class TopicDetail(Widget):
         out.append("\n".join(lines[1:]))
         if self.state.error:
             out.append(f"\nlast poll failed: {self.state.error}", style="red")
+        echo = self.state.echo
+        if echo is not None and echo[0] == t.name:
+            out.append("\nlatest (at most 2/s): ", style="bold")
+            out.append(echo[1], style="dim" if echo[1].startswith(("not echoed", "waiting")) else "")
         return out
 
 
@@ -196,7 +200,12 @@ class TopicsScreen(BaseScreen):
         table.focus()
 
     def _select(self, name: str | None) -> None:
-        self.selected = name
+        if name != self.selected:
+            self.selected = name
+            self.arbiter.echo_topic(name)
+
+    def on_screen_suspend(self) -> None:
+        self.arbiter.echo_topic(None)  # nobody looks at it: unsubscribe
 
     def _receive(self, state: TopicsState) -> None:
         self.state = state
@@ -204,6 +213,7 @@ class TopicsScreen(BaseScreen):
     def on_screen_resume(self) -> None:
         super().on_screen_resume()
         self.arbiter.set_keys_direct(False)  # this screen's keys are typed: no teleop here
+        self.arbiter.echo_topic(self.selected)
 
     @on(Input.Changed, "#topics-filter")
     def _filtered(self, event: Input.Changed) -> None:
