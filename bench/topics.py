@@ -47,16 +47,19 @@ scan = LaserScan(); scan.ranges = [1.0] * 360
 image = Image(); image.height, image.width, image.step, image.encoding = 512, 683, 2049, "rgb8"
 image.data = bytes(512 * 2049)
 chatter = String(data="x" * 64)
+import sys
+kinds = sys.argv[1].split(",")
 pubs = {k: n.create_publisher(t, "/bench/" + k, 10)
-        for k, t in (("scan", LaserScan), ("odom", Odometry), ("chatter", String), ("image", Image))}
+        for k, t in (("scan", LaserScan), ("odom", Odometry), ("chatter", String), ("image", Image))
+        if k in kinds}
 def odom():
     m = Odometry(); t = time.time() - 0.02
     m.header.stamp.sec, m.header.stamp.nanosec = int(t), int((t % 1) * 1e9)
     pubs["odom"].publish(m)
-n.create_timer(0.1, lambda: pubs["scan"].publish(scan))
-n.create_timer(0.02, odom)
-n.create_timer(0.005, lambda: pubs["chatter"].publish(chatter))
-n.create_timer(1 / 15, lambda: pubs["image"].publish(image))
+if "scan" in pubs: n.create_timer(0.1, lambda: pubs["scan"].publish(scan))
+if "odom" in pubs: n.create_timer(0.02, odom)
+if "chatter" in pubs: n.create_timer(0.005, lambda: pubs["chatter"].publish(chatter))
+if "image" in pubs: n.create_timer(1 / 15, lambda: pubs["image"].publish(image))
 print("ready", flush=True)
 rclpy.spin(n)
 """
@@ -78,7 +81,8 @@ def note(topic):
     return cb
 if sys.argv[1] == "subscribe":
     for k, t in (("scan", LaserScan), ("odom", Odometry), ("chatter", String), ("image", Image)):
-        n.create_subscription(t, "/bench/" + k, note(k), QoSProfile(depth=100))
+        if k in sys.argv[2].split(","):
+            n.create_subscription(t, "/bench/" + k, note(k), QoSProfile(depth=100))
 print("ready", flush=True)
 rclpy.spin(n)
 """
@@ -107,11 +111,14 @@ def main() -> int:
     ap.add_argument("--seconds", type=float, default=10.0, help="length of each phase (default 10)")
     ap.add_argument("--repeat", type=int, default=3, help="rounds of the four phases (default 3)")
     ap.add_argument("--warmup", type=float, default=3.0, help="seconds before each phase is measured")
+    ap.add_argument(
+        "--kinds", default="scan,odom,chatter,image", help="which of the four publishers run (default: all)"
+    )
     args = ap.parse_args()
     env = {**os.environ, "ROS_DOMAIN_ID": str(random.Random(os.getpid()).randint(101, 200)),
            "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST", "PYTHONUNBUFFERED": "1"}  # fmt: skip
     os.environ.update(env)
-    publisher = spawn(PUBLISHER, env=env)
+    publisher = spawn(PUBLISHER, args.kinds, env=env)
     phases: dict[str, list[float]] = {
         "not watching": [],
         "watching": [],
@@ -126,7 +133,8 @@ def main() -> int:
                     backend = start_backend("--transport", "ros", "--no-sim", *extra, timeout=30, env=env)
                     pid, stop = backend.proc.pid, backend.stop
                 else:
-                    proc = spawn(SUBSCRIBER, "subscribe" if name == "deserialising" else "idle", env=env)
+                    what = "subscribe" if name == "deserialising" else "idle"
+                    proc = spawn(SUBSCRIBER, what, args.kinds, env=env)
                     pid, stop = proc.pid, proc.kill
                 try:
                     time.sleep(args.warmup)
@@ -150,6 +158,7 @@ def main() -> int:
             "bench": "topics",
             "seconds": args.seconds,
             "repeat": args.repeat,
+            "kinds": args.kinds,
             **{f"{k.replace(' ', '_')}_cpu_pct": round(v, 2) for k, v in med.items()},
             "watching_over_not_watching": round(med["watching"] / med["not watching"], 2),
             "watch_cost_pct": round(watch_cost, 2),

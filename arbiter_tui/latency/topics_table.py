@@ -63,6 +63,15 @@ def ms(v: float | None) -> str:
     return f"{v:.1f}ms" if v < 100 else f"{v:.0f}ms"
 
 
+FRESH_MS = 100.0  # an age below this is shown as "<0.1s": a 50 Hz topic's age would change every poll
+
+
+def age(v: float | None) -> str:
+    if v is None:
+        return "-"
+    return "<0.1s" if v < FRESH_MS else ms(v)
+
+
 def cells(t: TopicFigures) -> tuple[str, ...]:
     return (
         t.name,
@@ -73,7 +82,7 @@ def cells(t: TopicFigures) -> tuple[str, ...]:
         size(t.bandwidth_bps),
         size(t.mean_size_bytes),
         ms(t.delay_mean_ms) if t.stamped else "",
-        ms(t.age_ms),
+        age(t.age_ms),
         f"{t.publishers}/{t.subscribers}",
     )
 
@@ -96,7 +105,7 @@ def detail(t: TopicFigures, window_s: float) -> list[str]:
         lines.append(f"delay mean {ms(t.delay_mean_ms)}  p95 {ms(t.delay_p95_ms)} (now - header.stamp)")
     if t.malformed_stamps:
         lines.append(f"malformed stamps {t.malformed_stamps}")
-    lines.append(f"last message {ms(t.age_ms)} ago" if t.age_ms is not None else "no message in the window")
+    lines.append(f"last message {age(t.age_ms)} ago" if t.age_ms is not None else "no message in the window")
     if t.qos_note:
         lines.append(f"QoS: {t.qos_note}")
     return lines

@@ -19,6 +19,7 @@ from .. import axes
 from ..latency.topics_client import TopicsState
 from ..latency.topics_table import COLUMNS, SORT_ORDER, cells, detail, select
 from ..plots import MIN_GAP_X, MIN_GAP_Y, Plot
+from ..views import PLOT_PERIOD_S
 from .base import BaseScreen
 
 # column -> width; columns are shown in PRIORITY order while they fit, the topic column takes the rest
@@ -54,12 +55,14 @@ class TopicsList(Widget, can_focus=True):
         Binding("home", "move(-100000)", "First", show=False),
         Binding("end", "move(100000)", "Last", show=False),
     ]
-    state: reactive[TopicsState] = reactive(TopicsState)
+    # a new answer repaints only when a cell shown changed (``watch_state``); the rest repaint at once
+    state: reactive[TopicsState] = reactive(TopicsState, repaint=False)
     text: reactive[str] = reactive("")
     sort: reactive[str] = reactive("name")
     reverse: reactive[bool] = reactive(False)
     selected: reactive[str | None] = reactive(None)
     renders = 0
+    _shown: object = None
 
     def rows(self) -> list:
         return select(self.state.topics, self.text, self.sort, self.reverse)
@@ -72,9 +75,14 @@ class TopicsList(Widget, can_focus=True):
         self.selected = names[max(0, min(len(names) - 1, i + step))]
 
     def watch_state(self) -> None:
-        names = [t.name for t in self.rows()]
+        rows = self.rows()
+        names = [t.name for t in rows]
         if names and self.selected not in names:
             self.selected = names[0]
+        shown = (tuple(cells(t) for t in rows), self.state.polls == 0, self.state.error if not rows else None)
+        if shown != self._shown:
+            self._shown = shown
+            self.refresh()
 
     def render(self) -> Text:
         self.renders += 1
@@ -127,8 +135,15 @@ class TopicDetail(Widget):
     """The selected topic's figures."""
 
     DEFAULT_CSS = "TopicDetail { height: auto; }"
-    state: reactive[TopicsState] = reactive(TopicsState)
+    state: reactive[TopicsState] = reactive(TopicsState, repaint=False)
     selected: reactive[str | None] = reactive(None)
+    _shown: str | None = None
+
+    def watch_state(self) -> None:
+        text = self.render().plain
+        if text != self._shown:  # an answer that changed nothing this pane shows paints nothing
+            self._shown = text
+            self.refresh()
 
     def render(self) -> Text:
         t = next((t for t in self.state.topics if t.name == self.selected), None)
@@ -158,7 +173,14 @@ class RatePlot(Plot):
             self._receive(getattr(self.app, self.SOURCE))
 
     def data_key(self, view: TopicsState) -> object:
-        return (view.polls, self.selected)
+        rates = view.rates(self.selected or "")
+        return (self.selected, rates if any(r is not None for r in rates) else None)  # no rate: no redraw
+
+    def follow_period(self, old: object, new: object) -> float:
+        """The same topic's rates: at most every ``PLOT_PERIOD_S`` (another topic: at once)."""
+        if isinstance(old, tuple) and isinstance(new, tuple) and old[0] == new[0]:
+            return PLOT_PERIOD_S
+        return 0.0
 
     def draw(self, view: TopicsState) -> None:
         rates = view.rates(self.selected or "")
@@ -181,9 +203,10 @@ class TopicsScreen(BaseScreen):
         Binding("s", "sort", "Sort"),
         Binding("r", "reverse", "Reverse", show=False),
     ]
-    state: reactive[TopicsState] = reactive(TopicsState)
-    selected: reactive[str | None] = reactive(None)
-    sort: reactive[str] = reactive("name")
+    # data for the widgets bound to them: a change repaints those widgets, never the whole screen
+    state: reactive[TopicsState] = reactive(TopicsState, repaint=False)
+    selected: reactive[str | None] = reactive(None, repaint=False)
+    sort: reactive[str] = reactive("name", repaint=False)
 
     def compose_body(self) -> ComposeResult:
         yield Input(placeholder="/ filters by name or type; esc returns to the table", id="topics-filter")

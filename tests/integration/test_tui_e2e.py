@@ -73,3 +73,47 @@ async def test_keys_to_tracker_records_to_odometry_to_data_points(tmp_path):
     finally:
         link.close()
         backend.stop()
+
+
+async def test_topics_screen_polls_the_backend_and_echoes_the_selected_topic(tmp_path):
+    """Screen 4 against the real backend: the table fills from GET /api/topics, the simulator's odometry
+    is ok at its rate, and the selected topic's latest message arrives through rosbridge (throttled).
+    Leaving the screen stops both the polls and the echo."""
+    from arbiter_tui.screens.topics import TopicDetail, TopicsList
+
+    backend = start_backend("--topics-window", "2")
+    link = RosLink("127.0.0.1", backend.bridge_port)
+    tracker = TrackerClient(backend.api)
+    settings = Settings(handle_signals=False, export_dir=tmp_path)
+    app = make_app(settings, link, tracker)
+    try:
+        async with app.run_test(size=(100, 30)) as pilot:
+            assert await until(pilot, lambda: link.state == CONNECTED, timeout=15)
+            await pilot.press("4")
+            table = app.screen.query_one(TopicsList)
+
+            def odom_ok() -> bool:
+                odom = next((t for t in app.topics.topics if t.name == "/odom"), None)
+                return odom is not None and odom.state == "ok" and (odom.rate_hz or 0) > 40
+
+            assert await until(pilot, odom_ok, timeout=15)
+            assert "/stamped_cmd_vel" in {t.name for t in table.rows()}
+            await pilot.press("slash", *"odom", "enter")
+            assert await until(pilot, lambda: table.selected == "/odom")
+            detail = app.screen.query_one(TopicDetail)
+
+            def echoed() -> bool:
+                echo = app.topics.echo
+                return echo is not None and echo[0] == "/odom" and echo[1].startswith('{"header"')
+
+            assert await until(pilot, echoed, timeout=10)
+            await pilot.pause(0.1)
+            assert '{"header"' in str(detail.render())
+            polls = app.topics.polls
+            await pilot.press("1")
+            await pilot.pause(1.5)
+            assert app.topics.polls <= polls + 1  # at most the poll in flight when the screen was left
+            assert app._echo is None and app._echo_cancel is None
+    finally:
+        link.close()
+        backend.stop()

@@ -35,6 +35,14 @@ def test_sorts_put_the_busiest_most_delayed_and_oldest_first():
 def test_cells():
     odom = cells(ROWS[0])
     assert odom[:4] == ("/odom", "nav_msgs/Odometry", "ok", "50.0")
-    assert odom[5:] == ("30.9k", "618", "0.1ms", "5.0ms", "1/2")
+    assert odom[5:] == ("30.9k", "618", "0.1ms", "<0.1s", "1/2")  # a fresh age does not flicker
     assert cells(ROWS[1])[2] == "SILENT" and cells(ROWS[1])[3] == "-"
     assert cells(ROWS[2])[5] == "15.7M"
+
+
+def test_ages_below_a_tenth_of_a_second_read_fresh_and_older_ones_in_units():
+    from arbiter_tui.latency.topics_table import age
+
+    assert [age(v) for v in (None, 3.0, 99.9, 230.0, 1500.0, 42_000.0)] == [
+        "-", "<0.1s", "<0.1s", "230ms", "1.5s", "42s",
+    ]  # fmt: skip
