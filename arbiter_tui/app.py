@@ -310,13 +310,14 @@ class ArbiterApp(App[None]):
 
     @work(exclusive=True, group="topics")
     async def _poll_topics_forever(self) -> None:
-        """``GET /api/topics`` at most every ``topics_client.PERIOD_S``, and only while screen 4 is shown."""
+        """``GET /api/topics`` at most every ``topics_client.PERIOD_S``, only while screen 4 (or the
+        dashboard, which shows its table) is shown."""
         tracker = self.tracker
         assert tracker is not None
         poller = TopicsPoller(tracker)
         while True:
             started = time.monotonic()
-            if self.current_mode == "topics":
+            if self.current_mode == "topics" or self.dashboard_shown():
                 self.topics = replace(await poller.poll(), echo=self._echo)
             await asyncio.sleep(max(0.0, TOPICS_PERIOD_S - (time.monotonic() - started)))
 

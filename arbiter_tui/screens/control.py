@@ -17,6 +17,7 @@ from ..plots import ErrorPlot, LatencyPlot, LiveMap
 from ..widgets import KEY_HELP, ClientLine, RobotPanel, StatsCards, TrackerCards, TrackerLine
 from .analytics import CompareTable, RuleLine
 from .base import BaseScreen
+from .topics import TopicsPane
 
 DASHBOARD_WIDTH, DASHBOARD_HEIGHT = 160, 45
 
@@ -41,7 +42,7 @@ class ControlScreen(BaseScreen):
 
     @staticmethod
     def dashboard_panes() -> Horizontal:
-        """What the dashboard adds below the panel and the map: the same widgets as screens 2 and 3."""
+        """What the dashboard adds below the panel and the map: the same widgets as screens 2, 3 and 4."""
         table = CompareTable(id="dash-table", show_cursor=False, zebra_stripes=True)
         table.can_focus = False  # the arrow keys drive here: they must never scroll a table
         compare = Vertical(
@@ -53,7 +54,7 @@ class ControlScreen(BaseScreen):
             ClientLine(id="dash-lat-client"), LatencyPlot("one-way (ms) vs time (s)", id="dash-lat-plot"),
             id="dash-latency",
         )  # fmt: skip
-        return Horizontal(compare, latency, id="dash")
+        return Horizontal(compare, latency, TopicsPane(id="dash-topics"), id="dash")
 
     def on_resize(self, event: events.Resize) -> None:
         # (Textual calls BaseScreen.on_resize too, after this: handlers run for each class)

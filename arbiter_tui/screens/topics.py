@@ -122,6 +122,17 @@ class TopicsList(Widget, can_focus=True):
 TEXT_COLUMNS = ("topic", "type", "state")
 
 
+class TopicsPane(TopicsList, can_focus=False):
+    """Screen 4's table on the dashboard: the app's latest answer, sorted by name, never focused (the
+    arrow keys drive there)."""
+
+    def on_mount(self) -> None:
+        self.watch(self.app, "topics", self._receive, init=True)
+
+    def _receive(self, state: TopicsState) -> None:
+        self.state = state
+
+
 def _line(values: tuple[str, ...], widths: list[int], columns: tuple[str, ...]) -> str:
     """Text columns left-aligned, figures right-aligned, each cut to its width."""
     parts = []

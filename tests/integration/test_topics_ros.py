@@ -124,7 +124,11 @@ def test_rate_bandwidth_delay_and_silence_match_ground_truth():
             assert row["bandwidth_bps"] == pytest.approx(bw, rel=0.02), rows
             assert row["mean_size_bytes"] == pytest.approx(sent["sizes"][name]), rows
             assert row["state"] == "ok" and row["publishers"] == 1
+        print("\ntopic      rate truth / measured (Hz)   bandwidth truth / measured (B/s)")  # pytest -s
+        for name, rate, measured, bw, measured_bw in rows:
+            print(f"{name:8} {rate:10.3f} / {measured:<10.3f} {bw:14.0f} / {measured_bw:.0f}")
         odom = got["/arbiter_test/odom"]
+        print(f"odom delay: injected {OFFSET * 1e3:.1f} ms, measured mean {odom['delay_mean_ms']:.3f} ms")
         assert odom["stamped"] and got["/arbiter_test/scan"]["stamped"]
         chatter = got["/arbiter_test/chatter"]
         assert not chatter["stamped"] and chatter["delay_mean_ms"] is None

@@ -98,8 +98,13 @@ def test_the_map_with_a_mission_selected(snap_compare):
 
 
 def test_dashboard(snap_compare):
-    """200x60: control panel and map, the live comparison and the latency figures and plot at once."""
-    assert snap_compare(still_app(), terminal_size=(200, 60))
+    """200x60: control panel and map, the live comparison, the latency figures and plot, and the topics
+    table (slow and silent rows marked) at once."""
+    from .test_topics_screen import STATE
+
+    app = still_app()
+    app.topics = STATE
+    assert snap_compare(app, terminal_size=(200, 60))
 
 
 def test_dashboard_with_the_link_down(snap_compare):
