@@ -18,7 +18,7 @@ from arbiter_core.topicstats import Expectation, TopicsAnswer, parse_expect, unm
 from arbiter_core.urls import UrlError, check_token_transport, tracker_endpoint
 
 from .topics_client import TopicsPoller
-from .topics_table import COLUMNS, cells
+from .topics_table import COLUMNS, aligned, cells
 from .tracker_client import TrackerClient
 
 DEFAULT_TRACKER = "http://127.0.0.1:8085"
@@ -61,8 +61,7 @@ def table(answer: TopicsAnswer) -> str:
     widths = [max(len(r[i]) for r in rows) for i in range(len(COLUMNS))]
     lines = []
     for r in rows:
-        pairs = enumerate(zip(r, widths, strict=True))
-        lines.append("  ".join(v.ljust(w) if i < 3 else v.rjust(w) for i, (v, w) in pairs))
+        lines.append("  ".join(aligned(v, w, c) for v, w, c in zip(r, widths, COLUMNS, strict=True)))
     lines.append(f"(window {answer.window_s:g} s; {len(answer.topics)} topics)")
     return "\n".join(line.rstrip() for line in lines)
 

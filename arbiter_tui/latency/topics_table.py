@@ -17,6 +17,15 @@ SORTS: dict[str, tuple[Callable[[TopicFigures], float | str], bool]] = {
 }
 SORT_ORDER = tuple(SORTS)
 COLUMNS = ("topic", "type", "state", "Hz", "usual", "B/s", "size", "delay", "age", "pub/sub")
+TEXT_COLUMNS = ("topic", "type", "state")  # left-aligned; the figures are right-aligned
+
+
+def aligned(value: str, width: int, column: str) -> str:
+    """One cell padded to ``width`` (cut with an ellipsis when longer), aligned as its column is."""
+    value = value if len(value) <= width else value[: width - 1] + "…"
+    return value.ljust(width) if column in TEXT_COLUMNS else value.rjust(width)
+
+
 # the state a row is marked with (a word, and a style the screen maps to colour): never colour alone
 MARKS = {"ok": "", "slow": "slow", "silent": "SILENT", "waiting": "waiting", "unmeasured": "n/a"}
 

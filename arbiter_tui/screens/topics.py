@@ -17,7 +17,7 @@ from textual_plot import HiResMode
 
 from .. import axes
 from ..latency.topics_client import TopicsState
-from ..latency.topics_table import COLUMNS, SORT_ORDER, cells, detail, select
+from ..latency.topics_table import COLUMNS, SORT_ORDER, aligned, cells, detail, select
 from ..plots import MIN_GAP_X, MIN_GAP_Y, Plot
 from ..views import PLOT_PERIOD_S
 from .base import BaseScreen
@@ -119,9 +119,6 @@ class TopicsList(Widget, can_focus=True):
         return "the backend sees no topic"
 
 
-TEXT_COLUMNS = ("topic", "type", "state")
-
-
 class TopicsPane(TopicsList, can_focus=False):
     """Screen 4's table on the dashboard: the app's latest answer, sorted by name, never focused (the
     arrow keys drive there)."""
@@ -134,12 +131,7 @@ class TopicsPane(TopicsList, can_focus=False):
 
 
 def _line(values: tuple[str, ...], widths: list[int], columns: tuple[str, ...]) -> str:
-    """Text columns left-aligned, figures right-aligned, each cut to its width."""
-    parts = []
-    for v, w, c in zip(values, widths, columns, strict=True):
-        v = v if len(v) <= w else v[: w - 1] + "…"
-        parts.append(v.ljust(w) if c in TEXT_COLUMNS else v.rjust(w))
-    return " ".join(parts)
+    return " ".join(aligned(v, w, c) for v, w, c in zip(values, widths, columns, strict=True))
 
 
 class TopicDetail(Widget):
