@@ -50,6 +50,7 @@ class _Graph:
     publishers: int = 0
     subscribers: int = 0
     qos_note: str | None = None
+    nodes: tuple[tuple[str, ...], tuple[str, ...]] = ((), ())  # publishing, subscribing node names
 
 
 @dataclass
@@ -100,9 +101,16 @@ class TopicWatch:
             if bad_stamp:
                 w.bad_stamp()
 
-    def set_graph(self, topic: str, publishers: int, subscribers: int, qos_note: str | None = None) -> None:
+    def set_graph(
+        self,
+        topic: str,
+        publishers: int,
+        subscribers: int,
+        qos_note: str | None = None,
+        nodes: tuple[tuple[str, ...], tuple[str, ...]] = ((), ()),
+    ) -> None:
         with self._lock:
-            self._graph[topic] = _Graph(publishers, subscribers, qos_note)
+            self._graph[topic] = _Graph(publishers, subscribers, qos_note, nodes)
 
     def figures(self) -> list[TopicFigures]:
         now = self.clock()
@@ -110,7 +118,7 @@ class TopicWatch:
             out = []
             for name, w in sorted(self._windows.items()):
                 g = self._graph.get(name, _Graph())
-                out.append(w.figures(now, g.publishers, g.subscribers, g.qos_note))
+                out.append(w.figures(now, g.publishers, g.subscribers, g.qos_note, g.nodes))
         return out
 
     def answer(self) -> dict[str, Any]:

@@ -64,9 +64,11 @@ class TopicFigures:
     malformed_stamps: int = 0
     qos_note: str | None = None
     note: str | None = None
+    publisher_nodes: tuple[str, ...] = ()  # fully qualified node names, where the graph has them
+    subscriber_nodes: tuple[str, ...] = ()
 
     def to_json(self) -> dict[str, Any]:
-        return {k: _finite(v) for k, v in self.__dict__.items()}
+        return {k: list(v) if isinstance(v, tuple) else _finite(v) for k, v in self.__dict__.items()}
 
 
 def _finite(v: Any) -> Any:
@@ -110,7 +112,12 @@ class TopicWindow:
             self.delays.popleft()
 
     def figures(
-        self, now: float, publishers: int = 0, subscribers: int = 0, qos_note: str | None = None
+        self,
+        now: float,
+        publishers: int = 0,
+        subscribers: int = 0,
+        qos_note: str | None = None,
+        nodes: tuple[tuple[str, ...], tuple[str, ...]] = ((), ()),
     ) -> TopicFigures:
         self._trim(now)
         times, n = self.times, len(self.times)
@@ -165,6 +172,8 @@ class TopicWindow:
             malformed_stamps=self.malformed_stamps,
             qos_note=qos_note,
             note=self.unmeasured,
+            publisher_nodes=nodes[0],
+            subscriber_nodes=nodes[1],
         )
 
     def _usual(self, now: float, rate: float | None) -> float | None:
@@ -220,9 +229,17 @@ def _topic(obj: Any) -> TopicFigures:
             raise TopicsError(f"{name}: {key} is not a count")
         values[key] = v
     notes = {k: obj.get(k) if isinstance(obj.get(k), str) else None for k in ("qos_note", "note")}
-    return TopicFigures(
-        name=name, type=type_name, state=state, stamped=obj.get("stamped") is True, **values, **notes
-    )
+    nodes = {k: _names(obj.get(k), name, k) for k in ("publisher_nodes", "subscriber_nodes")}
+    stamped = obj.get("stamped") is True
+    return TopicFigures(name=name, type=type_name, state=state, stamped=stamped, **values, **notes, **nodes)
+
+
+def _names(v: Any, topic: str, key: str) -> tuple[str, ...]:
+    if v is None:
+        return ()
+    if not isinstance(v, list) or not all(isinstance(n, str) for n in v):
+        raise TopicsError(f"{topic}: {key} is not a list of names")
+    return tuple(v)
 
 
 @dataclass(frozen=True)

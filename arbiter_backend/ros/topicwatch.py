@@ -63,6 +63,12 @@ def has_header(cls: Any) -> bool:
     return bool(fields) and fields[0][1] == "std_msgs/Header"
 
 
+def _node_names(infos: list[Any]) -> tuple[str, ...]:
+    """``/namespace/node`` of each endpoint, sorted, each once."""
+    names = {f"{i.node_namespace.rstrip('/')}/{i.node_name}" for i in infos}
+    return tuple(sorted(names))
+
+
 def _policy(profile: QoSProfile) -> tuple[str, str]:
     r = "best_effort" if profile.reliability == ReliabilityPolicy.BEST_EFFORT else "reliable"
     d = "transient_local" if profile.durability == DurabilityPolicy.TRANSIENT_LOCAL else "volatile"
@@ -138,7 +144,8 @@ class RosTopics:
                 continue
             offered = [_policy(i.qos_profile) for i in pubs]
             requested = [_policy(i.qos_profile) for i in subs]
-            self.watch.set_graph(name, len(pubs), len(subs), qos_mismatch(offered, requested))
+            nodes = (_node_names(pubs), _node_names(subs))
+            self.watch.set_graph(name, len(pubs), len(subs), qos_mismatch(offered, requested), nodes)
             best_effort = any(r == "best_effort" for r, _ in offered)
             have = self._subs.get(name)
             if have is None or have[:2] != (type_name, best_effort):

@@ -100,6 +100,10 @@ def detail(t: TopicFigures, window_s: float) -> list[str]:
     """The detail pane's lines for one topic."""
     lines = [t.name, f"type {t.type}", f"state {t.state}" + (f" ({t.note})" if t.note else "")]
     lines.append(f"publishers {t.publishers}  subscribers {t.subscribers}")
+    if t.publisher_nodes:
+        lines.append("  published by " + ", ".join(t.publisher_nodes))
+    if t.subscriber_nodes:
+        lines.append("  subscribed by " + ", ".join(t.subscriber_nodes))
     if t.rate_hz is not None:
         lines.append(f"rate {rate(t.rate_hz)} Hz over {t.count} msgs in {window_s:g} s")
         lines.append(

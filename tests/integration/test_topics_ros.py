@@ -124,6 +124,7 @@ def test_rate_bandwidth_delay_and_silence_match_ground_truth():
             assert row["bandwidth_bps"] == pytest.approx(bw, rel=0.02), rows
             assert row["mean_size_bytes"] == pytest.approx(sent["sizes"][name]), rows
             assert row["state"] == "ok" and row["publishers"] == 1
+            assert row["publisher_nodes"] == ["/arbiter_topics_truth"]  # the monitor itself is not counted
         print("\ntopic      rate truth / measured (Hz)   bandwidth truth / measured (B/s)")  # pytest -s
         for name, rate, measured, bw, measured_bw in rows:
             print(f"{name:8} {rate:10.3f} / {measured:<10.3f} {bw:14.0f} / {measured_bw:.0f}")

@@ -121,12 +121,14 @@ def test_parse_topics_takes_good_rows_and_counts_bad_ones():
                 good(name="/y", count=-1),
                 good(name="/z", rate_hz="fast"),
                 "nope",
-                good(name="/a", rate_hz=None, state="silent"),
+                good(name="/a", rate_hz=None, state="silent", publisher_nodes=["/driver"]),
+                good(name="/b", subscriber_nodes="/console"),  # not a list
             ],
         }
     )
     assert [t.name for t in answer.topics] == ["/a", "/odom"]
-    assert answer.skipped == 5 and answer.window_s == 5.0
+    assert answer.skipped == 6 and answer.window_s == 5.0
+    assert answer.topics[0].publisher_nodes == ("/driver",) and answer.topics[1].publisher_nodes == ()
     odom = answer.topics[1]
     assert odom.rate_hz == 50.0 and odom.stamped and odom.subscribers == 2
 
