@@ -12,6 +12,7 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 from arbiter_core.kinematics import Pose, distance_error
+from arbiter_core.linkmodel import LinkModel
 from arbiter_core.simulator import RATE_HZ
 
 from ..analytics import ranking
@@ -20,6 +21,7 @@ from ..analytics.store import AnalyticsStats, AnalyticsStore, DataPoint
 from ..control.algorithms import ALGORITHMS, MISSIONS
 from ..control.loop import ControlLoop
 from ..control.teleop import Teleop
+from ..link.modelled import ModelledLink
 from ..link.sim import SimLink
 
 AUTONOMOUS = tuple(a for a in ALGORITHMS if a != MANUAL)
@@ -73,11 +75,16 @@ def run_one(
     collection_rate: float = 10.0,
     run_id: int = 1,
     t0_ms: float = 0.0,
+    link_model: LinkModel | None = None,
+    seed: int = 0,
 ) -> RunResult:
     """One mission run from the origin, in simulated time starting at ``t0_ms`` (epoch ms, what its
-    points' timestamps count from); its points carry ``run_id``."""
+    points' timestamps count from); its points carry ``run_id``. With ``link_model`` the commands and
+    the odometry cross that link (``link.modelled``; jitter and loss drawn from ``seed``)."""
     clock = _Clock()
-    link = SimLink(clock=clock)
+    link: SimLink | ModelledLink = (
+        SimLink(clock=clock) if link_model is None else ModelledLink(link_model, clock, seed)
+    )
     store = AnalyticsStore(max_data_points=1_000_000, collection_rate=collection_rate)
     loop = ControlLoop(link, store, Teleop(speed=speed, turn=turn), wall_ms=lambda: t0_ms + clock.t * 1000.0)
     loop.set_algorithm(algorithm)
@@ -99,7 +106,7 @@ def run_one(
         if n % sample_every == 0:
             loop.sample()
     completed = loop.mission.done
-    pose = link.telemetry.snapshot()[0]
+    pose = link.true_pose if isinstance(link, ModelledLink) else link.telemetry.snapshot()[0]
     last = loop.mission.waypoints[-1]
     if loop.running:  # out of time
         loop.stop()
@@ -133,13 +140,15 @@ def compare(
     speed: float = 0.5,
     turn: float = 1.0,
     t0_ms: float | None = None,
+    link_model: LinkModel | None = None,
+    seed: int = 0,
 ) -> list[RunResult]:
     """Every algorithm on every mission. Each run has its own time span: the first starts at ``t0_ms``
     (default: now), each next one ``GAP_MS`` after the previous one ended, as if driven one after another."""
     start = time.time_ns() / 1e6 if t0_ms is None else t0_ms
     out = []
     for i, (a, m) in enumerate(((a, m) for m in missions for a in algorithms), 1):
-        result = run_one(a, m, speed, turn, run_id=i, t0_ms=start)
+        result = run_one(a, m, speed, turn, run_id=i, t0_ms=start, link_model=link_model, seed=seed + i)
         out.append(result)
         start += result.time_s * 1000.0 + GAP_MS
     return out

@@ -4,12 +4,15 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
-from arbiter_core.cliargs import OneLineParser, positive_float
+from arbiter_core.cliargs import OneLineParser, non_negative_float, positive_float
 from arbiter_core.kinematics import DEFAULT_LIMITS
+from arbiter_core.linkmodel import LinkModel, LinkModelError
 
 from ..analytics import ranking
 from ..analytics.exports import to_csv, to_json, to_mcap
@@ -46,7 +49,42 @@ def build_parser() -> argparse.ArgumentParser:
         "ranks, wins, rule), best, rule",
     )
     p.add_argument("--export-dir", type=Path, help="also write every run's data points as CSV, JSON and MCAP")
+    link = p.add_argument_group(
+        "a modelled link (in simulated time): commands reach the robot late, some never; odometry "
+        "reaches the console late"
+    )
+    link.add_argument(
+        "--latency",
+        metavar="MS[,MS...]",
+        help="one-way command latency, ms; several values run the whole comparison once per value (a sweep)",
+    )
+    link.add_argument(
+        "--jitter", type=non_negative_float, default=0.0, metavar="MS",
+        help="extra delay per command: |N(0, MS)| (half-normal), in order (default 0)",
+    )  # fmt: skip
+    link.add_argument(
+        "--loss", type=non_negative_float, default=0.0, metavar="FRACTION",
+        help="fraction of commands dropped, below 1 (default 0)",
+    )  # fmt: skip
+    link.add_argument(
+        "--odom-delay", type=non_negative_float, default=0.0, metavar="MS",
+        help="how late odometry reaches the console, ms (default 0)",
+    )  # fmt: skip
+    link.add_argument("--seed", type=int, default=0, help="seed of the jitter and loss draws (default 0)")
     return p
+
+
+def latencies_of(text: str | None) -> list[float] | None:
+    """``--latency 0,50,100`` -> [0.0, 50.0, 100.0] ms; None when not given."""
+    if text is None:
+        return None
+    try:
+        values = [float(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise CompareError(f"--latency: give milliseconds, e.g. 0,50,100 (got {text!r})") from None
+    if not values or any(not math.isfinite(v) or v < 0 for v in values):
+        raise CompareError(f"--latency: give milliseconds >= 0, e.g. 0,50,100 (got {text!r})")
+    return values
 
 
 HEAD = ("rank", "algorithm", "done", "time s", "final e_d m", "avg e_d m", "p95 e_d m", "max |v| m/s")
@@ -110,6 +148,17 @@ def run(argv: list[str]) -> int:
     for line in (note, note_turn):
         if line:
             print(f"arbiter-tui compare: {line}", file=sys.stderr)
+    try:
+        latencies = latencies_of(args.latency)
+        links = [
+            LinkModel(ms / 1e3, args.jitter / 1e3, args.loss, args.odom_delay / 1e3)
+            for ms in (latencies if latencies is not None else [0.0])
+        ]
+    except (CompareError, LinkModelError) as exc:
+        print(f"arbiter-tui compare: {exc}", file=sys.stderr)
+        return 2
+    if latencies is not None or not links[0].perfect:
+        return sweep(missions, algorithms, speed, turn, links, args.seed, args.json)
     results = compare(missions, algorithms, speed, turn)
     written: list[Path] = []
     if args.export_dir is not None:
@@ -118,28 +167,72 @@ def run(argv: list[str]) -> int:
         except ExportError as exc:
             print(f"arbiter-tui compare: {exc}", file=sys.stderr)
             return 1
-    answer = ranking_of(results)
     if args.json:
-        groups = ranking.by_mission(results)
-        body = {
-            "runs": [r.as_dict() for r in results],
-            "missions": [
-                {
-                    "mission": m.mission,
-                    "best": m.best,
-                    "ranking": [{"rank": i, **r.as_dict()} for i, r in enumerate(groups[m.mission], 1)],
-                    "not_run": list(m.not_run),
-                }
-                for m in answer.missions
-            ],
-            "overall": answer.overall.as_dict(),
-            "best": None if answer.overall.best is None else {"algorithm": answer.overall.best},
-            "rule": ranking.RULE,
-            "exports": [str(p) for p in written],
-        }
-        print(json.dumps(body, allow_nan=False))
+        print(json.dumps(body_of(results, written), allow_nan=False))
     else:
         print(table(results))
         for path in written:
             print(f"wrote {path}")
     return 0
+
+
+def sweep(
+    missions: list[str],
+    algorithms: list[str],
+    speed: float,
+    turn: float,
+    links: list[LinkModel],
+    seed: int,
+    as_json: bool,
+) -> int:
+    """The whole comparison once per link (one per ``--latency`` value), then avg e_d per run and link."""
+    cells = [(link, compare(missions, algorithms, speed, turn, link_model=link, seed=seed)) for link in links]
+    if as_json:
+        body = {
+            "sweep": [{"link": link.as_dict(), **body_of(results, [])} for link, results in cells],
+            "seed": seed,
+            "jitter": "half-normal: each command's delay is latency + |N(0, jitter)|, delivered in order",
+            "rule": ranking.RULE,
+        }
+        print(json.dumps(body, allow_nan=False))
+        return 0
+    for link, results in cells:
+        d = link.as_dict()
+        print(
+            f"== latency {d['latency_ms']:g} ms, jitter {d['jitter_ms']:g} ms, loss {d['loss']:g}, "
+            f"odometry delay {d['odom_delay_ms']:g} ms"
+        )
+        print(table(results))
+        print()
+    head = ["mission", "algorithm", *(f"{link.latency_s * 1e3:g} ms" for link, _ in cells)]
+    rows = [head]
+    for i, r in enumerate(cells[0][1]):
+        rows.append([r.mission, r.algorithm, *(f"{res[i].stats.avgDistanceError:.3f}" for _, res in cells)])
+    widths = [max(len(row[c]) for row in rows) for c in range(len(head))]
+    print("avg e_d (m) by one-way latency:")
+    for row in rows:
+        cols = enumerate(zip(row, widths, strict=True))
+        print("  ".join(v.ljust(w) if c < 2 else v.rjust(w) for c, (v, w) in cols))
+    return 0
+
+
+def body_of(results: list[RunResult], written: list[Path]) -> dict[str, Any]:
+    """The JSON of one comparison: runs, per-mission rankings, the overall answer, the rule."""
+    answer = ranking_of(results)
+    groups = ranking.by_mission(results)
+    return {
+        "runs": [r.as_dict() for r in results],
+        "missions": [
+            {
+                "mission": m.mission,
+                "best": m.best,
+                "ranking": [{"rank": i, **r.as_dict()} for i, r in enumerate(groups[m.mission], 1)],
+                "not_run": list(m.not_run),
+            }
+            for m in answer.missions
+        ],
+        "overall": answer.overall.as_dict(),
+        "best": None if answer.overall.best is None else {"algorithm": answer.overall.best},
+        "rule": ranking.RULE,
+        "exports": [str(p) for p in written],
+    }

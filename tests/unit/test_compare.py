@@ -68,6 +68,9 @@ def test_the_speed_cap_holds_for_every_sample(capsys):
         (["--algorithms", "go_to_goal,manual"], "unknown 'manual'; choose from go_to_goal, pure_pursuit"),
         (["--mission", ","], "give at least one of"),
         (["--speed", "0"], "must be a positive finite number"),
+        (["--latency", "0,fast"], "--latency: give milliseconds"),
+        (["--latency", "-5"], "--latency: give milliseconds >= 0"),
+        (["--loss", "1"], "loss must be below 1"),
     ],
 )
 def test_bad_names_are_one_line_errors(capsys, args, words):
@@ -96,3 +99,36 @@ def test_the_table_names_the_best_and_the_rule(capsys):
     assert out[0] == "square" and out[1].split()[:3] == ["rank", "algorithm", "done"]
     assert out[2].strip().startswith("1 *") and out[-2] == f"* {RULE_MISSION}"
     assert out[-1].startswith(f"{RULE_OVERALL}: ") and "mean rank 1 over square" in out[-1]
+
+
+def test_a_latency_sweep_holds_every_cell_and_the_link_of_each(capsys):
+    body = run_json(capsys, "--latency", "0,100,300", "--jitter", "10", "--odom-delay", "20", "--seed", "4")
+    assert [cell["link"] for cell in body["sweep"]] == [
+        {"latency_ms": ms, "jitter_ms": 10.0, "loss": 0.0, "odom_delay_ms": 20.0}
+        for ms in (0.0, 100.0, 300.0)
+    ]
+    assert body["seed"] == 4 and "half-normal" in body["jitter"] and body["rule"] == RULE
+    for cell in body["sweep"]:  # each cell: the whole comparison, ranked per mission
+        assert {(r["algorithm"], r["mission"]) for r in cell["runs"]} == {
+            (a, m) for a in ("go_to_goal", "pure_pursuit") for m in ("square", "figure_eight")
+        }
+        assert all(r["completed"] for r in cell["runs"])
+    error = {
+        (cell["link"]["latency_ms"], r["algorithm"], r["mission"]): r["stats"]["avgDistanceError"]
+        for cell in body["sweep"]
+        for r in cell["runs"]
+    }
+    for a in ("go_to_goal", "pure_pursuit"):
+        assert error[(300.0, a, "square")] > error[(0.0, a, "square")]
+    assert body == run_json(
+        capsys, "--latency", "0,100,300", "--jitter", "10", "--odom-delay", "20", "--seed", "4"
+    )
+
+
+def test_a_sweep_prints_a_table_per_latency_and_the_errors_side_by_side(capsys):
+    assert main(["compare", "--latency", "0,200", "--mission", "square"]) == 0
+    out = capsys.readouterr().out
+    assert out.count("== latency") == 2 and "== latency 200 ms, jitter 0 ms" in out
+    last = out.strip().splitlines()[-3:]
+    assert last[0].split() == ["mission", "algorithm", "0", "ms", "200", "ms"]
+    assert {line.split()[1] for line in last[1:]} == {"go_to_goal", "pure_pursuit"}
