@@ -142,32 +142,32 @@ def header_delay(msg: dict[str, Any], wall_now: float) -> tuple[float | None, bo
 
 
 class EmbeddedTopics:
-    """Feeds a ``TopicWatch`` from the embedded bus: every publish, whatever its topic."""
+    """Feeds a ``TopicWatch`` from the embedded bus: every publish, whatever its topic. The counts are
+    read from the bus when an answer is asked for, not per message."""
 
     def __init__(self, bus: TopicBus, watch: TopicWatch) -> None:
         self.bus = bus
         self.watch = watch
+        self._heard: set[str] = set()  # topics that have carried a message (their stamped-ness is known)
         bus.taps.append(self._on_publish)
 
     def _on_publish(self, topic: str, type_name: str, msg: dict[str, Any]) -> None:
-        if topic not in self._known():
+        if topic not in self._heard:
+            self._heard.add(topic)
             self.watch.watch(topic, type_name, stamped="header" in msg)
         size = len(json.dumps(msg, separators=(",", ":"), default=str))
         delay, bad = header_delay(msg, time.time())
         self.watch.note(topic, size, delay, bad)
-        self.refresh(topic)
-
-    def _known(self) -> set[str]:
-        return self.watch.watched()
 
     def answer(self) -> dict[str, Any]:
         self.refresh()
         return self.watch.answer()
 
-    def refresh(self, topic: str | None = None) -> None:
-        """Counts from the bus: advertisers (and the backend's own publishers) and subscribers."""
-        names = [topic] if topic is not None else [t for t, _ in self.bus.topics()]
-        for name in names:
-            if topic is None and self.watch.filter.wants(name) and name not in self._known():
-                self.watch.watch(name, self.bus.type_of(name) or "?")
+    def refresh(self) -> None:
+        """Every topic the bus knows (declared, advertised or published), with its counts: advertisers
+        (the backend's own publishers among them) and subscribers."""
+        watched = self.watch.watched()
+        for name, type_name in self.bus.topics():
+            if name not in watched and not self.watch.watch(name, type_name):
+                continue  # the filter does not want it
             self.watch.set_graph(name, self.bus.publisher_count(name), self.bus.subscriber_count(name))
