@@ -13,10 +13,12 @@ from typing import Any
 from arbiter_core.cliargs import OneLineParser, non_negative_float, positive_float
 from arbiter_core.kinematics import DEFAULT_LIMITS
 from arbiter_core.linkmodel import LinkModel, LinkModelError
+from arbiter_core.record import LatencyRecord, RecordError
+from arbiter_core.stats import percentile
 
 from ..analytics import ranking
 from ..analytics.exports import to_csv, to_json, to_mcap
-from ..analytics.files import ExportError, write_new_file
+from ..analytics.files import ExportError, load_points, write_new_file
 from ..analytics.runs import row_of
 from ..analytics.store import stats_of_points
 from ..control.teleop import cap_setting
@@ -55,8 +57,16 @@ def build_parser() -> argparse.ArgumentParser:
     )
     link.add_argument(
         "--latency",
-        metavar="MS[,MS...]",
-        help="one-way command latency, ms; several values run the whole comparison once per value (a sweep)",
+        metavar="MS[,MS...]|measured",
+        help="one-way command latency, ms; several values run the whole comparison once per value (a "
+        "sweep); 'measured': the p50 and p95 of the latencies of --measured-from",
+    )
+    link.add_argument(
+        "--measured-from",
+        default=DEFAULT_TRACKER,
+        metavar="URL|FILE",
+        help=f"with --latency measured: a tracker (its newest {MEASURED_RECORDS} records) or an analytics "
+        f"export (JSON, CSV or MCAP; its latencyMs) (default {DEFAULT_TRACKER})",
     )
     link.add_argument(
         "--jitter", type=non_negative_float, default=0.0, metavar="MS",
@@ -74,10 +84,47 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
-def latencies_of(text: str | None) -> list[float] | None:
-    """``--latency 0,50,100`` -> [0.0, 50.0, 100.0] ms; None when not given."""
+DEFAULT_TRACKER = "http://127.0.0.1:8085"
+MEASURED_RECORDS = 1000
+
+
+def measured_latencies(source: str, timeout: float = 5.0) -> list[float]:
+    """[p50, p95] of the one-way latencies a tracker holds (``http(s)://``) or an export file carries, in
+    ms (the product's percentile rule); a negative one (clocks apart) counts as 0: a link is never early."""
+    values: list[float] = []
+    if source.startswith(("http://", "https://")):
+        import httpx
+
+        try:
+            resp = httpx.get(
+                f"{source.rstrip('/')}/api/latency", params={"limit": MEASURED_RECORDS}, timeout=timeout
+            )
+            resp.raise_for_status()
+            records = resp.json().get("records", [])
+        except (httpx.HTTPError, ValueError, AttributeError) as exc:
+            raise CompareError(f"--measured-from {source}: {type(exc).__name__}: {exc}") from None
+        for obj in records if isinstance(records, list) else []:
+            try:
+                values.append(LatencyRecord.from_obj(obj).latency_ms)
+            except RecordError:
+                continue
+    else:
+        try:
+            points = load_points(Path(source))
+        except (OSError, ExportError, ValueError) as exc:
+            raise CompareError(f"--measured-from {source}: {exc}") from None
+        values = [p.latencyMs for p in points if p.latencyMs is not None]
+    if not values:
+        raise CompareError(f"--measured-from {source}: no latencies there to take p50 and p95 of")
+    return [max(0.0, percentile(values, q)) for q in (0.5, 0.95)]
+
+
+def latencies_of(text: str | None, measured_from: str = DEFAULT_TRACKER) -> list[float] | None:
+    """``--latency 0,50,100`` -> [0.0, 50.0, 100.0] ms; ``measured`` -> [p50, p95]; None when not given."""
     if text is None:
         return None
+    if text.strip() == "measured":
+        return measured_latencies(measured_from)
     try:
         values = [float(v) for v in text.split(",") if v.strip()]
     except ValueError:
@@ -149,7 +196,7 @@ def run(argv: list[str]) -> int:
         if line:
             print(f"arbiter-tui compare: {line}", file=sys.stderr)
     try:
-        latencies = latencies_of(args.latency)
+        latencies = latencies_of(args.latency, args.measured_from)
         links = [
             LinkModel(ms / 1e3, args.jitter / 1e3, args.loss, args.odom_delay / 1e3)
             for ms in (latencies if latencies is not None else [0.0])

@@ -132,3 +132,26 @@ def test_a_sweep_prints_a_table_per_latency_and_the_errors_side_by_side(capsys):
     last = out.strip().splitlines()[-3:]
     assert last[0].split() == ["mission", "algorithm", "0", "ms", "200", "ms"]
     assert {line.split()[1] for line in last[1:]} == {"go_to_goal", "pure_pursuit"}
+
+
+def test_latency_measured_takes_p50_and_p95_of_an_exports_latencies(tmp_path, capsys):
+    """The sweep starts from the user's real link: the p50 and p95 of the latencies an analytics export
+    carries (negative ones, clocks apart, count as 0: a modelled link is never early)."""
+    from dataclasses import replace
+
+    from arbiter_core.stats import percentile
+    from arbiter_tui.analytics.exports import to_csv
+
+    base = run_one("go_to_goal", "square").points[:100]
+    latencies = [-1.0, *(float(i) for i in range(1, 99)), None]  # 98 measured, one negative, one unknown
+    points = [replace(p, latencyMs=lat) for p, lat in zip(base, latencies, strict=True)]
+    export = tmp_path / "arbiter_analytics_x.csv"
+    export.write_text(to_csv(points))
+    body = run_json(capsys, "--latency", "measured", "--measured-from", str(export), "--mission", "square")
+    measured = [lat for lat in latencies if lat is not None]
+    want = [max(0.0, percentile(measured, q)) for q in (0.5, 0.95)]
+    assert [cell["link"]["latency_ms"] for cell in body["sweep"]] == pytest.approx(want)
+    empty = tmp_path / "no_latency.csv"
+    empty.write_text(to_csv(base))  # client-side simulation: no latency known
+    assert main(["compare", "--latency", "measured", "--measured-from", str(empty)]) == 2
+    assert "no latencies there" in capsys.readouterr().err
