@@ -1,4 +1,5 @@
-"""Missions (waypoint lists) and the controllers the analytics compare: manual, go_to_goal, pure_pursuit.
+"""Missions (waypoint lists) and the controllers the analytics compare: manual, go_to_goal, pure_pursuit,
+stanley, regulated_pure_pursuit, kanayama.
 
 A controller maps (pose, mission progress) to a commanded twist. Nothing here
 knows about time sources, sockets or the UI: the caller steps it.
@@ -41,7 +42,7 @@ MISSIONS: dict[str, list[Point]] = {
     "square": _square(),
     "figure_eight": _figure_eight(),
 }
-ALGORITHMS = (MANUAL, "go_to_goal", "pure_pursuit")
+ALGORITHMS = (MANUAL, "go_to_goal", "pure_pursuit", "stanley", "regulated_pure_pursuit", "kanayama")
 
 
 @dataclass
@@ -165,7 +166,146 @@ class PurePursuitController:
         return v, w
 
 
-Controller = ManualController | GoToGoalController | PurePursuitController
+def _segment(mission: MissionProgress) -> tuple[Point, Point, float, float, float]:
+    """The leg being driven: from the previous waypoint a to the goal b, its unit direction and length."""
+    (ax, ay), (bx, by) = mission.previous, mission.goal
+    seg = math.hypot(bx - ax, by - ay)
+    if seg < 1e-9:
+        return (ax, ay), (bx, by), 1.0, 0.0, 0.0
+    return (ax, ay), (bx, by), (bx - ax) / seg, (by - ay) / seg, seg
+
+
+def _capped(v: float, w: float, limits: Limits) -> tuple[float, float]:
+    """Within the caps, keeping the curvature w/v when the turn rate is what is too large."""
+    v = clamp(v, limits.max_linear)
+    if abs(w) > limits.max_angular:
+        scale = limits.max_angular / abs(w)
+        return v * scale, w * scale
+    return v, w
+
+
+@dataclass
+class StanleyController:
+    """The Stanley law (Thrun et al., 2006), for a differential drive: steer by the heading error to the
+    leg plus ``atan(k e / (v + softening))`` of the cross-track error e, as a turn rate ``k_heading`` x
+    that steering angle. Speed: the cap, slowed by the steering angle and near the goal.
+
+    Parameters: ``k`` (1/s) how hard the cross-track error is corrected; ``softening`` (m/s) keeps the
+    correction finite at low speed; ``k_heading`` (1/s) turn rate per radian of steering."""
+
+    k: float = 2.0
+    softening: float = 0.2
+    k_heading: float = 2.5
+    limits: Limits = field(default_factory=lambda: DEFAULT_LIMITS)
+    name: str = "stanley"
+
+    def command(self, pose: Pose, mission: MissionProgress) -> tuple[float, float]:
+        if mission.done:
+            return 0.0, 0.0
+        (ax, ay), goal, ux, uy, seg = _segment(mission)
+        if seg == 0.0:
+            return GoToGoalController(limits=self.limits).command(pose, mission)
+        path_heading = math.atan2(uy, ux)
+        cross = (pose.x - ax) * -uy + (pose.y - ay) * ux  # left of the leg: positive
+        e_heading = wrap_angle(path_heading - pose.theta)
+        if abs(e_heading) > math.pi / 2:  # facing away from the leg: turn in place first
+            return 0.0, clamp(self.k_heading * e_heading, self.limits.max_angular)
+        v = min(self.limits.max_linear, 0.8 * distance_error(pose, goal) + 0.05)
+        steer = e_heading + math.atan2(-self.k * cross, v + self.softening)
+        v *= max(0.2, math.cos(steer))
+        return _capped(v, self.k_heading * steer, self.limits)
+
+
+@dataclass
+class RegulatedPurePursuitController(PurePursuitController):
+    """Pure pursuit with the speed regulation Nav2's Regulated Pure Pursuit documents: slower on tight
+    curvature (``v = v_max x min_radius / radius`` below ``min_radius``) and near the goal
+    (``v x distance / approach_distance`` within ``approach_distance``), never below ``min_speed``.
+    The lookahead grows with speed (``lookahead_time`` x v, within ``[min_lookahead, max_lookahead]``).
+
+    Parameters: ``min_radius`` (m) below which curvature slows the robot; ``approach_distance`` (m);
+    ``min_speed`` (m/s); ``lookahead_time`` (s); ``min_lookahead``/``max_lookahead`` (m)."""
+
+    min_radius: float = 0.9
+    approach_distance: float = 0.6
+    min_speed: float = 0.05
+    lookahead_time: float = 1.2
+    min_lookahead: float = 0.25
+    max_lookahead: float = 0.8
+    name: str = "regulated_pure_pursuit"
+
+    def command(self, pose: Pose, mission: MissionProgress) -> tuple[float, float]:
+        if mission.done:
+            return 0.0, 0.0
+        v_max = self.limits.max_linear
+        self.lookahead = min(self.max_lookahead, max(self.min_lookahead, self.lookahead_time * v_max))
+        tx, ty = self.target(pose, mission)
+        dist = math.hypot(tx - pose.x, ty - pose.y)
+        if dist < 1e-9:
+            return 0.0, 0.0
+        alpha = wrap_angle(math.atan2(ty - pose.y, tx - pose.x) - pose.theta)
+        if abs(alpha) > math.pi / 2:
+            return 0.0, clamp(2.0 * alpha, self.limits.max_angular)
+        curvature = 2.0 * math.sin(alpha) / max(dist, 1e-3)
+        v = v_max
+        radius = 1.0 / abs(curvature) if curvature else math.inf
+        if radius < self.min_radius:  # curvature regulation
+            v *= radius / self.min_radius
+        remaining = distance_error(pose, mission.goal)
+        if remaining < self.approach_distance:  # proximity regulation
+            v *= remaining / self.approach_distance
+        v = max(v, self.min_speed)
+        return _capped(v, v * curvature, self.limits)
+
+
+@dataclass
+class KanayamaController:
+    """Kanayama's tracking law (Kanayama et al., 1990): track a reference moving along the leg at the
+    cruise speed, ``v = v_r cos(e_th) + k_x e_x`` and ``w = w_r + v_r (k_y e_y + k_th sin(e_th))`` with
+    the errors in the robot's frame. Chosen because it is provably stable (a Lyapunov function) for
+    small errors and corrects lateral error smoothly, unlike the geometric laws above; the reference is
+    the point ``lead`` metres ahead of the robot's projection on the leg, so it never runs away.
+
+    Parameters: ``k_x`` (1/s), ``k_y`` (1/m^2), ``k_th`` (1/m) gains; ``lead`` (m)."""
+
+    k_x: float = 1.0
+    k_y: float = 6.0
+    k_th: float = 3.0
+    lead: float = 0.3
+    limits: Limits = field(default_factory=lambda: DEFAULT_LIMITS)
+    name: str = "kanayama"
+
+    def command(self, pose: Pose, mission: MissionProgress) -> tuple[float, float]:
+        if mission.done:
+            return 0.0, 0.0
+        (ax, ay), (bx, by), ux, uy, seg = _segment(mission)
+        if seg == 0.0:
+            return GoToGoalController(limits=self.limits).command(pose, mission)
+        s = max(0.0, min(seg, (pose.x - ax) * ux + (pose.y - ay) * uy))
+        s_ref = min(seg, s + self.lead)
+        rx, ry, r_th = ax + ux * s_ref, ay + uy * s_ref, math.atan2(uy, ux)
+        if distance_error(pose, (bx, by)) < self.lead:  # the reference has reached the goal: face it
+            rx, ry, r_th = bx, by, math.atan2(by - pose.y, bx - pose.x)
+        dx, dy = rx - pose.x, ry - pose.y
+        c, sn = math.cos(pose.theta), math.sin(pose.theta)
+        e_x, e_y = c * dx + sn * dy, -sn * dx + c * dy
+        e_th = wrap_angle(r_th - pose.theta)
+        if abs(e_th) > math.pi / 2:
+            return 0.0, clamp(2.5 * e_th, self.limits.max_angular)
+        v_r = min(self.limits.max_linear, 0.8 * distance_error(pose, (bx, by)) + 0.05)
+        v = v_r * math.cos(e_th) + self.k_x * e_x
+        w = v_r * (self.k_y * e_y + self.k_th * math.sin(e_th))
+        return _capped(max(0.0, v), w, self.limits)
+
+
+Controller = (
+    ManualController
+    | GoToGoalController
+    | PurePursuitController
+    | StanleyController
+    | RegulatedPurePursuitController
+    | KanayamaController
+)
 
 
 def make_controller(name: str, limits: Limits = DEFAULT_LIMITS) -> Controller:
@@ -175,4 +315,10 @@ def make_controller(name: str, limits: Limits = DEFAULT_LIMITS) -> Controller:
         return GoToGoalController(limits=limits)
     if name == "pure_pursuit":
         return PurePursuitController(limits=limits)
+    if name == "stanley":
+        return StanleyController(limits=limits)
+    if name == "regulated_pure_pursuit":
+        return RegulatedPurePursuitController(limits=limits)
+    if name == "kanayama":
+        return KanayamaController(limits=limits)
     raise ValueError(f"unknown algorithm {name!r}; choose from {', '.join(ALGORITHMS)}")

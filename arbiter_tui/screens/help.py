@@ -18,7 +18,7 @@ HELP = f"""[b]arbiter-tui[/b] — teleop console, analytics and latency monitor
 
 [b]Control[/b] (teleop_twist_keyboard keys; hold a key to keep moving)
 {legend_long()}
-  a algorithm (manual, go_to_goal, pure_pursuit)  n mission
+  a algorithm (manual and five controllers)  n mission
   g go (resumes an interrupted mission)  G restart the mission
   t type a goal x y   click the map: drive there
   Map: o waypoints and G goal where g takes the robot; * is stale.

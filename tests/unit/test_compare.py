@@ -9,7 +9,7 @@ from arbiter_tui.analytics.files import load_points
 from arbiter_tui.analytics.ranking import RULE, RULE_MISSION, RULE_OVERALL
 from arbiter_tui.analytics.store import STATS_FIELDS
 from arbiter_tui.cli import main
-from arbiter_tui.session.compare import run_one
+from arbiter_tui.session.compare import AUTONOMOUS, run_one
 
 
 def run_json(capsys, *args):
@@ -23,7 +23,7 @@ def test_json_schema_ranking_and_best(capsys):
     wall = time.monotonic() - started
     runs = body["runs"]
     assert {(r["algorithm"], r["mission"]) for r in runs} == {
-        (a, m) for a in ("go_to_goal", "pure_pursuit") for m in ("square", "figure_eight")
+        (a, m) for a in AUTONOMOUS for m in ("square", "figure_eight")
     }
     for r in runs:
         assert set(r) == {
@@ -37,11 +37,12 @@ def test_json_schema_ranking_and_best(capsys):
             "stats",
         }
         assert tuple(r["stats"]) == STATS_FIELDS and r["completed"] and r["final_error_m"] <= 0.15
-    assert sorted(r["run"] for r in runs) == [1, 2, 3, 4]
+    assert sorted(r["run"] for r in runs) == list(range(1, 2 * len(AUTONOMOUS) + 1))
     assert [m["mission"] for m in body["missions"]] == ["square", "figure_eight"]
     for m in body["missions"]:  # ranked within each mission, never across
         ranked = m["ranking"]
-        assert {r["mission"] for r in ranked} == {m["mission"]} and [r["rank"] for r in ranked] == [1, 2]
+        assert {r["mission"] for r in ranked} == {m["mission"]}
+        assert [r["rank"] for r in ranked] == list(range(1, len(AUTONOMOUS) + 1))
         errors = [r["stats"]["avgDistanceError"] for r in ranked]
         assert errors == sorted(errors) and m["best"] == ranked[0]["algorithm"] and m["not_run"] == []
     overall = body["overall"]
@@ -65,7 +66,7 @@ def test_the_speed_cap_holds_for_every_sample(capsys):
     ("args", "words"),
     [
         (["--mission", "circle"], "unknown 'circle'; choose from square, figure_eight"),
-        (["--algorithms", "go_to_goal,manual"], "unknown 'manual'; choose from go_to_goal, pure_pursuit"),
+        (["--algorithms", "go_to_goal,manual"], "unknown 'manual'; choose from go_to_goal, pure_pursuit, st"),
         (["--mission", ","], "give at least one of"),
         (["--speed", "0"], "must be a positive finite number"),
         (["--latency", "0,fast"], "--latency: give milliseconds"),
@@ -90,7 +91,7 @@ def test_export_dir_writes_the_runs_data(tmp_path, capsys):
     total = sum(r["stats"]["sampleCount"] for r in body["runs"])
     for p in paths[:2]:  # CSV and JSON read back with the same reader `stats` uses
         points = load_points(tmp_path / p.rsplit("/", 1)[1])
-        assert len(points) == total and {q.algorithm for q in points} == {"go_to_goal", "pure_pursuit"}
+        assert len(points) == total and {q.algorithm for q in points} == set(AUTONOMOUS)
 
 
 def test_the_table_names_the_best_and_the_rule(capsys):
@@ -110,7 +111,7 @@ def test_a_latency_sweep_holds_every_cell_and_the_link_of_each(capsys):
     assert body["seed"] == 4 and "half-normal" in body["jitter"] and body["rule"] == RULE
     for cell in body["sweep"]:  # each cell: the whole comparison, ranked per mission
         assert {(r["algorithm"], r["mission"]) for r in cell["runs"]} == {
-            (a, m) for a in ("go_to_goal", "pure_pursuit") for m in ("square", "figure_eight")
+            (a, m) for a in AUTONOMOUS for m in ("square", "figure_eight")
         }
         assert all(r["completed"] for r in cell["runs"])
     error = {
@@ -118,7 +119,7 @@ def test_a_latency_sweep_holds_every_cell_and_the_link_of_each(capsys):
         for cell in body["sweep"]
         for r in cell["runs"]
     }
-    for a in ("go_to_goal", "pure_pursuit"):
+    for a in AUTONOMOUS:
         assert error[(300.0, a, "square")] > error[(0.0, a, "square")]
     assert body == run_json(
         capsys, "--latency", "0,100,300", "--jitter", "10", "--odom-delay", "20", "--seed", "4"
@@ -129,9 +130,9 @@ def test_a_sweep_prints_a_table_per_latency_and_the_errors_side_by_side(capsys):
     assert main(["compare", "--latency", "0,200", "--mission", "square"]) == 0
     out = capsys.readouterr().out
     assert out.count("== latency") == 2 and "== latency 200 ms, jitter 0 ms" in out
-    last = out.strip().splitlines()[-3:]
+    last = out.strip().splitlines()[-1 - len(AUTONOMOUS) :]
     assert last[0].split() == ["mission", "algorithm", "0", "ms", "200", "ms"]
-    assert {line.split()[1] for line in last[1:]} == {"go_to_goal", "pure_pursuit"}
+    assert {line.split()[1] for line in last[1:]} == set(AUTONOMOUS)
 
 
 def test_latency_measured_takes_p50_and_p95_of_an_exports_latencies(tmp_path, capsys):

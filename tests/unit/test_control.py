@@ -119,7 +119,9 @@ def test_manual_controller_returns_the_held_command():
     c = make_controller("manual")
     c.v, c.w = 0.3, -0.2
     assert c.command(Pose(), MissionProgress.named("square")) == (0.3, -0.2)
-    assert set(ALGORITHMS) == {"manual", "go_to_goal", "pure_pursuit"}
+    assert set(ALGORITHMS) == {
+        "manual", "go_to_goal", "pure_pursuit", "stanley", "regulated_pure_pursuit", "kanayama",
+    }  # fmt: skip
     with pytest.raises(ValueError):
         make_controller("teleport")
 
