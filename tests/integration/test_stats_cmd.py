@@ -9,6 +9,7 @@ import pytest
 
 from arbiter_tui.analytics.exports import to_csv, to_json, to_mcap
 from arbiter_tui.analytics.store import STATS_FIELDS, stats_of_points
+from arbiter_tui.session.compare import AUTONOMOUS
 
 from ..support.points import random_points
 
@@ -144,7 +145,7 @@ def test_by_run_reads_every_format_of_a_compare_export(tmp_path):
     assert r.returncode == 0, r.stderr
     body = json.loads(r.stdout)
     want = {f"run {run['run']}": run["stats"] for run in body["runs"]}
-    assert len(want) == 2
+    assert len(want) == len(AUTONOMOUS)  # one run per controller on the one mission
     for path in body["exports"]:
         got = run(path, "--by", "run", "--json")
         assert got.returncode == 0, got.stderr
@@ -154,4 +155,4 @@ def test_by_run_reads_every_format_of_a_compare_export(tmp_path):
             for k in STATS_FIELDS:
                 assert stats[name][k] == pytest.approx(expected[k], rel=1e-9), (path, name, k)
     table = run(body["exports"][0], "--by", "run").stdout.splitlines()
-    assert sorted(line for line in table if line.startswith("[")) == ["[run 1]", "[run 2]"]
+    assert sorted(line for line in table if line.startswith("[")) == sorted(f"[{name}]" for name in want)
