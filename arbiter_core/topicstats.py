@@ -136,9 +136,7 @@ class TopicWindow:
         delays = [d for _, d in self.delays]
         delay_mean = sum(delays) / len(delays) * 1e3 if delays else None
         delay_p95 = percentile(delays, 0.95) * 1e3 if delays else None
-        age = (now - self.times[-1]) * 1e3 if self.times else None
-        if self.total and not self.times:  # everything fell out of the window: keep the age honest
-            age = None
+        age = (now - self.times[-1]) * 1e3 if self.times else None  # nothing in the window: no age
         usual = self._usual(now, rate)
         if self.unmeasured is not None:
             state = "unmeasured"

@@ -132,16 +132,20 @@ class PurePursuitController:
     limits: Limits = field(default_factory=lambda: DEFAULT_LIMITS)
     name: str = "pure_pursuit"
 
+    def lookahead_now(self) -> float:
+        """The lookahead distance for this step (fixed here; the regulated variant grows it with speed)."""
+        return self.lookahead
+
     def target(self, pose: Pose, mission: MissionProgress) -> Point:
-        (ax, ay), (bx, by) = mission.previous, mission.goal
-        dx, dy = bx - ax, by - ay
-        seg = math.hypot(dx, dy)
-        if seg < 1e-9:
+        a, (bx, by), ux, uy, seg = _segment(mission)
+        if seg == 0.0:
             return (bx, by)
-        ux, uy = dx / seg, dy / seg
-        s = max(0.0, min(seg, (pose.x - ax) * ux + (pose.y - ay) * uy))
-        s_target = min(seg, s + self.lookahead)
-        return (ax + ux * s_target, ay + uy * s_target)
+        s_target = min(seg, _along(pose, a, ux, uy, seg) + self.lookahead_now())
+        return (a[0] + ux * s_target, a[1] + uy * s_target)
+
+    def speed(self, pose: Pose, mission: MissionProgress, curvature: float) -> float:
+        """The cruise speed, slowed approaching the goal (the regulated variant regulates it more)."""
+        return _approach_speed(pose, mission.goal, self.limits)
 
     def command(self, pose: Pose, mission: MissionProgress) -> tuple[float, float]:
         if mission.done:
@@ -154,16 +158,9 @@ class PurePursuitController:
         if abs(alpha) > math.pi / 2:
             # Target behind: turn in place towards it.
             return 0.0, clamp(2.0 * alpha, self.limits.max_angular)
-        ld = max(dist, 1e-3)
-        curvature = 2.0 * math.sin(alpha) / ld
-        v = self.limits.max_linear
-        # Slow down approaching the goal so the tolerance circle is not overshot.
-        v = min(v, 0.8 * distance_error(pose, mission.goal) + 0.05)
-        w = v * curvature
-        if abs(w) > self.limits.max_angular:
-            scale = self.limits.max_angular / abs(w)
-            v, w = v * scale, w * scale
-        return v, w
+        curvature = 2.0 * math.sin(alpha) / max(dist, 1e-3)
+        v = self.speed(pose, mission, curvature)
+        return _capped(v, v * curvature, self.limits)
 
 
 def _segment(mission: MissionProgress) -> tuple[Point, Point, float, float, float]:
@@ -173,6 +170,16 @@ def _segment(mission: MissionProgress) -> tuple[Point, Point, float, float, floa
     if seg < 1e-9:
         return (ax, ay), (bx, by), 1.0, 0.0, 0.0
     return (ax, ay), (bx, by), (bx - ax) / seg, (by - ay) / seg, seg
+
+
+def _along(pose: Pose, a: Point, ux: float, uy: float, seg: float) -> float:
+    """How far along the leg (from a, unit direction u, length seg) the robot's projection lies."""
+    return max(0.0, min(seg, (pose.x - a[0]) * ux + (pose.y - a[1]) * uy))
+
+
+def _approach_speed(pose: Pose, goal: Point, limits: Limits) -> float:
+    """The speed cap, slowed approaching the goal so the tolerance circle is not overshot."""
+    return min(limits.max_linear, 0.8 * distance_error(pose, goal) + 0.05)
 
 
 def _capped(v: float, w: float, limits: Limits) -> tuple[float, float]:
@@ -210,7 +217,7 @@ class StanleyController:
         e_heading = wrap_angle(path_heading - pose.theta)
         if abs(e_heading) > math.pi / 2:  # facing away from the leg: turn in place first
             return 0.0, clamp(self.k_heading * e_heading, self.limits.max_angular)
-        v = min(self.limits.max_linear, 0.8 * distance_error(pose, goal) + 0.05)
+        v = _approach_speed(pose, goal, self.limits)
         steer = e_heading + math.atan2(-self.k * cross, v + self.softening)
         v *= max(0.2, math.cos(steer))
         return _capped(v, self.k_heading * steer, self.limits)
@@ -234,28 +241,19 @@ class RegulatedPurePursuitController(PurePursuitController):
     max_lookahead: float = 0.8
     name: str = "regulated_pure_pursuit"
 
-    def command(self, pose: Pose, mission: MissionProgress) -> tuple[float, float]:
-        if mission.done:
-            return 0.0, 0.0
+    def lookahead_now(self) -> float:
         v_max = self.limits.max_linear
-        self.lookahead = min(self.max_lookahead, max(self.min_lookahead, self.lookahead_time * v_max))
-        tx, ty = self.target(pose, mission)
-        dist = math.hypot(tx - pose.x, ty - pose.y)
-        if dist < 1e-9:
-            return 0.0, 0.0
-        alpha = wrap_angle(math.atan2(ty - pose.y, tx - pose.x) - pose.theta)
-        if abs(alpha) > math.pi / 2:
-            return 0.0, clamp(2.0 * alpha, self.limits.max_angular)
-        curvature = 2.0 * math.sin(alpha) / max(dist, 1e-3)
-        v = v_max
+        return min(self.max_lookahead, max(self.min_lookahead, self.lookahead_time * v_max))
+
+    def speed(self, pose: Pose, mission: MissionProgress, curvature: float) -> float:
+        v = self.limits.max_linear
         radius = 1.0 / abs(curvature) if curvature else math.inf
         if radius < self.min_radius:  # curvature regulation
             v *= radius / self.min_radius
         remaining = distance_error(pose, mission.goal)
         if remaining < self.approach_distance:  # proximity regulation
             v *= remaining / self.approach_distance
-        v = max(v, self.min_speed)
-        return _capped(v, v * curvature, self.limits)
+        return max(v, self.min_speed)
 
 
 @dataclass
@@ -281,8 +279,7 @@ class KanayamaController:
         (ax, ay), (bx, by), ux, uy, seg = _segment(mission)
         if seg == 0.0:
             return GoToGoalController(limits=self.limits).command(pose, mission)
-        s = max(0.0, min(seg, (pose.x - ax) * ux + (pose.y - ay) * uy))
-        s_ref = min(seg, s + self.lead)
+        s_ref = min(seg, _along(pose, (ax, ay), ux, uy, seg) + self.lead)
         rx, ry, r_th = ax + ux * s_ref, ay + uy * s_ref, math.atan2(uy, ux)
         if distance_error(pose, (bx, by)) < self.lead:  # the reference has reached the goal: face it
             rx, ry, r_th = bx, by, math.atan2(by - pose.y, bx - pose.x)
@@ -292,7 +289,7 @@ class KanayamaController:
         e_th = wrap_angle(r_th - pose.theta)
         if abs(e_th) > math.pi / 2:
             return 0.0, clamp(2.5 * e_th, self.limits.max_angular)
-        v_r = min(self.limits.max_linear, 0.8 * distance_error(pose, (bx, by)) + 0.05)
+        v_r = _approach_speed(pose, (bx, by), self.limits)
         v = v_r * math.cos(e_th) + self.k_x * e_x
         w = v_r * (self.k_y * e_y + self.k_th * math.sin(e_th))
         return _capped(max(0.0, v), w, self.limits)
