@@ -28,6 +28,7 @@ from textual.reactive import var
 from textual.screen import Screen
 
 from .analytics.files import FORMATS
+from .analytics.linkcurve import FAILED, READY, RUNNING, CurveError, LinkSweepView, measured_p95
 from .analytics.store import AnalyticsStore
 from .config import save_theme
 from .control.algorithms import ALGORITHMS, MISSIONS
@@ -48,6 +49,7 @@ from .messages import (
     GoalPicked,
     LatencyPolled,
     LinkStateChanged,
+    LinkSweepFailed,
     RunFinished,
 )
 from .screens.analytics import AnalyticsScreen
@@ -55,6 +57,7 @@ from .screens.control import ControlScreen
 from .screens.help import HelpScreen
 from .screens.latency import LatencyScreen
 from .screens.topics import TopicsScreen
+from .session.link_sweep import sweep_curve
 from .session.robot import MissionFinished, RobotSession
 from .settings import SIM, Settings
 from .views import (
@@ -142,6 +145,7 @@ class ArbiterApp(App[None]):
     analytics: var[AnalyticsView] = var(AnalyticsView)
     latency: var[LatencySnapshot] = var(LatencySnapshot)
     topics: var[TopicsState] = var(TopicsState)
+    link_sweep: var[LinkSweepView] = var(LinkSweepView)  # error vs latency, and the measured p95 on it
     ui_tick: var[int] = var(0)  # one more at the end of every sampling: one frame for all that changed
 
     def __init__(
@@ -165,6 +169,7 @@ class ArbiterApp(App[None]):
         self._link_state: str | None = None
         self._shown_command: tuple[object, ...] = ()
         self._analytics_at = float("-inf")
+        self._sweep_version = -1  # the store version the measured p95 is from
         self._latency_at = float("-inf")
         self._echo: tuple[str, str] | None = None  # the topics screen's echo (written on the link's thread)
         self._echo_cancel: Callable[[], None] | None = None
@@ -386,12 +391,41 @@ class ArbiterApp(App[None]):
         if (mode == "analytics" or dashboard) and (force or now - self._analytics_at >= 1.0 / rate):
             self._analytics_at = now
             self.analytics = analytics_view(self.store, self.analytics, self.loop)
+            self._follow_link_sweep()
         if (mode == "latency" or dashboard) and (force or now - self._latency_at >= 1.0 / rate):
             # at the analytics rate too: the console's own figures change with every round trip, and a
             # line repainted at the UI rate made every frame span the screen below it (bench/pi.py)
             self._latency_at = now
             self.latency = self._latency_snapshot()
         self.ui_tick += 1  # what waited for its period (plots) is drawn now, in this same frame
+
+    def _follow_link_sweep(self) -> None:
+        """The analytics screen's error-vs-latency line: the p95 of the latencies recorded (when the store
+        changed), and a sweep for the selected mission when it has none yet (only while live)."""
+        view = self.link_sweep
+        if self._sweep_version != self.store.version:
+            self._sweep_version = self.store.version
+            p95 = measured_p95(self.store.column("latencyMs").tolist())
+            if p95 != view.p95_ms:
+                view = self.link_sweep = replace(view, p95_ms=p95)
+        mission = self.loop.mission_name
+        if self.settings.live and view.state != RUNNING and view.mission != mission:
+            self.link_sweep = replace(view, state=RUNNING, mission=mission, curve=None, error="")
+            self._sweep(mission)
+
+    @work(exclusive=True, group="link-sweep", exit_on_error=False)
+    async def _sweep(self, mission: str) -> None:
+        try:
+            curve = await sweep_curve(mission, self.teleop.speed, self.teleop.turn)
+        except (CurveError, OSError) as exc:
+            self.link_sweep = replace(self.link_sweep, state=FAILED, error=str(exc))
+            self.post_message(LinkSweepFailed(str(exc)))
+            return
+        self.link_sweep = replace(self.link_sweep, state=READY, curve=curve)
+
+    @on(LinkSweepFailed)
+    def _link_sweep_failed(self, event: LinkSweepFailed) -> None:
+        self.notify(f"latency sweep failed: {event.error}", severity="warning", timeout=8)
 
     def _publish_status(self, force: bool = False) -> None:
         """The status line; a change of the sample count alone shows at most every ``COUNT_PERIOD_S``.

@@ -85,3 +85,11 @@ class GoalPicked(Message):
         super().__init__()
         self.x = x
         self.y = y
+
+
+class LinkSweepFailed(Message):
+    """The analytics screen's latency sweep (``arbiter-tui compare`` in a child process) failed."""
+
+    def __init__(self, error: str) -> None:
+        super().__init__()
+        self.error = error

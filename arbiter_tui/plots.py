@@ -18,6 +18,7 @@ from textual_plot import HiResMode, PlotWidget
 from textual_plot.axis_formatter import AxisFormatter
 
 from . import axes
+from .analytics.linkcurve import LinkSweepView
 from .analytics.runs import MANUAL
 from .messages import GoalPicked
 from .views import PLOT_PERIOD_S, AnalyticsView, LatencySnapshot, MapView, thin
@@ -386,3 +387,33 @@ class LatencyHistogram(_LatencyWindow):
         self.set_y_formatter(DecadeFormatter())
         self.set_axes(axes.aligned(lo, hi, cols, MIN_GAP_X), axes.decades(float(heights.max()), rows))
         self.border_subtitle = f"count (log) · {len(lat)} commands"
+
+
+class LinkPlot(Plot):
+    """Avg cross-track error against one-way latency, one line per controller (a sweep of the selected
+    mission in simulated time), and the latency this console measures (its p95) as a vertical line."""
+
+    SOURCE = "link_sweep"
+
+    def data_key(self, view: LinkSweepView) -> object:
+        return (view.curve, None if view.p95_ms is None else round(view.p95_ms, 1))
+
+    def draw(self, view: LinkSweepView) -> None:
+        cols, rows = self.scale_size()
+        curve = view.curve
+        if curve is None:
+            self.set_axes(axes.aligned(0.0, 500.0, cols, MIN_GAP_X), axes.aligned(0.0, 0.1, rows, MIN_GAP_Y))
+            return
+        top = max(max(ys) for _name, ys in curve.errors) * 1.1 or 0.1
+        x_hi = curve.latencies_ms[-1]
+        legend = [] if view.p95_ms is None else [("│", f"p95 {view.p95_ms:.0f} ms")]  # first: never cut
+        for order, (name, ys) in enumerate(curve.errors):
+            marker, style = algorithm_style(name, order)
+            self.plot(curve.latencies_ms, ys, line_style=style, hires_mode=HiResMode.BRAILLE)
+            self.scatter(curve.latencies_ms, ys, marker=marker, marker_style=style)
+            legend.append((marker, name))
+        if view.p95_ms is not None:
+            at = min(view.p95_ms, x_hi)
+            self.plot([at, at], [0.0, top], line_style="bold red", hires_mode=HiResMode.BRAILLE)
+        self.set_axes(axes.aligned(0.0, x_hi, cols, MIN_GAP_X), axes.aligned(0.0, top, rows, MIN_GAP_Y))
+        self.border_subtitle = legend_text(legend, max(0, self.size.width - 4))

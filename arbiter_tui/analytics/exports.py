@@ -22,6 +22,7 @@ from typing import Any
 
 from .model import EXTRA_FIELDS, FIELDS, NUMERIC, STATS_FIELDS, AnalyticsStats, DataPoint, stats_of_points
 from .runs import OUTCOMES, AlgorithmSummary, RunSummary
+from .tracking import TRACKING_FIELDS, TrackingStats
 
 SEED_CSV_HEADER = ",".join(FIELDS)
 CSV_HEADER = ",".join(FIELDS + EXTRA_FIELDS)
@@ -69,6 +70,17 @@ MCAP_STATS_DEF = "\n".join(
 )
 
 _SEP = "=" * 80
+MCAP_TRACKING_DEF = "\n".join(
+    [
+        "bool measured  # false: no reference path (manual driving); the figures below are then 0",
+        "uint32 samples",
+        *(f"float64 {name}" for name in TRACKING_FIELDS[:4]),
+        "float64 time_to_complete_s  # NaN unless completed",
+        "float64 path_ratio  # NaN when the reference has no length",
+        "float64 mean_abs_dw_dt",
+    ]
+)
+_TRACKING_TAIL = [_SEP, "MSG: arbiter_msgs/TrackingStats", MCAP_TRACKING_DEF]
 MCAP_RUN_DEF = "\n".join(
     [
         "uint32 id",
@@ -81,9 +93,11 @@ MCAP_RUN_DEF = "\n".join(
         "float64 time_s",
         "float64 final_error_m  # NaN for manual driving",
         "arbiter_msgs/AnalyticsStats stats  # over all of the run's samples",
+        "arbiter_msgs/TrackingStats tracking  # against the run's reference path",
         _SEP,
         "MSG: arbiter_msgs/AnalyticsStats",
         MCAP_STATS_DEF,
+        *_TRACKING_TAIL,
     ]
 )
 MCAP_ALGORITHM_DEF = "\n".join(
@@ -95,9 +109,11 @@ MCAP_ALGORITHM_DEF = "\n".join(
         "float64 time_s  # mean over completed runs; NaN when none completed",
         "float64 final_error_m  # likewise",
         "arbiter_msgs/AnalyticsStats stats  # over the pooled samples of all its runs on this mission",
+        "arbiter_msgs/TrackingStats tracking  # its runs pooled",
         _SEP,
         "MSG: arbiter_msgs/AnalyticsStats",
         MCAP_STATS_DEF,
+        *_TRACKING_TAIL,
     ]
 )
 # nav_msgs/msg/Odometry with its dependencies, in the concatenated form ROS 2 bags store
@@ -273,6 +289,7 @@ def _mcap_run(r: RunSummary) -> dict[str, Any]:
         "time_s": float(r.time_s),
         "final_error_m": math.nan if r.final_error_m is None else float(r.final_error_m),
         "stats": _mcap_stats(r.stats),
+        "tracking": _mcap_tracking(r.tracking),
     }
 
 
@@ -285,7 +302,37 @@ def _mcap_algorithm(a: AlgorithmSummary) -> dict[str, Any]:
         "time_s": math.nan if a.time_s is None else float(a.time_s),
         "final_error_m": math.nan if a.final_error_m is None else float(a.final_error_m),
         "stats": _mcap_stats(a.stats),
+        "tracking": _mcap_tracking(a.tracking),
     }
+
+
+def _mcap_tracking(t: TrackingStats | None) -> dict[str, Any]:
+    if t is None:
+        return {"measured": False, "samples": 0, **{name: 0.0 for name in TRACKING_FIELDS}}
+    return {
+        "measured": True,
+        "samples": t.samples,
+        **{name: math.nan if (v := getattr(t, name)) is None else float(v) for name in TRACKING_FIELDS},
+    }
+
+
+def _mcap_tracking_dict(m: Any) -> dict[str, Any] | None:
+    """The JSON form (``TrackingStats.as_dict``) of a decoded MCAP tracking field; None when the
+    summary has none (or the file predates it)."""
+    t = getattr(m, "tracking", None)
+    if t is None or not t.measured:
+        return None
+    values = {name: None if math.isnan(v := getattr(t, name)) else v for name in TRACKING_FIELDS}
+    return {"samples": t.samples, **values}
+
+
+def _tracking_from(raw: Any, where: str) -> TrackingStats | None:
+    if raw is None:
+        return None
+    try:
+        return TrackingStats.from_dict(raw)
+    except ValueError as exc:
+        raise ExportFormatError(f"{where}: {exc}") from None
 
 
 MCAP_MAGIC = b"\x89MCAP0\r\n"
@@ -358,7 +405,10 @@ def runs_from(rows: Any, in_file: dict[int, int]) -> tuple[RunSummary, ...]:
         stats = _stats_from(row.get("stats"), where)
         last = start + time_s * 1000.0
         in_ring = in_file.get(run_id, 0)
-        out.append(RunSummary(run_id, algorithm, mission, start, end, outcome, final, stats, in_ring, last))
+        tracking = _tracking_from(row.get("tracking"), where)
+        out.append(
+            RunSummary(run_id, algorithm, mission, start, end, outcome, final, stats, in_ring, last, tracking)
+        )
     return tuple(out)
 
 
@@ -380,6 +430,7 @@ def algorithms_from(rows: Any) -> tuple[AlgorithmSummary, ...]:
                 time_s=_opt_number(row.get("time_s"), f"{where}.time_s"),
                 final_error_m=_opt_number(row.get("final_error_m"), f"{where}.final_error_m"),
                 stats=_stats_from(row.get("stats"), where),
+                tracking=_tracking_from(row.get("tracking"), where),
             )
         )
     return tuple(out)
@@ -427,12 +478,14 @@ def read_mcap(data: bytes) -> Export:
                     "id": m.id, "algorithm": m.algorithm, "mission": m.mission, "outcome": m.outcome,
                     "start_ms": m.start_ms, "end_ms": m.end_ms, "time_s": m.time_s,
                     "final_error_m": m.final_error_m, "stats": _mcap_stats_dict(m.stats),
+                    "tracking": _mcap_tracking_dict(m),
                 })  # fmt: skip
                 continue
             if channel.topic == MCAP_ALGORITHMS_TOPIC:
                 algorithms.append({
                     "algorithm": m.algorithm, "mission": m.mission, "runs": m.runs, "completed": m.completed,
                     "time_s": m.time_s, "final_error_m": m.final_error_m, "stats": _mcap_stats_dict(m.stats),
+                    "tracking": _mcap_tracking_dict(m),
                 })  # fmt: skip
                 continue
             where = f"MCAP message {len(points) + 1}"

@@ -3,9 +3,12 @@
 Pure (no I/O, no Textual). One definition used by the analytics screen, ``arbiter-tui compare`` and
 ``arbiter-tui stats``:
 
-* **Within a mission** (like with like): completed entries first, then the lowest mean distance error
-  (avg e_d). A distance error measured on a square says nothing about one measured on a figure-eight, so
-  entries of different missions are never ranked against each other.
+* **Within a mission** (like with like): completed entries first, then the lowest mean cross-track
+  error to the mission's path (avg e_xt, ``tracking``); an entry without one (an export from before
+  it was measured) by its mean distance error (avg e_d), after those with one. The seed's e_d is the
+  distance to the *current waypoint*, so it mostly measures how far apart the waypoints are; e_xt
+  measures how well the robot follows the path. An error measured on a square says nothing about one
+  measured on a figure-eight, so entries of different missions are never ranked against each other.
 * **Overall**: only over the missions that *every* ranked algorithm completed. On each of them an
   algorithm's place is its rank there; the overall best has the lowest mean rank (ties: more wins, then
   the first seen). An algorithm that never ran a mission is listed as "not run" there instead of
@@ -22,8 +25,9 @@ from typing import Protocol, TypeVar
 
 from .model import AnalyticsStats
 from .runs import MANUAL
+from .tracking import TrackingStats
 
-RULE_MISSION = "per mission: completed first, then lowest mean distance error (avg e_d)"
+RULE_MISSION = "per mission: completed first, then lowest mean cross-track error to the path (avg e_xt)"
 RULE_OVERALL = (
     "overall: lowest mean rank over the missions every ranked algorithm completed (ties: more wins)"
 )
@@ -45,13 +49,18 @@ class Entry(Protocol):
     @property
     def stats(self) -> AnalyticsStats: ...
 
+    @property
+    def tracking(self) -> TrackingStats | None: ...
+
 
 E = TypeVar("E", bound=Entry)
 
 
-def rank_key(e: Entry) -> tuple[bool, float]:
-    """Within one mission: completed first, then by mean distance error."""
-    return (not e.completed, e.stats.avgDistanceError)
+def rank_key(e: Entry) -> tuple[bool, bool, float]:
+    """Within one mission: completed first, then by mean cross-track error (entries without one last,
+    by mean distance error)."""
+    t = e.tracking
+    return (not e.completed, t is None, e.stats.avgDistanceError if t is None else t.xte_mean_m)
 
 
 def ranked(entries: Iterable[E]) -> list[E]:

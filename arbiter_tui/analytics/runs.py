@@ -14,12 +14,14 @@ the ring still holds (``in_ring``).
 from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 
+from . import tracking as T
 from .model import EMPTY_STATS, AnalyticsStats, compute_stats
+from .tracking import TrackingStats
 
 RUNNING = "running"
 COMPLETED = "completed"
@@ -33,7 +35,8 @@ MANUAL_IDLE_S = 2.0
 # Columns where lower is better and a "best" mark means something; the others (samples, speeds, path)
 # have no better direction and are never marked.
 LOWER_IS_BETTER = (
-    "time_s", "final_error_m", "avgDistanceError", "stdDevError", "p95Error", "avgHeadingError",
+    "time_s", "final_error_m", "xte_mean_m", "xte_p95_m", "avgDistanceError", "stdDevError", "p95Error",
+    "avgHeadingError", "mean_abs_dw_dt",
 )  # fmt: skip
 
 
@@ -51,6 +54,7 @@ class RunSummary:
     stats: AnalyticsStats
     in_ring: int  # how many of its samples the ring buffer still holds
     last_ms: float | None = None  # timestamp of its last sample
+    tracking: TrackingStats | None = None  # against its reference path (``tracking``); None for manual
 
     @property
     def completed(self) -> bool:
@@ -79,6 +83,7 @@ class RunSummary:
             "time_s": round(self.time_s, 3),
             "final_error_m": None if self.final_error_m is None else round(self.final_error_m, 4),
             "stats": self.stats.as_dict(),
+            "tracking": None if self.tracking is None else self.tracking.as_dict(),
         }
 
 
@@ -94,6 +99,7 @@ class AlgorithmSummary:
     time_s: float | None  # mean over completed runs
     final_error_m: float | None  # mean over completed runs
     stats: AnalyticsStats  # over the pooled samples of all its runs; path = sum of the runs' paths
+    tracking: TrackingStats | None = None  # ``tracking.pooled`` over its runs; None for manual
 
     def as_dict(self) -> dict[str, Any]:
         return {
@@ -104,12 +110,16 @@ class AlgorithmSummary:
             "time_s": None if self.time_s is None else round(self.time_s, 3),
             "final_error_m": None if self.final_error_m is None else round(self.final_error_m, 4),
             "stats": self.stats.as_dict(),
+            "tracking": None if self.tracking is None else self.tracking.as_dict(),
         }
 
 
 def column_value(row: RunSummary | AlgorithmSummary, column: str) -> float | None:
     if column in ("time_s", "final_error_m"):
         value = getattr(row, column)
+        return None if value is None else float(value)
+    if column in T.TRACKING_FIELDS:
+        value = None if row.tracking is None else getattr(row.tracking, column)
         return None if value is None else float(value)
     return float(getattr(row.stats, column))
 
@@ -135,9 +145,11 @@ def best_in_columns(
 
 class _Run:
     __slots__ = ("_summary", "algorithm", "cols", "end_ms", "final_error_m", "id", "in_ring", "last_ms",
-                 "mission", "n", "outcome", "start_ms")  # fmt: skip
+                 "mission", "n", "outcome", "path", "start_ms")  # fmt: skip
 
-    def __init__(self, run_id: int, algorithm: str, mission: str, start_ms: float) -> None:
+    def __init__(
+        self, run_id: int, algorithm: str, mission: str, start_ms: float, path: np.ndarray | None = None
+    ) -> None:
         self.id = run_id
         self.algorithm = algorithm
         self.mission = mission
@@ -145,7 +157,8 @@ class _Run:
         self.end_ms: float | None = None
         self.outcome = RUNNING
         self.final_error_m: float | None = None
-        self.cols = np.empty((6, 64), dtype=np.float64)  # x, y, v, w, e_d, e_th
+        self.path = path  # the reference path (``tracking.reference_path``); None: no tracking metrics
+        self.cols = np.empty((7, 64), dtype=np.float64)  # x, y, v, w, e_d, e_th, t (ms)
         self.n = 0
         self.in_ring = 0
         self.last_ms: float | None = None
@@ -153,10 +166,10 @@ class _Run:
 
     def add(self, t_ms: float, x: float, y: float, v: float, w: float, e_d: float, e_th: float) -> None:
         if self.n == self.cols.shape[1]:
-            grown = np.empty((6, self.n * 2), dtype=np.float64)
+            grown = np.empty((7, self.n * 2), dtype=np.float64)
             grown[:, : self.n] = self.cols
             self.cols = grown
-        self.cols[:, self.n] = (x, y, v, w, e_d, e_th)
+        self.cols[:, self.n] = (x, y, v, w, e_d, e_th, t_ms)
         self.n += 1
         self.in_ring += 1
         self.last_ms = t_ms
@@ -166,11 +179,22 @@ class _Run:
         if self._summary is None:
             c = self.cols[:, : self.n]
             stats = compute_stats(c[0], c[1], c[2], c[3], c[4], c[5]) if self.n else EMPTY_STATS
-            self._summary = RunSummary(
+            summary = RunSummary(
                 self.id, self.algorithm, self.mission, self.start_ms, self.end_ms, self.outcome,
                 self.final_error_m, stats, self.in_ring, self.last_ms,
             )  # fmt: skip
+            if self.path is not None and self.n:
+                done = summary.time_s if self.outcome == COMPLETED else None
+                tracking = T.tracking_stats(
+                    c[6] / 1e3, c[0], c[1], c[3], self.path, stats.totalPathLength, done
+                )
+                summary = replace(summary, tracking=tracking)
+            self._summary = summary
         return self._summary
+
+    def cross_track(self) -> np.ndarray:
+        c = self.cols[:, : self.n]
+        return T.cross_track(c[0], c[1], self.path) if self.path is not None else c[0][:0]
 
 
 class RunLog:
@@ -190,11 +214,12 @@ class RunLog:
     def active_algorithm(self) -> str | None:
         return None if self._active is None else self._active.algorithm
 
-    def begin(self, algorithm: str, mission: str, t_ms: float) -> int:
-        """Start a run (ending the active one as aborted); returns its id."""
+    def begin(self, algorithm: str, mission: str, t_ms: float, path: np.ndarray | None = None) -> int:
+        """Start a run (ending the active one as aborted); returns its id. ``path``: the reference path
+        its tracking metrics are measured against (none for manual driving)."""
         if self._active is not None:
             self.end(ABORTED, t_ms)
-        run = _Run(self._next_id, algorithm, mission, t_ms)
+        run = _Run(self._next_id, algorithm, mission, t_ms, path)
         self._next_id += 1
         self._runs.append(run)
         self._by_id[run.id] = run
@@ -271,7 +296,7 @@ class RunLog:
         self._active = None
         self._next_id = 1
         if active is not None:
-            self.begin(active.algorithm, active.mission, active.start_ms)
+            self.begin(active.algorithm, active.mission, active.start_ms, active.path)
 
 
 def row_of(run: RunSummary) -> AlgorithmSummary:
@@ -285,6 +310,7 @@ def row_of(run: RunSummary) -> AlgorithmSummary:
         time_s=run.time_s if done else None,
         final_error_m=run.final_error_m if done else None,
         stats=run.stats,
+        tracking=run.tracking,
     )
 
 
@@ -296,6 +322,7 @@ def _pool(algorithm: str, mission: str, runs: list[_Run]) -> AlgorithmSummary:
     stats = compute_stats(none, none, cols[0], cols[1], cols[2], cols[3], path=path)
     done = [r.summary() for r in runs if r.outcome == COMPLETED]
     errors = [s.final_error_m for s in done if s.final_error_m is not None]
+    tracked = [(r.cross_track(), t, r.n) for r in runs if (t := r.summary().tracking) is not None]
     return AlgorithmSummary(
         algorithm=algorithm,
         mission=mission,
@@ -304,4 +331,5 @@ def _pool(algorithm: str, mission: str, runs: list[_Run]) -> AlgorithmSummary:
         time_s=sum(s.time_s for s in done) / len(done) if done else None,
         final_error_m=sum(errors) / len(errors) if errors else None,
         stats=stats,
+        tracking=T.pooled(tracked),
     )

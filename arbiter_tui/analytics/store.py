@@ -157,10 +157,11 @@ class AnalyticsStore:
             self._version += 1
 
     # -- runs ----------------------------------------------------------------------------------
-    def begin_run(self, algorithm: str, mission: str, t_ms: float) -> int:
-        """Start a run (an active one ends as aborted); points recorded with its id join it."""
+    def begin_run(self, algorithm: str, mission: str, t_ms: float, path: np.ndarray | None = None) -> int:
+        """Start a run (an active one ends as aborted); points recorded with its id join it. ``path``:
+        its reference path, for the tracking metrics (``analytics.tracking``)."""
         with self._lock:
-            run_id = self._runs.begin(algorithm, mission, t_ms)
+            run_id = self._runs.begin(algorithm, mission, t_ms, path)
             self._version += 1
         return run_id
 

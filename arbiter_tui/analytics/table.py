@@ -13,7 +13,8 @@ from dataclasses import dataclass
 
 from . import ranking
 from .labels import format_stat
-from .runs import LOWER_IS_BETTER, MANUAL, AlgorithmSummary, RunSummary, best_in_columns
+from .runs import LOWER_IS_BETTER, MANUAL, AlgorithmSummary, RunSummary, best_in_columns, column_value
+from .tracking import TRACKING_FIELDS
 
 BEST_CELL = "◆"
 BEST_ROW = "★"
@@ -56,6 +57,20 @@ _TAIL = (
     Column("totalPathLength", "path m", lambda r: f"{r.stats.totalPathLength:.2f}", "path"),
     Column("sampleCount", "samples", lambda r: str(r.stats.sampleCount), "n"),
 )
+
+
+def _track(attr: str, fmt: str) -> Callable[[Row], str]:
+    def text(r: Row) -> str:
+        value = column_value(r, attr)
+        return "—" if value is None else format(value, fmt)
+
+    return text
+
+
+_XTE = Column("xte_mean_m", "avg e_xt m", _track("xte_mean_m", ".3f"), "e_xt")
+_XTE95 = Column("xte_p95_m", "p95 e_xt m", _track("xte_p95_m", ".3f"), "p95xt")
+_RATIO = Column("path_ratio", "path/ref", _track("path_ratio", ".2f"), "/ref")
+_SMOOTH = Column("mean_abs_dw_dt", "|dω/dt| rad/s²", _track("mean_abs_dw_dt", ".2f"), "|ω'|")
 _MISSION = Column("mission", "mission", lambda r: r.mission or "—")
 _TIME = Column("time_s", "time s", _opt("time_s", ".1f"), "t")
 _FINAL = Column("final_error_m", "final m", _opt("final_error_m", ".3f"), "final")
@@ -65,6 +80,10 @@ ALGORITHM_COLUMNS = (
     Column("completed", "done", lambda r: f"{int(r.completed)}/{getattr(r, 'runs', 1)}"),
     _TIME,
     _FINAL,
+    _XTE,
+    _XTE95,
+    _RATIO,
+    _SMOOTH,
     _AVG,
     _STD,
     *_TAIL,
@@ -81,10 +100,17 @@ RUN_COLUMNS = (
     ),
     _TIME,
     _FINAL,
+    _XTE,
+    _XTE95,
+    _RATIO,
+    _SMOOTH,
     _AVG,
     *_TAIL,
 )  # std e_d left out: a run row is wide already (stats --by run prints all nine)
-COMPACT_UNITS = "m: final e_d std p95 path, rad: |e_θ|, s: t, n: samples"
+COMPACT_UNITS = "m: final e_xt p95xt e_d p95, rad: |e_θ|, s: t, n: samples"
+# Left out of the compact view (80 columns): the mission (a group row instead), and the figures the
+# stats cards (the seed's std and path) or the full view (path ratio, smoothness) show
+COMPACT_OMITS = ("mission", "stdDevError", "totalPathLength", "path_ratio", "mean_abs_dw_dt")
 SORTABLE = {c.key for c in RUN_COLUMNS + ALGORITHM_COLUMNS}
 
 
@@ -109,6 +135,9 @@ def sort_value(row: Row, key: str) -> tuple[bool, float | str]:
     """Missing values last; text columns alphabetically."""
     if key == RANK:
         return ranking.rank_key(row)
+    if key in TRACKING_FIELDS:
+        tracked = column_value(row, key)
+        return (True, 0.0) if tracked is None else (False, tracked)
     if hasattr(row.stats, key):
         return (False, float(getattr(row.stats, key)))
     value = getattr(row, key, None)
@@ -131,7 +160,7 @@ def build(
     within each mission; ``★`` on each mission's best, the overall best by ``ranking.RULE_OVERALL``."""
     columns = ALGORITHM_COLUMNS if mode == BY_ALGORITHM else RUN_COLUMNS
     if compact:
-        columns = tuple(c for c in columns if c is not _MISSION)
+        columns = tuple(c for c in columns if c.key not in COMPACT_OMITS)
     source: list[Row] = list(algorithms if mode == BY_ALGORITHM else runs)
     groups: dict[tuple[bool, str], list[Row]] = {}
     for item in source:
@@ -186,7 +215,7 @@ def legend(table: Table) -> str:
     """The rule, the overall answer and (compact) the units, as the screen shows them under the table."""
     if table.compact:
         return (
-            f"{BEST_ROW} mission best (completed, lowest avg e_d) · overall: {table.overall} · "
+            f"{BEST_ROW} mission best (completed, lowest avg e_xt) · overall: {table.overall} · "
             f"reversed: column best · {COMPACT_UNITS}"
         )
     return (

@@ -38,9 +38,23 @@ def _figure_eight(a: float = 1.5, n: int = 16) -> list[Point]:
     return pts
 
 
+def _slalom(gates: int = 6, spacing: float = 0.8, offset: float = 0.4) -> list[Point]:
+    # Gates alternately left and right of the x axis: a 90-degree change of heading at every gate,
+    # tighter than the turn cap allows at full speed (0.5 m/s at 1 rad/s is a 0.5 m radius).
+    pts = [(spacing * k, offset if k % 2 else -offset) for k in range(1, gates + 1)]
+    return [*pts, (spacing * (gates + 1), 0.0)]
+
+
+def _corner(straight: float = 6.0, after: float = 2.0) -> list[Point]:
+    # A long straight (where a controller reaches full speed) and one 90-degree left corner.
+    return [(straight, 0.0), (straight, after)]
+
+
 MISSIONS: dict[str, list[Point]] = {
     "square": _square(),
     "figure_eight": _figure_eight(),
+    "slalom": _slalom(),
+    "corner": _corner(),
 }
 ALGORITHMS = (MANUAL, "go_to_goal", "pure_pursuit", "stanley", "regulated_pure_pursuit", "kanayama")
 

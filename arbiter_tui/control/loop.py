@@ -20,6 +20,7 @@ from arbiter_core.kinematics import Limits, Pose, clamp_twist, distance_error, h
 
 from ..analytics.runs import ABORTED, COMPLETED, ENDED, MANUAL, MANUAL_IDLE_S, OVERRIDDEN
 from ..analytics.store import AnalyticsStore, DataPoint
+from ..analytics.tracking import reference_path
 from ..link.base import Link
 from .algorithms import ALGORITHMS, MISSIONS, MissionProgress, make_controller
 from .teleop import Teleop
@@ -104,7 +105,8 @@ class ControlLoop:
         self.mission_label = label
         self.interrupted = None
         self.running = True
-        self.store.begin_run(self.algorithm, label, self._wall_ms())
+        path = reference_path(mission.start, mission.waypoints[mission.index :])
+        self.store.begin_run(self.algorithm, label, self._wall_ms(), path)
 
     def start_autonomous(self) -> bool:
         """Start the selected controller on the named mission, from the robot's current pose."""

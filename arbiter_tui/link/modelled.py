@@ -25,10 +25,12 @@ def _twist(v: float, w: float) -> dict[str, Any]:
 
 
 class ModelledLink:
-    def __init__(self, model: LinkModel, clock: Callable[[], float], seed: int = 0) -> None:
+    def __init__(
+        self, model: LinkModel, clock: Callable[[], float], seed: int = 0, cmd_timeout: float = 0.5
+    ) -> None:
         self.model = model
         self.telemetry = Telemetry()  # what the console sees: odometry as late as the model says
-        self.sim = DiffDriveSimulator()
+        self.sim = DiffDriveSimulator(cmd_timeout=cmd_timeout)  # stops when commands stop arriving
         self._clock = clock
         rng = random.Random(seed)
         self.commands: DelayLine[tuple[float, float]] = DelayLine(

@@ -11,16 +11,19 @@ from textual import on
 from textual.app import ComposeResult
 from textual.binding import Binding
 from textual.containers import Horizontal
+from textual.geometry import Size
 from textual.reactive import reactive
 from textual.widget import Widget
 from textual.widgets import DataTable
 
 from ..analytics import table as T
-from ..plots import ErrorPlot, TrajectoryPlot
+from ..analytics.linkcurve import LinkSweepView
+from ..plots import ErrorPlot, LinkPlot, TrajectoryPlot
 from ..views import AnalyticsView
 from ..widgets import Bound, StatsCards
 from .base import BaseScreen
 
+LINK_PLOT_WIDTH = 120  # the error-vs-latency plot from this width on
 FULL_WIDTH = 104  # columns the full table needs; below it the compact view (every number still shown)
 
 
@@ -167,6 +170,17 @@ class EmptyState(Bound):
         )
 
 
+class LinkLine(Bound):
+    """Where the latency this console measures falls on the error-vs-latency curve, in words."""
+
+    SOURCE = "link_sweep"
+    DEFAULT_CSS = "LinkLine { height: auto; padding: 0 1; }"
+    view: reactive[LinkSweepView] = reactive(LinkSweepView)
+
+    def draw(self) -> Text:
+        return Text(self.view.text(), no_wrap=False)
+
+
 class AnalyticsScreen(BaseScreen):
     CSS_PATH = ["base.tcss", "analytics.tcss"]
     BINDINGS = [
@@ -186,6 +200,14 @@ class AnalyticsScreen(BaseScreen):
         with Horizontal(id="plots"):
             yield TrajectoryPlot("trajectory (m)", id="traj")
             yield ErrorPlot("e_d (m) vs time (s)", id="err-plot")
+            yield LinkPlot("avg e_xt (m) vs latency (ms)", id="link-plot")
+        yield LinkLine(id="link-line")
+
+    def _check_size(self, size: Size) -> None:
+        super()._check_size(size)
+        # the error-vs-latency plot only where the other two keep room for their legends; its line of
+        # text (the measured latency on the curve) is always shown
+        self.set_class(size.width < LINK_PLOT_WIDTH, "no-link-plot")
 
     def action_toggle_collect(self) -> None:
         self.arbiter.toggle_collection()

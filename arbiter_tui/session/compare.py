@@ -11,6 +11,9 @@ import time
 from dataclasses import dataclass, field, replace
 from typing import Any
 
+import numpy as np
+
+from arbiter_core import stats as S
 from arbiter_core.kinematics import Pose, distance_error
 from arbiter_core.linkmodel import LinkModel
 from arbiter_core.simulator import RATE_HZ
@@ -18,17 +21,18 @@ from arbiter_core.simulator import RATE_HZ
 from ..analytics import ranking
 from ..analytics.runs import MANUAL, RunSummary
 from ..analytics.store import AnalyticsStats, AnalyticsStore, DataPoint
+from ..analytics.tracking import TrackingStats, reference_path, tracking_stats
 from ..control.algorithms import ALGORITHMS, MISSIONS
 from ..control.loop import ControlLoop
 from ..control.teleop import Teleop
 from ..link.modelled import ModelledLink
-from ..link.sim import SimLink
 
 AUTONOMOUS = tuple(a for a in ALGORITHMS if a != MANUAL)
 SIM_HZ = RATE_HZ  # the simulator's own rate (arbiter_core.simulator)
 CONTROL_HZ = 10.0
 TIME_LIMIT_S = 600.0  # a run that has not finished by then counts as not completed
 GAP_MS = 1000.0  # between two runs' time spans in an export
+CMD_TIMEOUT_S = 0.5  # the simulated robot's deadman, as the backend's simulator (--cmd-timeout)
 
 
 class CompareError(ValueError):
@@ -44,6 +48,7 @@ class RunResult:
     final_error_m: float  # distance from where the robot stopped to the mission's last waypoint
     max_linear_vel: float  # the largest |v| commanded
     stats: AnalyticsStats
+    tracking: TrackingStats  # against the mission's path, from where the robot truly was (``true_pose``)
     points: list[DataPoint] = field(repr=False, compare=False)
     summary: RunSummary | None = field(default=None, repr=False, compare=False)  # as the console keeps it
 
@@ -57,6 +62,7 @@ class RunResult:
             "final_error_m": round(self.final_error_m, 4),
             "max_linear_vel": round(self.max_linear_vel, 4),
             "stats": self.stats.as_dict(),
+            "tracking": self.tracking.as_dict(),
         }
 
 
@@ -77,14 +83,14 @@ def run_one(
     t0_ms: float = 0.0,
     link_model: LinkModel | None = None,
     seed: int = 0,
+    cmd_timeout: float = CMD_TIMEOUT_S,
 ) -> RunResult:
     """One mission run from the origin, in simulated time starting at ``t0_ms`` (epoch ms, what its
-    points' timestamps count from); its points carry ``run_id``. With ``link_model`` the commands and
-    the odometry cross that link (``link.modelled``; jitter and loss drawn from ``seed``)."""
+    points' timestamps count from); its points carry ``run_id``. The commands and the odometry cross
+    ``link_model`` (``link.modelled``; none: a perfect link; jitter and loss drawn from ``seed``); the
+    robot stops when no command has arrived for ``cmd_timeout`` s (its deadman, as on the backend)."""
     clock = _Clock()
-    link: SimLink | ModelledLink = (
-        SimLink(clock=clock) if link_model is None else ModelledLink(link_model, clock, seed)
-    )
+    link = ModelledLink(link_model or LinkModel(), clock, seed, cmd_timeout=cmd_timeout)
     store = AnalyticsStore(max_data_points=1_000_000, collection_rate=collection_rate)
     loop = ControlLoop(link, store, Teleop(speed=speed, turn=turn), wall_ms=lambda: t0_ms + clock.t * 1000.0)
     loop.set_algorithm(algorithm)
@@ -94,6 +100,8 @@ def run_one(
     step = 1.0 / SIM_HZ
     control_every = round(SIM_HZ / CONTROL_HZ)
     sample_every = max(1, round(SIM_HZ / collection_rate))
+    path = reference_path(loop.mission.start, loop.mission.waypoints)
+    truth: list[tuple[float, float, float, float]] = []  # t, true x, true y, commanded w at each sample
     max_v = 0.0
     n = 0
     while loop.running and clock.t < TIME_LIMIT_S:
@@ -103,14 +111,18 @@ def run_one(
         if n % control_every == 0:
             loop.tick_control(clock.t)
             max_v = max(max_v, abs(loop.command[0]))
-        if n % sample_every == 0:
-            loop.sample()
+        if n % sample_every == 0 and (point := loop.sample()) is not None and point.runId is not None:
+            p = _true_pose(link)  # the run's samples, where the robot truly was
+            truth.append((clock.t, p.x, p.y, point.angularVel))
     completed = loop.mission.done
-    pose = link.true_pose if isinstance(link, ModelledLink) else link.telemetry.snapshot()[0]
+    pose = _true_pose(link)
     last = loop.mission.waypoints[-1]
     if loop.running:  # out of time
         loop.stop()
     (summary,) = store.runs()
+    t, x, y, w = np.array(truth, dtype=np.float64).reshape(-1, 4).T
+    tracking = tracking_stats(t, x, y, w, path, S.path_length(x, y),
+                              clock.t if completed else None)  # fmt: skip
     return RunResult(
         algorithm=algorithm,
         mission=mission,
@@ -119,9 +131,15 @@ def run_one(
         final_error_m=distance_error(Pose(pose.x, pose.y, pose.theta), last),
         max_linear_vel=max_v,
         stats=summary.stats,
+        tracking=tracking,
         points=[replace(p, runId=run_id) for p in store.points() if p.runId == summary.id],
-        summary=replace(summary, id=run_id),
+        summary=replace(summary, id=run_id, tracking=tracking),
     )
+
+
+def _true_pose(link: ModelledLink) -> Pose:
+    """Where the robot is now (the console sees it ``odom_delay`` late)."""
+    return link.true_pose
 
 
 def parse_names(text: str, valid: tuple[str, ...], what: str) -> list[str]:
@@ -142,13 +160,24 @@ def compare(
     t0_ms: float | None = None,
     link_model: LinkModel | None = None,
     seed: int = 0,
+    cmd_timeout: float = CMD_TIMEOUT_S,
 ) -> list[RunResult]:
     """Every algorithm on every mission. Each run has its own time span: the first starts at ``t0_ms``
     (default: now), each next one ``GAP_MS`` after the previous one ended, as if driven one after another."""
     start = time.time_ns() / 1e6 if t0_ms is None else t0_ms
     out = []
     for i, (a, m) in enumerate(((a, m) for m in missions for a in algorithms), 1):
-        result = run_one(a, m, speed, turn, run_id=i, t0_ms=start, link_model=link_model, seed=seed + i)
+        result = run_one(
+            a,
+            m,
+            speed,
+            turn,
+            run_id=i,
+            t0_ms=start,
+            link_model=link_model,
+            seed=seed + i,
+            cmd_timeout=cmd_timeout,
+        )
         out.append(result)
         start += result.time_s * 1000.0 + GAP_MS
     return out

@@ -7,10 +7,11 @@ import json
 import math
 import sys
 import time
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from arbiter_core.cliargs import OneLineParser, non_negative_float, positive_float
+from arbiter_core.cliargs import OneLineParser, count, non_negative_float, positive_float
 from arbiter_core.kinematics import DEFAULT_LIMITS
 from arbiter_core.linkmodel import LinkModel, LinkModelError
 from arbiter_core.record import LatencyRecord, RecordError
@@ -23,7 +24,18 @@ from ..analytics.runs import row_of
 from ..analytics.store import stats_of_points
 from ..control.teleop import cap_setting
 from ..settings import Settings
-from .compare import AUTONOMOUS, MISSION_NAMES, CompareError, RunResult, compare, parse_names, ranking_of
+from . import trials as TR
+from .compare import (
+    AUTONOMOUS,
+    CMD_TIMEOUT_S,
+    MISSION_NAMES,
+    CompareError,
+    RunResult,
+    compare,
+    parse_names,
+    ranking_of,
+)
+from .trials import INTERVAL, VERDICT_RULE
 
 D = Settings()  # the console's defaults, one place
 
@@ -81,6 +93,21 @@ def build_parser() -> argparse.ArgumentParser:
         help="how late odometry reaches the console, ms (default 0)",
     )  # fmt: skip
     link.add_argument("--seed", type=int, default=0, help="seed of the jitter and loss draws (default 0)")
+    link.add_argument(
+        "--trials", type=count, default=1, metavar="N",
+        help="run every cell N times, each with jitter and loss drawn from its own seed; figures become "
+        f"the {INTERVAL}, and a mission's best is named only when {VERDICT_RULE} (default 1)",
+    )  # fmt: skip
+    link.add_argument(
+        "--cmd-timeout", type=positive_float, default=CMD_TIMEOUT_S, metavar="S",
+        help=f"the simulated robot stops when no command has arrived for S seconds, as the backend's "
+        f"(default {CMD_TIMEOUT_S:g})",
+    )  # fmt: skip
+    p.add_argument(
+        "--plot", type=Path, metavar="FILE",
+        help="with a sweep: also draw avg cross-track error against latency, one panel per mission, one "
+        "line per controller (with its 95 %% interval), as FILE.svg or FILE.png (matplotlib)",
+    )  # fmt: skip
     return p
 
 
@@ -134,7 +161,10 @@ def latencies_of(text: str | None, measured_from: str = DEFAULT_TRACKER) -> list
     return values
 
 
-HEAD = ("rank", "algorithm", "done", "time s", "final e_d m", "avg e_d m", "p95 e_d m", "max |v| m/s")
+HEAD = (
+    "rank", "algorithm", "done", "time s", "avg e_xt m", "p95 e_xt m", "max e_xt m", "path/ref",
+    "|dω/dt| rad/s²", "avg e_d m", "final m",
+)  # fmt: skip
 
 
 def table(results: list[RunResult]) -> str:
@@ -147,10 +177,11 @@ def table(results: list[RunResult]) -> str:
         rows.append(list(HEAD))
         for i, r in enumerate(groups[m.mission], 1):
             mark = " *" if i == 1 and r.completed else ""
+            t = r.tracking
             rows.append([
                 f"{i}{mark}", r.algorithm, "yes" if r.completed else "NO", f"{r.time_s:.1f}",
-                f"{r.final_error_m:.3f}", f"{r.stats.avgDistanceError:.3f}", f"{r.stats.p95Error:.3f}",
-                f"{r.max_linear_vel:.3f}",
+                f"{t.xte_mean_m:.3f}", f"{t.xte_p95_m:.3f}", f"{t.xte_max_m:.3f}", _ratio(t.path_ratio),
+                f"{t.mean_abs_dw_dt:.2f}", f"{r.stats.avgDistanceError:.3f}", f"{r.final_error_m:.3f}",
             ])  # fmt: skip
         rows.extend([["", name, "not run"] for name in m.not_run])
     cells = [r for r in rows if len(r) > 1]
@@ -164,6 +195,19 @@ def table(results: list[RunResult]) -> str:
     lines.append(f"* {ranking.RULE_MISSION}")
     lines.append(f"{ranking.RULE_OVERALL}: {answer.overall.reason}")
     return "\n".join(lines)
+
+
+def _ratio(value: float | None) -> str:
+    return "—" if value is None else f"{value:.2f}"
+
+
+def _aligned(rows: list[list[str]], left: int = 2) -> list[str]:
+    widths = [max(len(row[c]) for row in rows) for c in range(len(rows[0]))]
+    out = []
+    for row in rows:
+        cells = enumerate(zip(row, widths, strict=True))
+        out.append("  ".join(v.ljust(w) if c < left else v.rjust(w) for c, (v, w) in cells))
+    return out
 
 
 def export(results: list[RunResult], directory: Path) -> list[Path]:
@@ -204,9 +248,13 @@ def run(argv: list[str]) -> int:
     except (CompareError, LinkModelError) as exc:
         print(f"arbiter-tui compare: {exc}", file=sys.stderr)
         return 2
-    if latencies is not None or not links[0].perfect:
-        return sweep(missions, algorithms, speed, turn, links, args.seed, args.json)
-    results = compare(missions, algorithms, speed, turn)
+    if args.plot is not None and args.plot.suffix.lower() not in (".svg", ".png"):
+        print(f"arbiter-tui compare: --plot {args.plot}: give a .svg or .png file", file=sys.stderr)
+        return 2
+    if latencies is not None or not links[0].perfect or args.trials > 1 or args.plot is not None:
+        setup = Sweep(missions, algorithms, speed, turn, links, args.seed, args.trials, args.cmd_timeout)
+        return sweep(setup, args.json, args.plot)
+    results = compare(missions, algorithms, speed, turn, cmd_timeout=args.cmd_timeout)
     written: list[Path] = []
     if args.export_dir is not None:
         try:
@@ -223,44 +271,130 @@ def run(argv: list[str]) -> int:
     return 0
 
 
-def sweep(
-    missions: list[str],
-    algorithms: list[str],
-    speed: float,
-    turn: float,
-    links: list[LinkModel],
-    seed: int,
-    as_json: bool,
-) -> int:
-    """The whole comparison once per link (one per ``--latency`` value), then avg e_d per run and link."""
-    cells = [(link, compare(missions, algorithms, speed, turn, link_model=link, seed=seed)) for link in links]
-    if as_json:
-        body = {
-            "sweep": [{"link": link.as_dict(), **body_of(results, [])} for link, results in cells],
-            "seed": seed,
-            "jitter": "half-normal: each command's delay is latency + |N(0, jitter)|, delivered in order",
-            "rule": ranking.RULE,
+@dataclass(frozen=True)
+class Sweep:
+    missions: list[str]
+    algorithms: list[str]
+    speed: float
+    turn: float
+    links: list[LinkModel]
+    seed: int = 0
+    trials: int = 1
+    cmd_timeout: float = CMD_TIMEOUT_S
+
+
+TRIAL_SEED_STEP = 10_000  # trial k draws from seed + k x this (+ the run's index within the comparison)
+
+
+@dataclass(frozen=True)
+class SweepCell:
+    link: LinkModel
+    runs: list[list[RunResult]]  # runs[k]: trial k, every algorithm on every mission
+    summaries: list[TR.CellSummary]
+    verdicts: list[TR.Verdict]
+
+    def as_dict(self) -> dict[str, Any]:
+        return {
+            "link": self.link.as_dict(),
+            "runs": [{"trial": k, **r.as_dict()} for k, trial in enumerate(self.runs) for r in trial],
+            "missions": [v.as_dict() for v in self.verdicts],
+            "overall": ranking.rank(self.summaries).overall.as_dict(),
         }
-        print(json.dumps(body, allow_nan=False))
+
+
+def run_sweep(setup: Sweep) -> list[SweepCell]:
+    """Every link x trial x mission x algorithm, in simulated time; deterministic for a seed."""
+    out = []
+    for link in setup.links:
+        runs = [
+            compare(
+                setup.missions,
+                setup.algorithms,
+                setup.speed,
+                setup.turn,
+                t0_ms=0.0,
+                link_model=link,
+                seed=setup.seed + k * TRIAL_SEED_STEP,
+                cmd_timeout=setup.cmd_timeout,
+            )
+            for k in range(setup.trials)
+        ]
+        summaries = TR.cells(runs)
+        out.append(SweepCell(link, runs, summaries, TR.verdicts(summaries)))
+    return out
+
+
+def sweep_body(setup: Sweep, cells: list[SweepCell]) -> dict[str, Any]:
+    """The sweep's JSON (schema: tests/unit/test_compare.py, README)."""
+    return {
+        "sweep": [c.as_dict() for c in cells],
+        "trials": setup.trials,
+        "seed": setup.seed,
+        "cmd_timeout_s": setup.cmd_timeout,
+        "jitter": "half-normal: each command's delay is latency + |N(0, jitter)|, delivered in order",
+        "interval": INTERVAL,
+        "rule": ranking.RULE,
+        "verdict_rule": VERDICT_RULE,
+    }
+
+
+def sweep(setup: Sweep, as_json: bool, plot: Path | None = None) -> int:
+    """The whole comparison once per link (one per ``--latency`` value) and trial; per mission a ranked
+    table with intervals and a verdict, then avg e_xt per controller and latency side by side."""
+    cells = run_sweep(setup)
+    if plot is not None:
+        try:
+            from .plotfile import write_plot
+
+            write_plot(plot, cells)
+        except (OSError, ImportError) as exc:
+            print(f"arbiter-tui compare: --plot {plot}: {exc}", file=sys.stderr)
+            return 1
+    if as_json:
+        print(json.dumps(sweep_body(setup, cells), allow_nan=False))
         return 0
-    for link, results in cells:
-        d = link.as_dict()
+    for cell in cells:
+        d = cell.link.as_dict()
         print(
             f"== latency {d['latency_ms']:g} ms, jitter {d['jitter_ms']:g} ms, loss {d['loss']:g}, "
-            f"odometry delay {d['odom_delay_ms']:g} ms"
+            f"odometry delay {d['odom_delay_ms']:g} ms; {setup.trials} trial(s)"
         )
-        print(table(results))
+        print(trial_table(cell.verdicts))
         print()
-    head = ["mission", "algorithm", *(f"{link.latency_s * 1e3:g} ms" for link, _ in cells)]
-    rows = [head]
-    for i, r in enumerate(cells[0][1]):
-        rows.append([r.mission, r.algorithm, *(f"{res[i].stats.avgDistanceError:.3f}" for _, res in cells)])
-    widths = [max(len(row[c]) for row in rows) for c in range(len(head))]
-    print("avg e_d (m) by one-way latency:")
-    for row in rows:
-        cols = enumerate(zip(row, widths, strict=True))
-        print("  ".join(v.ljust(w) if c < 2 else v.rjust(w) for c, (v, w) in cols))
+    print(f"avg e_xt (m) by one-way latency ({INTERVAL if setup.trials > 1 else 'one trial'}):")
+    print("\n".join(error_vs_latency(cells)))
+    if plot is not None:
+        print(f"wrote {plot}")
     return 0
+
+
+TRIAL_HEAD = ("rank", "algorithm", "done", "avg e_xt m", "p95 e_xt m", "time s", "|dω/dt|", "avg e_d m")
+
+
+def trial_table(verdicts: list[TR.Verdict]) -> str:
+    lines = []
+    for v in verdicts:
+        lines.append(v.mission)
+        rows = [list(TRIAL_HEAD)]
+        for i, c in enumerate(v.ranking, 1):
+            f = c.figures
+            rows.append([
+                f"{i}{' *' if c.algorithm == v.best else ''}", c.algorithm, f"{c.completions}/{c.trials}",
+                f["xte_mean_m"].text(), f["xte_p95_m"].text(), f["time_s"].text(1),
+                f["mean_abs_dw_dt"].text(2), f["avgDistanceError"].text(),
+            ])  # fmt: skip
+        lines.extend("  " + line.rstrip() for line in _aligned(rows))
+        lines.append(f"  verdict: {v.reason}")
+    lines.append(f"* {ranking.RULE_MISSION}; {VERDICT_RULE}")
+    return "\n".join(lines)
+
+
+def error_vs_latency(cells: list[SweepCell]) -> list[str]:
+    head = ["mission", "algorithm", *(f"{c.link.latency_s * 1e3:g} ms" for c in cells)]
+    rows = [head]
+    for i, s in enumerate(cells[0].summaries):
+        rows.append([s.mission, s.algorithm, *(c.summaries[i].figures["xte_mean_m"].text() for c in cells)])
+    return _aligned(rows)
 
 
 def body_of(results: list[RunResult], written: list[Path]) -> dict[str, Any]:

@@ -13,13 +13,16 @@ from arbiter_tui.settings import Settings
 SEEDED_POINTS = 300  # the seeded store's ring: smaller than its runs, so it has dropped samples of run 1
 
 
-def seeded_store() -> AnalyticsStore:
+def seeded_store(latency_ms=None) -> AnalyticsStore:
     """Runs as the console records them, driven in simulated time (deterministic): go_to_goal completes
     the square, pure_pursuit is stopped half-way round the figure eight; the ring (300) has dropped the
-    oldest samples of run 1, so the analytics screen warns."""
+    oldest samples of run 1, so the analytics screen warns. ``latency_ms(i)``: the i-th sample's
+    one-way latency (default: none measured, as over a simulated link)."""
     from dataclasses import replace
 
     from arbiter_tui.analytics.runs import ABORTED, COMPLETED
+    from arbiter_tui.analytics.tracking import reference_path
+    from arbiter_tui.control.algorithms import MISSIONS
     from arbiter_tui.session.compare import run_one
 
     store = AnalyticsStore(max_data_points=SEEDED_POINTS)
@@ -28,9 +31,11 @@ def seeded_store() -> AnalyticsStore:
     for algorithm, mission, keep in (("go_to_goal", "square", None), ("pure_pursuit", "figure_eight", 150)):
         result = run_one(algorithm, mission)
         points = result.points[:keep]
-        run = store.begin_run(algorithm, mission, t0 + points[0].timestamp - 100)
+        path = reference_path((0.0, 0.0), MISSIONS[mission])  # as the console's loop gives it
+        run = store.begin_run(algorithm, mission, t0 + points[0].timestamp - 100, path)
         for p in points:
-            store.record(replace(p, timestamp=t0 + p.timestamp, runId=run))
+            lat = None if latency_ms is None else latency_ms(len(store))
+            store.record(replace(p, timestamp=t0 + p.timestamp, runId=run, latencyMs=lat))
         done = keep is None and result.completed
         store.end_run(COMPLETED if done else ABORTED, t0 + points[-1].timestamp,
                       result.final_error_m if done else 0.8)  # fmt: skip

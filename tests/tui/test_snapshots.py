@@ -4,7 +4,7 @@ import pytest
 
 from arbiter_tui.link.base import RECONNECTING
 
-from ..support.tui import RecordingLink, still_app
+from ..support.tui import RecordingLink, seeded_store, still_app
 
 SIZES = [(100, 30), (80, 24)]
 
@@ -111,3 +111,21 @@ def test_dashboard_with_the_link_down(snap_compare):
     """Stale pose and odometry marked, the banner short, the latency pane saying the link is down."""
     app = still_app(link=RecordingLink(state=RECONNECTING))
     assert snap_compare(app, terminal_size=(200, 60))
+
+
+def test_analytics_marks_the_measured_latency_on_the_error_vs_latency_curve(snap_compare):
+    """The curve of a real sweep (square, every controller), and the p95 of the latencies the console
+    recorded (the store's, as the app computes it) marked on it, in the plot and in words."""
+    from arbiter_core.linkmodel import LinkModel
+    from arbiter_tui.analytics.linkcurve import READY, SWEEP_LATENCIES_MS, LinkSweepView, curve_of
+    from arbiter_tui.session.compare import AUTONOMOUS
+    from arbiter_tui.session.compare_cmd import Sweep, run_sweep, sweep_body
+
+    setup = Sweep(["square"], list(AUTONOMOUS), 0.5, 1.0, [LinkModel(ms / 1e3) for ms in SWEEP_LATENCIES_MS])
+    curve = curve_of(sweep_body(setup, run_sweep(setup)), "square")
+    app = still_app(store=seeded_store(latency_ms=lambda i: 40.0 + (i % 20) * 5.0))  # p95: 135 ms
+
+    def swept(pilot) -> None:
+        pilot.app.link_sweep = LinkSweepView(READY, "square", curve, None)
+
+    assert snap_compare(app, terminal_size=(130, 36), press=["2"], run_before=swept)

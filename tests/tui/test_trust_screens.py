@@ -151,7 +151,7 @@ async def test_at_80x24_the_comparison_shows_every_column_and_the_warning_says_w
         assert await until(pilot, lambda: table.compact and table.row_count > 0)
         await pilot.pause()
         assert table.virtual_size.width <= table.size.width  # nothing cut off, nothing to scroll to
-        assert {"p95", "|e_θ|", "path", "n"} <= set(table.table.headers)
+        assert {"e_xt", "p95xt", "e_d", "p95", "|e_θ|", "n"} <= set(table.table.headers)
         warning = app.screen.query_one(RingWarning)
         view: AnalyticsView = app.analytics
         lost = replace(view.runs[0], in_ring=0)

@@ -8,7 +8,9 @@ import pytest
 from arbiter_tui.analytics.files import load_points
 from arbiter_tui.analytics.ranking import RULE, RULE_MISSION, RULE_OVERALL
 from arbiter_tui.analytics.store import STATS_FIELDS
+from arbiter_tui.analytics.tracking import TRACKING_FIELDS
 from arbiter_tui.cli import main
+from arbiter_tui.control.algorithms import MISSIONS
 from arbiter_tui.session.compare import AUTONOMOUS, run_one
 
 
@@ -17,36 +19,40 @@ def run_json(capsys, *args):
     return json.loads(capsys.readouterr().out)
 
 
+RUN_KEYS = {
+    "run",  # the runId its exported points carry
+    "algorithm",
+    "mission",
+    "completed",
+    "time_s",
+    "final_error_m",
+    "max_linear_vel",
+    "stats",
+    "tracking",
+}
+
+
 def test_json_schema_ranking_and_best(capsys):
     started = time.monotonic()
     body = run_json(capsys)
     wall = time.monotonic() - started
     runs = body["runs"]
-    assert {(r["algorithm"], r["mission"]) for r in runs} == {
-        (a, m) for a in AUTONOMOUS for m in ("square", "figure_eight")
-    }
+    assert {(r["algorithm"], r["mission"]) for r in runs} == {(a, m) for a in AUTONOMOUS for m in MISSIONS}
     for r in runs:
-        assert set(r) == {
-            "run",  # the runId its exported points carry
-            "algorithm",
-            "mission",
-            "completed",
-            "time_s",
-            "final_error_m",
-            "max_linear_vel",
-            "stats",
-        }
+        assert set(r) == RUN_KEYS
         assert tuple(r["stats"]) == STATS_FIELDS and r["completed"] and r["final_error_m"] <= 0.15
-    assert sorted(r["run"] for r in runs) == list(range(1, 2 * len(AUTONOMOUS) + 1))
-    assert [m["mission"] for m in body["missions"]] == ["square", "figure_eight"]
-    for m in body["missions"]:  # ranked within each mission, never across
+        assert set(r["tracking"]) == {"samples", *TRACKING_FIELDS}
+        assert r["tracking"]["time_to_complete_s"] == r["time_s"]  # completed: its time
+    assert sorted(r["run"] for r in runs) == list(range(1, len(MISSIONS) * len(AUTONOMOUS) + 1))
+    assert [m["mission"] for m in body["missions"]] == list(MISSIONS)
+    for m in body["missions"]:  # ranked within each mission, never across, by mean cross-track error
         ranked = m["ranking"]
         assert {r["mission"] for r in ranked} == {m["mission"]}
         assert [r["rank"] for r in ranked] == list(range(1, len(AUTONOMOUS) + 1))
-        errors = [r["stats"]["avgDistanceError"] for r in ranked]
+        errors = [r["tracking"]["xte_mean_m"] for r in ranked]
         assert errors == sorted(errors) and m["best"] == ranked[0]["algorithm"] and m["not_run"] == []
     overall = body["overall"]
-    assert overall["missions"] == ["square", "figure_eight"] and overall["rule"] == RULE_OVERALL
+    assert overall["missions"] == list(MISSIONS) and overall["rule"] == RULE_OVERALL
     assert body["best"] == {"algorithm": overall["best"]}
     assert overall["mean_rank"][overall["best"]] == min(overall["mean_rank"].values())
     assert body["rule"] == RULE
@@ -65,7 +71,9 @@ def test_the_speed_cap_holds_for_every_sample(capsys):
 @pytest.mark.parametrize(
     ("args", "words"),
     [
-        (["--mission", "circle"], "unknown 'circle'; choose from square, figure_eight"),
+        (["--mission", "circle"], "unknown 'circle'; choose from square, figure_eight, slalom, corner"),
+        (["--trials", "0"], "--trials"),
+        (["--plot", "out.pdf"], "give a .svg or .png file"),
         (["--algorithms", "go_to_goal,manual"], "unknown 'manual'; choose from go_to_goal, pure_pursuit, st"),
         (["--mission", ","], "give at least one of"),
         (["--speed", "0"], "must be a positive finite number"),
@@ -102,28 +110,67 @@ def test_the_table_names_the_best_and_the_rule(capsys):
     assert out[-1].startswith(f"{RULE_OVERALL}: ") and "mean rank 1 over square" in out[-1]
 
 
-def test_a_latency_sweep_holds_every_cell_and_the_link_of_each(capsys):
-    body = run_json(capsys, "--latency", "0,100,300", "--jitter", "10", "--odom-delay", "20", "--seed", "4")
-    assert [cell["link"] for cell in body["sweep"]] == [
-        {"latency_ms": ms, "jitter_ms": 10.0, "loss": 0.0, "odom_delay_ms": 20.0}
-        for ms in (0.0, 100.0, 300.0)
-    ]
-    assert body["seed"] == 4 and "half-normal" in body["jitter"] and body["rule"] == RULE
-    for cell in body["sweep"]:  # each cell: the whole comparison, ranked per mission
-        assert {(r["algorithm"], r["mission"]) for r in cell["runs"]} == {
-            (a, m) for a in AUTONOMOUS for m in ("square", "figure_eight")
-        }
-        assert all(r["completed"] for r in cell["runs"])
-    error = {
-        (cell["link"]["latency_ms"], r["algorithm"], r["mission"]): r["stats"]["avgDistanceError"]
-        for cell in body["sweep"]
-        for r in cell["runs"]
+FIGURE_KEYS = {"mean", "ci95"}
+
+
+def test_a_sweeps_json_holds_every_cell_trial_and_the_rules(capsys):
+    """The sweep's JSON schema: per link every trial's runs, per mission the ranking with mean ± 95 %
+    interval and a verdict, the overall answer; the rules and the seed; deterministic for a seed."""
+    args = ["--latency", "0,300", "--jitter", "10", "--odom-delay", "20", "--seed", "4", "--trials", "3",
+            "--mission", "square,corner"]  # fmt: skip
+    body = run_json(capsys, *args)
+    assert set(body) == {
+        "sweep",
+        "trials",
+        "seed",
+        "cmd_timeout_s",
+        "jitter",
+        "interval",
+        "rule",
+        "verdict_rule",
     }
-    for a in AUTONOMOUS:
-        assert error[(300.0, a, "square")] > error[(0.0, a, "square")]
-    assert body == run_json(
-        capsys, "--latency", "0,100,300", "--jitter", "10", "--odom-delay", "20", "--seed", "4"
-    )
+    assert body["trials"] == 3 and body["seed"] == 4 and body["cmd_timeout_s"] == 0.5
+    assert "half-normal" in body["jitter"] and "95 %" in body["interval"] and body["rule"] == RULE
+    assert [cell["link"] for cell in body["sweep"]] == [
+        {"latency_ms": ms, "jitter_ms": 10.0, "loss": 0.0, "odom_delay_ms": 20.0} for ms in (0.0, 300.0)
+    ]
+    for cell in body["sweep"]:
+        assert set(cell) == {"link", "runs", "missions", "overall"}
+        assert len(cell["runs"]) == 3 * 2 * len(AUTONOMOUS)
+        assert all(set(r) == RUN_KEYS | {"trial"} for r in cell["runs"])
+        assert {r["trial"] for r in cell["runs"]} == {0, 1, 2}
+        for m in cell["missions"]:
+            assert set(m) == {"mission", "best", "clear", "overlapping", "reason", "ranking"}
+            assert m["clear"] == (m["best"] is not None) and m["reason"]
+            ranked = m["ranking"]
+            assert [r["rank"] for r in ranked] == list(range(1, len(AUTONOMOUS) + 1))
+            for r in ranked:
+                assert {"algorithm", "mission", "trials", "completed", "xte_mean_m", "time_s"} <= set(r)
+                assert set(r["xte_mean_m"]) == FIGURE_KEYS and r["trials"] == 3
+            means = [r["xte_mean_m"]["mean"] for r in ranked]
+            assert means == sorted(means)
+            # the mean is the mean of the trials' runs
+            runs = [
+                r
+                for r in cell["runs"]
+                if (r["mission"], r["algorithm"]) == (m["mission"], ranked[0]["algorithm"])
+            ]
+            assert ranked[0]["xte_mean_m"]["mean"] == pytest.approx(
+                sum(r["tracking"]["xte_mean_m"] for r in runs) / 3, abs=1e-6
+            )
+    assert body == run_json(capsys, *args)  # deterministic for a seed
+
+
+def test_trials_draw_different_jitter_and_the_interval_says_so(capsys):
+    body = run_json(capsys, "--latency", "200", "--jitter", "40", "--trials", "4", "--mission", "square")
+    (cell,) = body["sweep"]
+    errors = {r["tracking"]["xte_mean_m"] for r in cell["runs"] if r["algorithm"] == "pure_pursuit"}
+    assert len(errors) == 4  # each trial its own draws
+    (m,) = cell["missions"]
+    assert all(r["xte_mean_m"]["ci95"] > 0 for r in m["ranking"])
+    # no jitter, no loss: the trials are the same run and the interval has no width
+    body = run_json(capsys, "--latency", "200", "--trials", "3", "--mission", "square")
+    assert all(r["xte_mean_m"]["ci95"] == 0 for r in body["sweep"][0]["missions"][0]["ranking"])
 
 
 def test_a_sweep_prints_a_table_per_latency_and_the_errors_side_by_side(capsys):
@@ -132,6 +179,7 @@ def test_a_sweep_prints_a_table_per_latency_and_the_errors_side_by_side(capsys):
     assert out.count("== latency") == 2 and "== latency 200 ms, jitter 0 ms" in out
     last = out.strip().splitlines()[-1 - len(AUTONOMOUS) :]
     assert last[0].split() == ["mission", "algorithm", "0", "ms", "200", "ms"]
+    assert out.count("verdict: ") == 2
     assert {line.split()[1] for line in last[1:]} == set(AUTONOMOUS)
 
 

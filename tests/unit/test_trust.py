@@ -15,6 +15,7 @@ from arbiter_tui.analytics.model import EMPTY_STATS, AnalyticsStats
 from arbiter_tui.analytics.runs import ABORTED, COMPLETED, RunSummary
 from arbiter_tui.analytics.store import AnalyticsStore, DataPoint
 from arbiter_tui.cli import main
+from arbiter_tui.control.algorithms import MISSIONS
 from arbiter_tui.control.loop import ControlLoop
 from arbiter_tui.control.teleop import MIN_SPEED, MIN_TURN, Teleop
 from arbiter_tui.latency.clocksync import LatencyMeter
@@ -75,9 +76,9 @@ def test_the_screens_rows_are_per_mission_and_algorithm():
 def test_compare_json_ranks_within_each_mission(capsys):
     assert main(["compare", "--json"]) == 0
     body = json.loads(capsys.readouterr().out)
-    assert [m["mission"] for m in body["missions"]] == ["square", "figure_eight"]
+    assert [m["mission"] for m in body["missions"]] == list(MISSIONS)
     assert all({r["mission"] for r in m["ranking"]} == {m["mission"]} for m in body["missions"])
-    assert body["overall"]["missions"] == ["square", "figure_eight"]
+    assert body["overall"]["missions"] == list(MISSIONS)
     assert body["overall"]["rule"] == ranking.RULE_OVERALL
 
 

@@ -1,0 +1,66 @@
+"""``compare --plot FILE``: a sweep's avg cross-track error against latency as an SVG or PNG, for reports.
+
+One panel per mission, one line per controller, its 95 % interval as a band when there are several
+trials. matplotlib (the ``[report]`` extra) is imported only here, with the headless Agg backend.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from .compare_cmd import SweepCell
+
+
+def series(cells: list[SweepCell]) -> dict[str, dict[str, list[tuple[float, float, float]]]]:
+    """mission -> algorithm -> [(latency ms, mean avg e_xt, interval half-width)] in latency order."""
+    out: dict[str, dict[str, list[tuple[float, float, float]]]] = {}
+    for cell in sorted(cells, key=lambda c: c.link.latency_s):
+        for s in cell.summaries:
+            f = s.figures["xte_mean_m"]
+            out.setdefault(s.mission, {}).setdefault(s.algorithm, []).append(
+                (cell.link.latency_s * 1e3, f.mean, f.ci95)
+            )
+    return out
+
+
+def write_plot(path: Path, cells: list[SweepCell]) -> None:
+    """Write the figure; ImportError (with how to install) when matplotlib is missing."""
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        raise ImportError("needs matplotlib: pip install 'arbiter-tui[report]'") from None
+    data = series(cells)
+    n = len(data)
+    cols = min(n, 2)
+    rows = math.ceil(n / cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(6.0 * cols, 4.0 * rows), squeeze=False)
+    first = cells[0].link
+    for ax, (mission, lines) in zip(axes.flat, data.items(), strict=False):
+        for algorithm, points in lines.items():
+            x = [p[0] for p in points]
+            y = [p[1] for p in points]
+            ax.plot(x, y, marker="o", label=algorithm)
+            if any(p[2] for p in points):
+                ax.fill_between(x, [p[1] - p[2] for p in points], [p[1] + p[2] for p in points], alpha=0.2)
+        ax.set_title(mission)
+        ax.set_xlabel("one-way command latency (ms)")
+        ax.set_ylabel("avg cross-track error (m)")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize="small")
+    for ax in list(axes.flat)[n:]:
+        ax.set_visible(False)
+    trials = len(cells[0].runs)
+    fig.suptitle(
+        f"arbiter-tui compare: jitter {first.jitter_s * 1e3:g} ms, loss {first.loss:g}, odometry delay "
+        f"{first.odom_delay_s * 1e3:g} ms, {trials} trial(s)"
+        + (", bands: 95 % interval" if trials > 1 else "")
+    )
+    fig.tight_layout()
+    fig.savefig(path, format=path.suffix.lower().lstrip("."))
+    plt.close(fig)

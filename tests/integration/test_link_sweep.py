@@ -1,0 +1,46 @@
+"""The analytics screen's sweep runs ``arbiter-tui compare`` in a real child process, at lower priority."""
+
+import asyncio
+import os
+import subprocess
+
+import pytest
+
+from arbiter_tui.analytics.linkcurve import SWEEP_LATENCIES_MS, CurveError
+from arbiter_tui.session import link_sweep
+from arbiter_tui.session.compare import AUTONOMOUS
+
+
+def test_the_child_process_answers_a_curve_per_controller():
+    curve = asyncio.run(link_sweep.sweep_curve("corner", 0.5, 1.0))
+    assert curve.mission == "corner" and curve.latencies_ms == SWEEP_LATENCIES_MS
+    assert {name for name, _ys in curve.errors} == set(AUTONOMOUS)
+    assert all(len(ys) == len(SWEEP_LATENCIES_MS) and min(ys) >= 0 for _name, ys in curve.errors)
+
+
+def test_a_failing_child_says_why(monkeypatch):
+    real = link_sweep.command
+    monkeypatch.setattr(link_sweep, "command", lambda m, s, t: [*real(m, s, t), "--trials", "0"])
+    with pytest.raises(CurveError, match="--trials"):
+        asyncio.run(link_sweep.sweep_curve("square", 0.5, 1.0))
+
+
+def test_cancelling_kills_the_child(monkeypatch):
+    monkeypatch.setattr(link_sweep, "command", lambda m, s, t: ["sleep", "30"])
+
+    async def cancel_it() -> None:
+        task = asyncio.create_task(link_sweep.sweep_curve("square", 0.5, 1.0))
+        await asyncio.sleep(0)  # the child is being started
+        for _ in range(200):
+            if task.done():
+                break
+            await asyncio.sleep(0.01)
+            task.cancel()
+        with pytest.raises(asyncio.CancelledError):
+            await task
+
+    asyncio.run(cancel_it())
+    children = subprocess.run(
+        ["pgrep", "-P", str(os.getpid()), "-x", "sleep"], capture_output=True, text=True
+    )
+    assert children.stdout.strip() == ""  # killed and reaped

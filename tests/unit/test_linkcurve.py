@@ -1,0 +1,49 @@
+"""Error against latency on the analytics screen: the curve from a compare sweep, the measured p95 on it."""
+
+import pytest
+
+from arbiter_tui.analytics.linkcurve import (
+    FAILED,
+    READY,
+    RUNNING,
+    CurveError,
+    LinkCurve,
+    LinkSweepView,
+    curve_of,
+    interpolate,
+    measured_p95,
+)
+
+
+def test_interpolation_between_and_beyond_the_swept_latencies():
+    xs, ys = (0.0, 100.0, 300.0), (0.01, 0.03, 0.07)
+    assert interpolate(xs, ys, 50.0) == pytest.approx(0.02)
+    assert interpolate(xs, ys, 200.0) == pytest.approx(0.05)
+    assert interpolate(xs, ys, -5.0) == 0.01 and interpolate(xs, ys, 900.0) == 0.07
+
+
+def test_the_marker_line_names_each_controllers_extra_error_at_the_measured_p95():
+    curve = LinkCurve(
+        "square", (0.0, 100.0, 300.0), (("stanley", (0.01, 0.02, 0.05)), ("kanayama", (0.04, 0.034, 0.03)))
+    )
+    view = LinkSweepView(READY, "square", curve, p95_ms=50.0)
+    assert (
+        view.text()
+        == "at your p95 of 50 ms on square: stanley +0.005 m, kanayama -0.003 m (avg e_xt vs 0 ms)"
+    )
+    assert "beyond the sweep" in LinkSweepView(READY, "square", curve, p95_ms=400.0).text()
+    assert "no latency measured" in LinkSweepView(READY, "square", curve, p95_ms=None).text()
+    assert "sweeping latency" in LinkSweepView(RUNNING, "square").text()
+    assert LinkSweepView(FAILED, "square", error="boom").text() == "latency sweep failed: boom"
+
+
+def test_p95_of_recorded_latencies_ignores_unknown_ones_and_clamps_negative_ones():
+    assert measured_p95([]) is None and measured_p95([float("nan")]) is None
+    assert measured_p95([-3.0, *[float(i) for i in range(1, 20)]]) == 19.0
+    assert measured_p95([-3.0]) == 0.0
+
+
+def test_a_malformed_compare_answer_is_a_curve_error():
+    for body in ({}, {"sweep": [{"link": {}}]}, {"sweep": []}, {"sweep": "x"}):
+        with pytest.raises(CurveError):
+            curve_of(body, "square")

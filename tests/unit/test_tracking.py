@@ -1,0 +1,138 @@
+"""Path-tracking metrics (cross-track error, time, path ratio, smoothness), trials with 95 % intervals,
+and what latency does to each controller on the square."""
+
+import math
+
+import numpy as np
+import pytest
+
+from arbiter_core.linkmodel import LinkModel
+from arbiter_core.stats import mean_ci95, t975
+from arbiter_tui.analytics import tracking as T
+from arbiter_tui.analytics.exports import read_mcap, runs_from, to_json, to_mcap
+from arbiter_tui.analytics.runs import COMPLETED
+from arbiter_tui.analytics.store import AnalyticsStore
+from arbiter_tui.session import trials as TR
+from arbiter_tui.session.compare import AUTONOMOUS, run_one
+from arbiter_tui.session.compare_cmd import Sweep, run_sweep
+
+
+def test_cross_track_is_the_distance_to_the_nearest_segment():
+    path = T.reference_path((0.0, 0.0), [(2.0, 0.0), (2.0, 2.0)])
+    x = np.array([1.0, 1.0, 3.0, 2.5, -1.0, 2.0])
+    y = np.array([0.0, 0.3, 1.0, -0.5, 0.0, 3.0])
+    # on the path; beside the first leg; beside the second; off the corner (to the corner point);
+    # behind the start; past the end
+    expected = [0.0, 0.3, 1.0, math.hypot(0.5, 0.5), 1.0, 1.0]
+    assert T.cross_track(x, y, path) == pytest.approx(expected)
+    assert T.path_length(path) == 4.0
+    # a goal run from where the robot stood: one segment; a zero-length path is a point
+    assert T.cross_track(np.array([1.0]), np.array([1.0]), T.reference_path((0, 0), [(2, 0)])) == [1.0]
+    assert T.cross_track(np.array([3.0]), np.array([4.0]), T.reference_path((0, 0), [])) == [5.0]
+
+
+def test_tracking_stats_formulas():
+    path = T.reference_path((0.0, 0.0), [(10.0, 0.0)])
+    e = np.array([0.0, 0.1, 0.2, 0.3, 0.4])
+    t = np.array([0.0, 0.1, 0.2, 0.3, 0.4])
+    w = np.array([0.0, 0.5, 0.5, 0.0, 0.0])  # |dw/dt|: 5, 0, 5, 0 -> mean 2.5
+    s = T.tracking_stats(t, np.arange(5.0), e, w, path, travelled=5.0, completed_time_s=12.0)
+    assert s.samples == 5 and s.xte_mean_m == pytest.approx(0.2) and s.xte_max_m == pytest.approx(0.4)
+    assert s.xte_rms_m == pytest.approx(math.sqrt((0.01 + 0.04 + 0.09 + 0.16) / 5))
+    assert s.xte_p95_m == pytest.approx(0.4)  # the seed's rule: sorted[floor(0.95 * 5)] = sorted[4]
+    assert s.path_ratio == pytest.approx(0.5) and s.time_to_complete_s == 12.0
+    assert s.mean_abs_dw_dt == pytest.approx(2.5)
+    assert T.TrackingStats.from_dict(s.as_dict()) == T.TrackingStats.from_dict(s.as_dict())
+    with pytest.raises(ValueError, match=r"tracking\.xte_mean_m"):
+        T.TrackingStats.from_dict({**s.as_dict(), "xte_mean_m": float("nan")})
+    with pytest.raises(ValueError, match="samples"):
+        T.TrackingStats.from_dict({**s.as_dict(), "samples": -1})
+
+
+def test_a_run_in_the_store_is_measured_against_its_path_and_exports_keep_it():
+    store = AnalyticsStore(max_data_points=1000)
+    store.start_collection()
+    result = run_one("pure_pursuit", "square")
+    run = store.begin_run(
+        "pure_pursuit", "square", 0.0, T.reference_path((0.0, 0.0), [(2, 0), (2, 2), (0, 2), (0, 0)])
+    )
+    from dataclasses import replace
+
+    for p in result.points:
+        store.record(replace(p, runId=run))
+    store.end_run(COMPLETED, result.points[-1].timestamp + 50, result.final_error_m)
+    (summary,) = store.runs()
+    # perfect link: the console's odometry is the true pose, so the store says what compare says
+    assert summary.tracking.xte_mean_m == pytest.approx(result.tracking.xte_mean_m, abs=1e-9)
+    assert summary.tracking.xte_max_m == pytest.approx(result.tracking.xte_max_m, abs=1e-9)
+    (row,) = store.runs_by_algorithm()
+    assert row.tracking.xte_mean_m == pytest.approx(summary.tracking.xte_mean_m)
+    import json
+
+    doc = json.loads(to_json(store.points(), None, store.runs(), store.runs_by_algorithm()))
+    (back,) = runs_from(doc["runs"], {})
+    assert back.tracking == T.TrackingStats.from_dict(summary.tracking.as_dict())
+    export = read_mcap(to_mcap(store.points(), None, store.runs(), store.runs_by_algorithm()))
+    assert export.runs[0].tracking.xte_mean_m == pytest.approx(summary.tracking.xte_mean_m, abs=1e-6)
+    assert export.algorithms[0].tracking.path_ratio == pytest.approx(row.tracking.path_ratio, abs=1e-6)
+
+
+def test_a_manual_run_has_no_tracking_metrics():
+    store = AnalyticsStore()
+    store.start_collection()
+    store.begin_run("manual", "", 0.0)
+    assert store.runs() == () or store.runs()[0].tracking is None
+
+
+def test_mean_ci95_uses_students_t():
+    assert t975(1) == 12.706 and t975(9) == 2.262 and t975(60) == pytest.approx(2.0, abs=0.005)
+    assert mean_ci95([1.0, 2.0, 3.0]) == pytest.approx((2.0, 4.303 * 1.0 / math.sqrt(3)))
+    assert mean_ci95([5.0]) == (5.0, 0.0) and mean_ci95([]) == (0.0, 0.0)
+    with pytest.raises(ValueError):
+        t975(0)
+
+
+def _summary(algorithm: str, mission: str, xte: list[float]):
+    from dataclasses import replace
+
+    base = run_one(algorithm, mission)
+    runs = [replace(base, tracking=replace(base.tracking, xte_mean_m=v)) for v in xte]
+    return TR.summarize(runs)
+
+
+def test_no_clear_winner_when_the_intervals_overlap():
+    a = _summary("stanley", "corner", [0.010, 0.012, 0.014])
+    b = _summary("pure_pursuit", "corner", [0.013, 0.015, 0.017])
+    (v,) = TR.verdicts([a, b])
+    assert v.best is None and v.overlapping == ("pure_pursuit",) and v.reason.startswith("no clear winner")
+    c = _summary("pure_pursuit", "corner", [0.030, 0.031, 0.032])
+    (v,) = TR.verdicts([a, c])
+    assert v.best == "stanley" and v.overlapping == () and "apart from every other" in v.reason
+
+
+def test_each_controllers_tracking_on_the_square_at_300_ms_against_0_ms_over_10_seeds():
+    """The issue expects every controller to track worse at 300 ms. Measured (10 trials, 20 ms jitter):
+    the path trackers do; go_to_goal and kanayama track the square's corners *better* at 300 ms — the
+    late command keeps them turning in place longer before they speed up, so they swing wide of the
+    corner less (README, "Is my link good enough?") — and all five take longer to complete it. At
+    500 ms kanayama tracks worse too; go_to_goal still swings wide less than at 0 ms."""
+    cells = run_sweep(
+        Sweep(
+            ["square"],
+            list(AUTONOMOUS),
+            0.5,
+            1.0,
+            [LinkModel(0.0, 0.02), LinkModel(0.3, 0.02), LinkModel(0.5, 0.02)],
+            seed=0,
+            trials=10,
+        )
+    )
+    at = {ms: {s.algorithm: s for s in c.summaries} for ms, c in zip((0, 300, 500), cells, strict=True)}
+    for name in AUTONOMOUS:
+        assert at[300][name].completions == 10
+        assert at[300][name].figures["time_s"].low > at[0][name].figures["time_s"].high
+    for name in ("pure_pursuit", "stanley", "regulated_pure_pursuit"):
+        assert at[300][name].figures["xte_mean_m"].low > at[0][name].figures["xte_mean_m"].high, name
+    for name in ("go_to_goal", "kanayama"):
+        assert at[300][name].figures["xte_mean_m"].high < at[0][name].figures["xte_mean_m"].low, name
+    assert at[500]["kanayama"].figures["xte_mean_m"].low > at[0]["kanayama"].figures["xte_mean_m"].high
