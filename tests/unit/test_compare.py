@@ -204,3 +204,17 @@ def test_latency_measured_takes_p50_and_p95_of_an_exports_latencies(tmp_path, ca
     empty.write_text(to_csv(base))  # client-side simulation: no latency known
     assert main(["compare", "--latency", "measured", "--measured-from", str(empty)]) == 2
     assert "no latencies there" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("suffix", ["svg", "png"])
+def test_plot_writes_the_error_vs_latency_figure(tmp_path, capsys, suffix):
+    out = tmp_path / f"sweep.{suffix}"
+    assert main(["compare", "--latency", "0,200", "--mission", "corner", "--plot", str(out)]) == 0
+    assert f"wrote {out}" in capsys.readouterr().out
+    data = out.read_bytes()
+    if suffix == "svg":
+        text = data.decode()
+        assert text.lstrip().startswith("<?xml") and "<svg" in text
+        assert "corner" in text and "one-way command latency" in text  # the panel and its axis
+    else:
+        assert data.startswith(b"\x89PNG\r\n\x1a\n") and len(data) > 10_000
