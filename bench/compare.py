@@ -1,8 +1,10 @@
 """How long a latency sweep of ``arbiter-tui compare`` takes, and what each controller costs per step.
 
 A sweep is every autonomous controller x every mission x 5 one-way latencies (0, 50, 100, 200, 300 ms,
-jitter 10 ms) x 10 trials (seeds 0-9), each run in simulated time behind the modelled link; timed
-``--repeat`` times, the median reported (target: under 20 s on one core). Per step: one controller's
+jitter 10 ms) x 10 trials, each run in simulated time behind the modelled link, exactly as
+``arbiter-tui compare --latency 0,50,100,200,300 --jitter 10 --trials 10`` runs it (``run_sweep``:
+the runs, their tracking metrics, the trials' intervals and verdicts); timed ``--repeat`` times, the
+median reported (target: under 20 s on one core). Per step: one controller's
 ``command(pose, mission)`` at a pose beside the square's first leg, median of 7 timings of 20,000 calls.
 
     python bench/compare.py
@@ -20,18 +22,16 @@ from _common import emit
 from arbiter_core.kinematics import Pose
 from arbiter_core.linkmodel import LinkModel
 from arbiter_tui.control.algorithms import MissionProgress, make_controller
-from arbiter_tui.session.compare import AUTONOMOUS, MISSION_NAMES, compare
+from arbiter_tui.session.compare import AUTONOMOUS, MISSION_NAMES
+from arbiter_tui.session.compare_cmd import Sweep, run_sweep
 
 LATENCIES_MS = (0, 50, 100, 200, 300)
 
 
 def sweep(trials: int) -> int:
-    runs = 0
-    for seed in range(trials):
-        for ms in LATENCIES_MS:
-            link = LinkModel(latency_s=ms / 1e3, jitter_s=0.01)
-            runs += len(compare(list(MISSION_NAMES), list(AUTONOMOUS), link_model=link, seed=seed, t0_ms=0.0))
-    return runs
+    links = [LinkModel(latency_s=ms / 1e3, jitter_s=0.01) for ms in LATENCIES_MS]
+    cells = run_sweep(Sweep(list(MISSION_NAMES), list(AUTONOMOUS), 0.5, 1.0, links, seed=0, trials=trials))
+    return sum(len(trial) for cell in cells for trial in cell.runs)
 
 
 def step_cost_us(name: str, calls: int = 20_000) -> float:
@@ -61,6 +61,7 @@ def main() -> int:
         {
             "bench": "compare",
             "runs_per_sweep": runs,
+            "missions": list(MISSION_NAMES),
             "latencies_ms": list(LATENCIES_MS),
             "trials": args.trials,
             "sweep_cpu_s_median": round(statistics.median(times), 3),
