@@ -96,9 +96,12 @@ class LinkSweepView:
             return f"{self.curve.mission}: no latency measured yet (simulated link, or nothing recorded)"
         beyond = " (beyond the sweep: its last value)" if self.p95_ms > self.curve.latencies_ms[-1] else ""
         parts = ", ".join(f"{name} {delta + 0.0:+.3f} m" for name, delta in self.curve.at(round(self.p95_ms)))
-        return (
-            f"at your p95 of {self.p95_ms:.0f} ms{beyond} on {self.curve.mission}: {parts} (avg e_xt vs 0 ms)"
-        )
+        return f"at your p95 of {_ms(self.p95_ms)} ms{beyond} on {self.curve.mission}: {parts} (avg e_xt vs 0 ms)"
+
+
+def _ms(value: float) -> str:
+    """0.4 (a LAN link) or 130: a tenth of a millisecond only where it is most of the figure."""
+    return f"{value:.1f}" if value < 10 else f"{value:.0f}"
 
 
 def _range() -> str:

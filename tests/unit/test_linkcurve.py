@@ -32,6 +32,11 @@ def test_the_marker_line_names_each_controllers_extra_error_at_the_measured_p95(
         == "at your p95 of 50 ms on square: stanley +0.005 m, kanayama -0.003 m (avg e_xt vs 0 ms)"
     )
     assert "beyond the sweep" in LinkSweepView(READY, "square", curve, p95_ms=400.0).text()
+    assert (
+        LinkSweepView(READY, "square", curve, p95_ms=0.42)
+        .text()
+        .startswith("at your p95 of 0.4 ms on square")
+    )
     assert "no latency measured" in LinkSweepView(READY, "square", curve, p95_ms=None).text()
     assert "sweeping latency" in LinkSweepView(RUNNING, "square").text()
     assert LinkSweepView(FAILED, "square", error="boom").text() == "latency sweep failed: boom"
