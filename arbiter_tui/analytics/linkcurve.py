@@ -96,7 +96,8 @@ class LinkSweepView:
             return f"{self.curve.mission}: no latency measured yet (simulated link, or nothing recorded)"
         beyond = " (beyond the sweep: its last value)" if self.p95_ms > self.curve.latencies_ms[-1] else ""
         parts = ", ".join(f"{name} {delta + 0.0:+.3f} m" for name, delta in self.curve.at(round(self.p95_ms)))
-        return f"at your p95 of {_ms(self.p95_ms)} ms{beyond} on {self.curve.mission}: {parts} (avg e_xt vs 0 ms)"
+        where = f"at your p95 of {_ms(self.p95_ms)} ms{beyond} on {self.curve.mission}"
+        return f"{where}: {parts} (avg e_xt vs 0 ms)"
 
 
 def _ms(value: float) -> str:
