@@ -405,7 +405,7 @@ class ArbiterApp(App[None]):
         view = self.link_sweep
         if self._sweep_version != self.store.version:
             self._sweep_version = self.store.version
-            p95 = measured_p95(self.store.column("latencyMs").tolist())
+            p95 = measured_p95(self.store.column("latencyMs"))
             if p95 != view.p95_ms:
                 view = self.link_sweep = replace(view, p95_ms=p95)
         mission = self.loop.mission_name
