@@ -2,7 +2,6 @@
 
 import asyncio
 import os
-import subprocess
 
 import pytest
 
@@ -27,20 +26,25 @@ def test_a_failing_child_says_why(monkeypatch):
 
 def test_cancelling_kills_the_child(monkeypatch):
     monkeypatch.setattr(link_sweep, "command", lambda m, s, t: ["sleep", "30"])
+    started = []
+    real_exec = asyncio.create_subprocess_exec
 
     async def cancel_it() -> None:
+        running = asyncio.Event()
+
+        async def exec_and_tell(*args, **kwargs):
+            proc = await real_exec(*args, **kwargs)
+            started.append(proc.pid)
+            running.set()
+            return proc
+
+        monkeypatch.setattr(asyncio, "create_subprocess_exec", exec_and_tell)
         task = asyncio.create_task(link_sweep.sweep_curve("square", 0.5, 1.0))
-        await asyncio.sleep(0)  # the child is being started
-        for _ in range(200):
-            if task.done():
-                break
-            await asyncio.sleep(0.01)
-            task.cancel()
+        await asyncio.wait_for(running.wait(), 30)  # the child is running: cancel now
+        task.cancel()
         with pytest.raises(asyncio.CancelledError):
             await task
 
     asyncio.run(cancel_it())
-    children = subprocess.run(
-        ["pgrep", "-P", str(os.getpid()), "-x", "sleep"], capture_output=True, text=True
-    )
-    assert children.stdout.strip() == ""  # killed and reaped
+    (pid,) = started
+    assert not os.path.exists(f"/proc/{pid}")  # killed and reaped (not even a zombie)
