@@ -42,8 +42,8 @@ def test_cancelling_kills_the_child(monkeypatch):
         task = asyncio.create_task(link_sweep.sweep_curve("square", 0.5, 1.0))
         await asyncio.wait_for(running.wait(), 30)  # the child is running: cancel now
         task.cancel()
-        with pytest.raises(asyncio.CancelledError):
-            await task
+        with pytest.raises(asyncio.CancelledError):  # not a 10 s wait for the child's 30 s to end
+            await asyncio.wait_for(task, 10)
 
     asyncio.run(cancel_it())
     (pid,) = started
