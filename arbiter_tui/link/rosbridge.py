@@ -16,6 +16,7 @@ from arbiter_core import failures as errors
 
 from . import wsframe
 from .base import CONNECTED, CONNECTING, DISCONNECTED, RECONNECTING, Telemetry
+from .streams import Streams
 
 log = logging.getLogger(__name__)
 
@@ -167,13 +168,42 @@ class RosLink:
         factory.on("ready", self._on_ready)
         self.ros.on("close", self._on_close)
         self._cmd = roslibpy.Topic(self.ros, self.topic_stamped, topics.TYPE_STRING, queue_size=1)
-        self._odom = roslibpy.Topic(
-            self.ros, self.topic_odom, topics.TYPE_ODOM, throttle_rate=odom_throttle_ms, queue_length=1
-        )
-        self._report = roslibpy.Topic(self.ros, self.topic_report, topics.TYPE_STRING, queue_length=10)
         self._cmd.advertise()
-        self._odom.subscribe(self.telemetry.set_odom)
-        self._report.subscribe(self.telemetry.set_report)
+        # Every stream the console takes goes through one registry (streams.py): one server
+        # subscription per topic, any number of listeners, none removing another's.
+        self.streams = Streams(
+            self._write_frame,
+            attach=self.ros.on,
+            detach=self.ros.off,
+            call_later=self._reactor.callLater,
+        )
+        self.streams.listen(
+            self.topic_odom, topics.TYPE_ODOM, self.telemetry.set_odom, odom_throttle_ms, queue_length=1
+        )
+        self.streams.listen(self.topic_report, topics.TYPE_STRING, self.telemetry.set_report, queue_length=10)
+
+    def _write_frame(self, frame: dict[str, Any]) -> None:
+        """Send one rosbridge frame of the registry on the reactor thread (now when called there);
+        dropped while the link is down: the registry sends its subscriptions again when it is up."""
+
+        def write() -> None:
+            proto = self.ros.factory._proto
+            if proto is None or not self.ros.is_connected:
+                return
+            try:
+                proto.sendMessage(json.dumps(frame).encode("utf-8"), isBinary=False)
+            except Exception:  # a socket closing under us: the next "ready" sends it again
+                log.debug("sending %s failed", frame.get("op"), exc_info=True)
+
+        if self._on_reactor_thread():
+            write()
+        else:
+            self._reactor.callFromThread(write)
+
+    def _on_reactor_thread(self) -> bool:
+        from twisted.python import threadable
+
+        return bool(self._reactor.running and threadable.isInIOThread())
 
     def _set_error(self, text: str) -> None:
         with self._lock:
@@ -200,11 +230,13 @@ class RosLink:
             if self._ever_connected:
                 self._zero_first = True
             self._ever_connected = True
+        self.streams.connected()  # our subscriptions, to this (new) connection
 
     def _on_close(self, *args: Any) -> None:
         with self._lock:
             if self._state != "CLOSED":
                 self._state = DISCONNECTED
+        self.streams.disconnected()
         with self.telemetry.lock:
             self.telemetry.connected_at = None
         self.telemetry.meter.reset_pending(time.monotonic())  # in flight: never reported
@@ -275,14 +307,11 @@ class RosLink:
     def echo(
         self, topic: str, type_name: str, callback: Callable[[dict[str, Any]], None]
     ) -> Callable[[], None]:
-        """Subscribe to ``topic`` for the topics screen's echo: at most one message every
-        ``ECHO_THROTTLE_MS`` (rosbridge's ``throttle_rate``, ``queue_length`` 1, so the server drops
-        the rest). Returns the unsubscribe."""
-        import roslibpy  # imported where the link is built too: not at module level (start-up time)
-
-        sub = roslibpy.Topic(self.ros, topic, type_name, throttle_rate=ECHO_THROTTLE_MS, queue_length=1)
-        self._reactor.callFromThread(sub.subscribe, callback)
-        return lambda: self._reactor.callFromThread(sub.unsubscribe)
+        """The topics screen's echo of ``topic``: at most one message every ``ECHO_THROTTLE_MS``. A
+        topic the console already takes (odometry, latency reports) shares that stream, throttled on
+        our side; any other gets a server subscription with rosbridge's ``throttle_rate`` and
+        ``queue_length`` 1. Returns the function that removes this echo and nothing else."""
+        return self.streams.listen(topic, type_name, callback, ECHO_THROTTLE_MS, queue_length=1)
 
     def close(self) -> None:
         with self._lock:
