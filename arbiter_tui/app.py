@@ -647,6 +647,7 @@ class ArbiterApp(App[None]):
         self.publish_views(force=True)
 
     def ask_goal(self) -> None:
+        from .control.algorithms import goal_driver
         from .screens.goal import GoalPrompt
 
         pose = self.link.telemetry.snapshot()[0]
@@ -655,7 +656,7 @@ class ArbiterApp(App[None]):
             if goal is not None:
                 self.set_goal(*goal)
 
-        self.push_screen(GoalPrompt((pose.x, pose.y)), chosen)
+        self.push_screen(GoalPrompt((pose.x, pose.y), goal_driver(self.loop.algorithm)), chosen)
 
     @on(GoalPicked)
     def _goal_picked(self, event: GoalPicked) -> None:

@@ -18,25 +18,20 @@ from textual_plot import HiResMode, PlotWidget
 from textual_plot.axis_formatter import AxisFormatter
 
 from . import axes
-from .analytics.linkcurve import LinkSweepView
+from .analytics.linkcurve import LinkSweepView, format_ms
 from .analytics.runs import MANUAL
+from .analytics.styles import GOAL, ROBOT_ARROWS, WAYPOINT, style_of
 from .messages import GoalPicked
 from .views import PLOT_PERIOD_S, AnalyticsView, LatencySnapshot, MapView, thin
 
-# one marker shape (and colour) per algorithm; later names reuse them in order
-ALGORITHM_STYLES: dict[str, tuple[str, str]] = {
-    MANUAL: ("·", "bright_white"),
-    "go_to_goal": ("+", "cyan"),
-    "pure_pursuit": ("x", "magenta"),
-}
-EXTRA_STYLES = (("*", "green"), ("o", "yellow"), ("#", "red"))
+
+def algorithm_style(name: str) -> tuple[str, str]:
+    """The terminal marker and colour of controller ``name``: the same on every plot (styles.py)."""
+    style = style_of(name)
+    return style.marker, style.colour
+
+
 CELL_ASPECT = 2.0  # a terminal cell is about twice as tall as it is wide
-
-
-def algorithm_style(name: str, order: int) -> tuple[str, str]:
-    return ALGORITHM_STYLES.get(name) or EXTRA_STYLES[order % len(EXTRA_STYLES)]
-
-
 MIN_GAP_X = 8  # columns between x ticks: room for a label like "-12.5"
 MIN_GAP_Y = 2  # rows between y ticks
 LINE_GAP_S = 1.0  # latency over time: no line across a second without commands
@@ -52,11 +47,19 @@ def short_name(name: str) -> str:
 
 
 def legend_text(items: Sequence[tuple[str, str]], width: int) -> str:
-    """``marker name`` pairs in one line of at most ``width`` cells: full names, else short ones."""
-    full = " ".join(f"{m} {n}" for m, n in items)
-    if len(full) <= width:
-        return full
-    return " ".join(f"{m} {short_name(n)}" for m, n in items)[: max(width, 0)]
+    """``marker name`` pairs in one line of at most ``width`` cells: full names, else short ones, else
+    as many whole entries as fit (the first ones) and an ellipsis."""
+    for name_of in (str, short_name):
+        text = " ".join(f"{m} {name_of(n)}" for m, n in items)
+        if len(text) <= width:
+            return text
+    shown: list[str] = []
+    for m, n in items:
+        entry = f"{m} {short_name(n)}"
+        if len(" ".join([*shown, entry, "…"])) > width:
+            break
+        shown.append(entry)
+    return " ".join([*shown, "…"]) if shown else ""
 
 
 class DecadeFormatter(AxisFormatter):
@@ -201,11 +204,11 @@ class MapPlot(Plot):
         legend = []
         if waypoints:
             wx, wy = zip(*waypoints, strict=True)
-            self.scatter(wx, wy, marker="o", marker_style="yellow")
-            legend.append(("o", "waypoint"))
+            self.scatter(wx, wy, marker=WAYPOINT.marker, marker_style=WAYPOINT.colour)
+            legend.append((WAYPOINT.marker, "waypoint"))
         if goal is not None:
-            self.scatter([goal[0]], [goal[1]], marker="G", marker_style="bold red")
-            legend.append(("G", "goal"))
+            self.scatter([goal[0]], [goal[1]], marker=GOAL.marker, marker_style=GOAL.colour)
+            legend.append((GOAL.marker, "goal"))
         return legend
 
     def one_per_cell(
@@ -239,8 +242,8 @@ class TrajectoryPlot(MapPlot):
         x_axis, y_axis = self.map_axes(xs, ys, view.waypoints, view.goal)
         self.set_axes(x_axis, y_axis)
         legend: list[tuple[str, str]] = []
-        for i, (track, x, y) in enumerate(tracks):
-            marker, colour = algorithm_style(track.algorithm, i)
+        for track, x, y in tracks:
+            marker, colour = algorithm_style(track.algorithm)
             self.scatter(*self.one_per_cell(x, y, x_axis, y_axis), marker=marker, marker_style=colour)
             legend.append((marker, track.algorithm))
         legend += self.draw_mission(view.waypoints, view.goal)
@@ -315,12 +318,11 @@ class LiveMap(MapPlot):
         self.post_message(GoalPicked(round(x, 2), round(y, 2)))
 
 
-ARROWS = "→↗↑↖←↙↓↘"
 FOLLOW_S = 0.5  # the live map follows the robot at most this often
 
 
 def heading_arrow(theta: float) -> str:
-    return ARROWS[round(theta / (math.pi / 4)) % 8]
+    return ROBOT_ARROWS[round(theta / (math.pi / 4)) % 8]
 
 
 class _LatencyWindow(Plot):
@@ -406,9 +408,10 @@ class LinkPlot(Plot):
             return
         top = max(max(ys) for _name, ys in curve.errors) * 1.1 or 0.1
         x_hi = curve.latencies_ms[-1]
-        legend = [] if view.p95_ms is None else [("│", f"p95 {view.p95_ms:.0f} ms")]  # first: never cut
-        for order, (name, ys) in enumerate(curve.errors):
-            marker, style = algorithm_style(name, order)
+        # first: never cut; the same figure as the line of text below the plot
+        legend = [] if view.p95_ms is None else [("│", f"p95 {format_ms(view.p95_ms)} ms")]
+        for name, ys in curve.errors:
+            marker, style = algorithm_style(name)
             self.plot(curve.latencies_ms, ys, line_style=style, hires_mode=HiResMode.BRAILLE)
             self.scatter(curve.latencies_ms, ys, marker=marker, marker_style=style)
             legend.append((marker, name))

@@ -10,6 +10,7 @@ cross-track error at that latency minus its error at 0 ms (the first swept laten
 from __future__ import annotations
 
 import math
+import textwrap
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -89,7 +90,9 @@ class LinkSweepView:
     p95_ms: float | None = None
     error: str = ""
 
-    def text(self) -> str:
+    def text(self, width: int | None = None, rows: int = 2) -> str:
+        """In words; with ``width``, fitted to ``rows`` lines of that many cells (word-wrapped): the
+        controllers that do not fit are left out whole, and an ellipsis says so."""
         if self.state == RUNNING:
             return f"sweeping latency {_range()} for {self.mission} in the background (arbiter-tui compare)…"
         if self.state == FAILED:
@@ -99,13 +102,25 @@ class LinkSweepView:
         if self.p95_ms is None:
             return f"{self.curve.mission}: no latency measured yet (simulated link, or nothing recorded)"
         beyond = " (beyond the sweep: its last value)" if self.p95_ms > self.curve.latencies_ms[-1] else ""
-        parts = ", ".join(f"{name} {delta + 0.0:+.3f} m" for name, delta in self.curve.at(round(self.p95_ms)))
-        where = f"at your p95 of {_ms(self.p95_ms)} ms{beyond} on {self.curve.mission}"
-        return f"{where}: {parts} (avg e_xt vs 0 ms)"
+        parts = [f"{name} {delta + 0.0:+.3f} m" for name, delta in self.curve.at(round(self.p95_ms))]
+        where = f"at your p95 of {format_ms(self.p95_ms)} ms{beyond} on {self.curve.mission}"
+        full = f"{where}: {', '.join(parts)} (avg e_xt vs 0 ms)"
+        if width is None or _fits(full, width, rows):
+            return full
+        for keep in range(len(parts) - 1, 0, -1):
+            cut = f"{where}: {', '.join(parts[:keep])}, … (avg e_xt vs 0 ms)"
+            if _fits(cut, width, rows):
+                return cut
+        return f"{where}: {parts[0]}, …"
 
 
-def _ms(value: float) -> str:
-    """0.4 (a LAN link) or 130: a tenth of a millisecond only where it is most of the figure."""
+def _fits(text: str, width: int, rows: int) -> bool:
+    return len(textwrap.wrap(text, max(width, 1))) <= rows
+
+
+def format_ms(value: float) -> str:
+    """0.4 (a LAN link) or 130: a tenth of a millisecond only where it is most of the figure. The one
+    format of the measured p95 on the analytics screen: the plot's legend and the line under it."""
     return f"{value:.1f}" if value < 10 else f"{value:.0f}"
 
 

@@ -57,6 +57,18 @@ MISSIONS: dict[str, list[Point]] = {
     "corner": _corner(),
 }
 ALGORITHMS = (MANUAL, "go_to_goal", "pure_pursuit", "stanley", "regulated_pure_pursuit", "kanayama")
+CONTROLLERS = ALGORITHMS[1:]  # the autonomous ones: what ``a`` cycles through after manual
+DEFAULT_CONTROLLER = "go_to_goal"  # what drives a goal or mission started while manual is selected
+
+
+def goal_driver(selected: str) -> str:
+    """The controller that drives to a goal when ``selected`` is chosen: itself, or the default for manual."""
+    return DEFAULT_CONTROLLER if selected == MANUAL else selected
+
+
+def choose_controller_hint() -> str:
+    """How to pick a controller, naming every one the registry has (for hints on screen)."""
+    return f"Select a controller with [b]a[/b] first ({', '.join(CONTROLLERS)})"
 
 
 @dataclass

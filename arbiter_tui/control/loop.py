@@ -22,7 +22,14 @@ from ..analytics.runs import ABORTED, COMPLETED, ENDED, MANUAL, MANUAL_IDLE_S, O
 from ..analytics.store import AnalyticsStore, DataPoint
 from ..analytics.tracking import reference_path
 from ..link.base import Link
-from .algorithms import ALGORITHMS, MISSIONS, MissionProgress, make_controller
+from .algorithms import (
+    ALGORITHMS,
+    DEFAULT_CONTROLLER,
+    MISSIONS,
+    MissionProgress,
+    goal_driver,
+    make_controller,
+)
 from .teleop import Teleop
 
 TRAIL_POINTS = 2000
@@ -55,7 +62,7 @@ class ControlLoop:
         self.mission = MissionProgress.named(self.mission_name)
         self.mission_label = self.mission_name  # what the current (or last) run drives: a name or a goal
         self.interrupted: MissionProgress | None = None  # a mission stopped before its end: ``g`` resumes it
-        self._interrupted_algorithm = "go_to_goal"  # the controller and label it ran with
+        self._interrupted_algorithm = DEFAULT_CONTROLLER  # the controller and label it ran with
         self._interrupted_label = ""
         self._manual_at: tuple[float, float] | None = None  # (monotonic, wall ms) of the last manual move
         self.controller = make_controller(self.algorithm)
@@ -94,9 +101,8 @@ class ControlLoop:
         return self.mission_name
 
     def _autonomous(self) -> bool:
-        """Make sure an autonomous controller is selected (go_to_goal after manual); False if none can be."""
-        if self.algorithm == MANUAL:
-            self.set_algorithm("go_to_goal")
+        """Make sure an autonomous controller is selected (the default after manual); False if none can be."""
+        self.set_algorithm(goal_driver(self.algorithm))
         return self.algorithm != MANUAL
 
     def _run(self, mission: MissionProgress, label: str) -> None:
@@ -157,7 +163,7 @@ class ControlLoop:
         return self.start_autonomous()
 
     def go_to(self, x: float, y: float) -> None:
-        """Drive to the point (x, y) in the odometry frame: go_to_goal unless another controller is chosen."""
+        """Drive to the point (x, y) in the odometry frame with :func:`goal_driver` of the selection."""
         if not (math.isfinite(x) and math.isfinite(y)):
             raise ValueError("a goal needs finite coordinates")
         self._autonomous()

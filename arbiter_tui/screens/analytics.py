@@ -175,10 +175,12 @@ class LinkLine(Bound):
 
     SOURCE = "link_sweep"
     DEFAULT_CSS = "LinkLine { height: auto; padding: 0 1; }"
+    ROWS = 2  # its max-height in analytics.tcss
     view: reactive[LinkSweepView] = reactive(LinkSweepView)
 
     def draw(self) -> Text:
-        return Text(self.view.text(), no_wrap=False)
+        # whole controllers only: the ones that do not fit in two lines are left out, with an ellipsis
+        return Text(self.view.text(self.content_size.width, self.ROWS), no_wrap=False)
 
 
 class AnalyticsScreen(BaseScreen):

@@ -9,6 +9,7 @@ from textual.containers import Vertical
 from textual.screen import ModalScreen
 from textual.widgets import Input, Static
 
+from ..control.algorithms import DEFAULT_CONTROLLER
 from ..control.goals import GoalError, parse_goal
 
 
@@ -16,16 +17,17 @@ class GoalPrompt(ModalScreen[tuple[float, float] | None]):
     CSS_PATH = "modal.tcss"
     BINDINGS = [Binding("escape", "cancel", "Cancel")]
 
-    def __init__(self, pose: tuple[float, float]) -> None:
+    def __init__(self, pose: tuple[float, float], driver: str = DEFAULT_CONTROLLER) -> None:
         super().__init__()
         self.pose = pose
+        self.driver = driver  # the controller enter starts (control.algorithms.goal_driver)
 
     def compose(self) -> ComposeResult:
         with Vertical(classes="dialog"):
             yield Static(
                 "Drive to x y (m, odometry frame). "
                 f"The robot is at {self.pose[0]:+.2f} {self.pose[1]:+.2f}.\n"
-                "enter: drive there (go_to_goal unless pure_pursuit is selected) · escape: cancel"
+                f"enter: drive there with {self.driver} · escape: cancel"
             )
             yield Input(placeholder="x y, e.g. 1.5 -0.5", id="goal-input")
             yield Static("", id="goal-error")

@@ -10,6 +10,8 @@ import math
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from ..analytics.styles import style_of
+
 if TYPE_CHECKING:
     from .compare_cmd import SweepCell
 
@@ -45,9 +47,11 @@ def write_plot(path: Path, cells: list[SweepCell]) -> None:
         for algorithm, points in lines.items():
             x = [p[0] for p in points]
             y = [p[1] for p in points]
-            ax.plot(x, y, marker="o", label=algorithm)
+            style = style_of(algorithm)  # the marker and colour it has on the console's plots
+            ax.plot(x, y, marker=style.mpl_marker, color=style.mpl_colour, label=algorithm)
             if any(p[2] for p in points):
-                ax.fill_between(x, [p[1] - p[2] for p in points], [p[1] + p[2] for p in points], alpha=0.2)
+                lo, hi = [p[1] - p[2] for p in points], [p[1] + p[2] for p in points]
+                ax.fill_between(x, lo, hi, color=style.mpl_colour, alpha=0.2)
         ax.set_title(mission)
         ax.set_xlabel("one-way command latency (ms)")
         ax.set_ylabel("avg cross-track error (m)")

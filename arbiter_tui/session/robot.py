@@ -29,6 +29,7 @@ from arbiter_core.simulator import RATE_HZ as SIM_HZ
 from ..analytics.files import FORMATS, ExportError, NothingToExport, export_stem, export_store
 from ..analytics.runs import MANUAL
 from ..analytics.store import AnalyticsStore
+from ..control.algorithms import choose_controller_hint
 from ..control.loop import ControlLoop
 from ..control.teleop import MOVE_KEYS, SCALE_KEYS, STOP_KEYS, Teleop
 from ..link.base import DISCONNECTED, RECONNECTING, STARTING, Link
@@ -243,7 +244,7 @@ class RobotSession:
             if self.link_down() or self.link.state == STARTING:
                 return NO_LINK_WORDS  # a mission that cannot move says why, instead of "driving" at v 0
             started = self.loop.restart() if restart else self.loop.go()
-            return None if started else "Select go_to_goal or pure_pursuit with [b]a[/b] first"
+            return None if started else choose_controller_hint()
 
     def go_to(self, x: float, y: float) -> None:
         """Drive to (x, y) with go_to_goal (or the autonomous controller already selected)."""

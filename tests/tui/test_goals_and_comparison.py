@@ -1,6 +1,8 @@
 """Pilot tests of goals from the console (a click on the map, a typed goal, the palette, g after an
 override) and of the ranked comparison (per algorithm / per run, sorting, marks, the ring warning)."""
 
+from textual.widgets import Static
+
 from arbiter_tui.analytics import table as T
 from arbiter_tui.analytics.runs import COMPLETED, OVERRIDDEN
 from arbiter_tui.analytics.store import AnalyticsStore
@@ -75,6 +77,25 @@ async def test_a_typed_goal_and_its_errors(tmp_path):
         await pilot.press("space")
         await pilot.press("t", "escape")
         assert not isinstance(app.screen, GoalPrompt) and not app.loop.running
+
+
+async def test_the_hints_name_the_controller_that_will_drive_from_the_registry(tmp_path):
+    from arbiter_tui.control.algorithms import CONTROLLERS
+
+    app, _clock = sim_app(tmp_path)
+    async with app.run_test(size=SIZE) as pilot:
+        await pilot.press("g")  # manual selected: g starts nothing and says how to choose
+        assert not app.loop.running
+        hint = next(n.message for n in app._notifications if "Select a controller" in n.message)
+        assert all(name in hint for name in CONTROLLERS)
+        for _ in range(3):  # manual -> go_to_goal -> pure_pursuit -> stanley
+            await pilot.press("a")
+        assert app.loop.algorithm == "stanley"
+        await pilot.press("t")
+        assert isinstance(app.screen, GoalPrompt)
+        assert "drive there with stanley" in str(app.screen.query_one(Static).render())
+        await pilot.press(*"0.5 0", "enter")
+        assert app.loop.running and app.store.run(app.store.active_run).algorithm == "stanley"
 
 
 async def test_the_palette_selects_algorithm_and_mission_and_goes(tmp_path):

@@ -203,3 +203,4 @@ async def test_the_trajectory_legend_fits_its_border():
         items = [("·", "manual"), ("+", "go_to_goal"), ("x", "pure_pursuit"), ("o", "waypoint"),
                  ("G", "goal")]  # fmt: skip
         assert legend_text(items, 34) == "· man + gtg x pp o wpt G goal"  # too long in full: short names
+        assert legend_text(items, 20) == "· man + gtg x pp …"  # too long even so: whole entries, then …

@@ -1,5 +1,7 @@
 """Error against latency on the analytics screen: the curve from a compare sweep, the measured p95 on it."""
 
+import re
+
 import pytest
 
 from arbiter_tui.analytics.linkcurve import (
@@ -52,3 +54,41 @@ def test_a_malformed_compare_answer_is_a_curve_error():
     for body in ({}, {"sweep": [{"link": {}}]}, {"sweep": []}, {"sweep": "x"}):
         with pytest.raises(CurveError):
             curve_of(body, "square")
+
+
+FIVE = LinkCurve(
+    "square",
+    (0.0, 100.0, 300.0),
+    tuple(
+        (name, (0.01 * k, 0.012 * k, 0.02 * k))
+        for k, name in enumerate(
+            ("go_to_goal", "pure_pursuit", "stanley", "regulated_pure_pursuit", "kanayama"), start=1
+        )
+    ),
+)
+
+
+@pytest.mark.parametrize("width", [76, 96, 156])
+def test_the_marker_line_fits_two_rows_leaving_out_whole_controllers_with_an_ellipsis(width):
+    import textwrap
+
+    view = LinkSweepView(READY, "square", FIVE, p95_ms=130.0)
+    text = view.text(width, rows=2)
+    assert len(textwrap.wrap(text, width)) <= 2
+    full = view.text()
+    if len(textwrap.wrap(full, width)) <= 2:
+        assert text == full
+    else:
+        assert "…" in text
+        shown = [n for n, _ in FIVE.errors if f"{n} " in text]
+        assert shown == [n for n, _ in FIVE.errors][: len(shown)] and shown, "whole controllers, in order"
+        for name in shown:  # none is cut inside its figure
+            assert re.search(rf"{name} [+-]\d\.\d{{3}} m", text)
+
+
+def test_the_legend_and_the_line_show_the_measured_p95_the_same_way():
+    from arbiter_tui.analytics.linkcurve import format_ms
+
+    for p95, shown in ((0.31, "0.3"), (4.0, "4.0"), (130.4, "130")):
+        assert format_ms(p95) == shown
+        assert f"at your p95 of {shown} ms" in LinkSweepView(READY, "square", FIVE, p95_ms=p95).text()
