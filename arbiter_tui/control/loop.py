@@ -227,6 +227,16 @@ class ControlLoop:
         self.trail_version += 1
 
     def tick_control(self, now: float) -> tuple[float, float] | None:
+        completed: list[tuple[float, float | None]] = []  # a run that completed at this tick
+        try:
+            return self._tick(now, completed)
+        finally:
+            # The run's summary (cross-track figures over all its samples) is made after the stop
+            # command left, never before it: it took milliseconds on the command path.
+            for t_ms, final_error in completed:
+                self.store.end_run(COMPLETED, t_ms, final_error)
+
+    def _tick(self, now: float, completed: list[tuple[float, float | None]]) -> tuple[float, float] | None:
         pose, *_ = self.link.telemetry.snapshot()
         self.add_trail(pose.x, pose.y)
         self.mission.update(pose)
@@ -234,7 +244,7 @@ class ControlLoop:
         if self.running:
             if self.mission.done:
                 self.running = False
-                self.store.end_run(COMPLETED, self._wall_ms(), self._final_error())
+                completed.append((self._wall_ms(), self._final_error()))
                 self.teleop.stop()
                 cmd = self.teleop.tick(now)
             else:

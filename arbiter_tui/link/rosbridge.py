@@ -298,11 +298,13 @@ class RosLink:
             {"op": "publish", "id": f"cmd:{seq}", "topic": self.topic_stamped, "msg": {"data": text}},
             separators=(",", ":"),
         )
-        self.telemetry.meter.on_send(seq, envelope.stamp_ms_from_ns(now_ns), mono)
         try:
             _write_now(proto, frame.encode("utf-8"))
         except Exception:  # a socket closing under us: the meter counts it lost later
             log.debug("sending a command failed", exc_info=True)
+        # After the write: nothing that takes a lock stands between the stamp and the socket. The
+        # report cannot come first: it arrives on this (the reactor's) thread.
+        self.telemetry.meter.on_send(seq, envelope.stamp_ms_from_ns(now_ns), mono)
 
     def echo(
         self, topic: str, type_name: str, callback: Callable[[dict[str, Any]], None]
