@@ -218,3 +218,93 @@ def test_plot_writes_the_error_vs_latency_figure(tmp_path, capsys, suffix):
         assert "corner" in text and "one-way command latency" in text  # the panel and its axis
     else:
         assert data.startswith(b"\x89PNG\r\n\x1a\n") and len(data) > 10_000
+
+
+def _cell(algorithm: str, xte: float, ci95: float, trials: int = 3):
+    """A controller's summary on figure_eight over ``trials`` trials with avg e_xt ``xte ± ci95``."""
+    from dataclasses import replace
+
+    from arbiter_tui.session import trials as TR
+
+    base = TR.summarize([run_one(algorithm, "figure_eight")] * trials)
+    figures = {**base.figures, "xte_mean_m": TR.Figure(xte, ci95)}
+    return replace(base, figures=figures, tracking=replace(base.tracking, xte_mean_m=xte))
+
+
+def _xte_cells(table: str) -> dict[str, str]:
+    """algorithm -> its avg e_xt cell, from a trial table of one mission."""
+    lines = table.splitlines()
+    col = lines[1].split().index("avg")  # "rank algorithm done avg e_xt m ..."
+    rows = [line.replace(" * ", " ").split() for line in lines[2:]]
+    return {row[1]: row[col] for row in rows if row[0].isdigit()}
+
+
+def _interval(cell: str) -> tuple[float, float]:
+    mean, ci = (float(v) for v in cell.split("±"))
+    return mean - ci, mean + ci
+
+
+def test_a_trial_tables_column_has_one_form_and_the_digits_the_verdict_needs():
+    """Issue 31: figure_eight at 0 ms printed stanley `0.016±0.000` (an interval of 1e-18, rounding noise)
+    beside go_to_goal `0.016` under the verdict "stanley, apart from every other". Every cell of a column
+    now has the same form, and avg e_xt has as many decimals as tell the ranked means apart."""
+    from arbiter_tui.session import trials as TR
+    from arbiter_tui.session.compare_cmd import trial_table
+
+    summaries = [
+        _cell("stanley", 0.015611, 1e-18),
+        _cell("go_to_goal", 0.016049, 0.0),
+        _cell("pure_pursuit", 0.026231, 0.0),
+    ]
+    (v,) = TR.verdicts(summaries)
+    assert v.best == "stanley"
+    cells = _xte_cells(trial_table([v]))
+    assert all("±" in c for c in cells.values()), cells  # one form: every cell with its interval
+    assert len({c.split("±")[0] for c in cells.values()}) == 3, cells  # the ranked means differ visibly
+    assert cells["stanley"] in trial_table([v]).splitlines()[-2]  # the verdict quotes the cell as printed
+    # --json keeps its reason as it was
+    assert v.reason == "stanley (avg e_xt 0.016±0.000 m, apart from every other)"
+    # one trial: no interval in any cell
+    (one,) = TR.verdicts([_cell("stanley", 0.015611, 0.0, 1), _cell("go_to_goal", 0.016049, 0.0, 1)])
+    assert all("±" not in c for c in _xte_cells(trial_table([one])).values())
+
+
+@pytest.mark.parametrize(
+    ("best", "rival"),
+    [
+        ((0.0104, 0.0003), (0.0110, 0.0004)),  # overlapping, though 3 decimals print 0.010 and 0.011 apart
+        ((0.0104, 0.0002), (0.0108, 0.0001)),  # apart by 0.0001
+        ((0.015611, 1e-18), (0.016049, 0.0)),  # apart, equal at 3 decimals
+    ],
+)
+def test_the_printed_intervals_overlap_exactly_when_the_verdict_says_so(best, rival):
+    from arbiter_tui.session import trials as TR
+    from arbiter_tui.session.compare_cmd import trial_table
+
+    (v,) = TR.verdicts([_cell("stanley", *best), _cell("go_to_goal", *rival)])
+    cells = _xte_cells(trial_table([v]))
+    low, _ = _interval(cells["go_to_goal"])
+    _, high = _interval(cells["stanley"])
+    assert (low <= high) == (v.best is None), (cells, v.reason)
+
+
+def test_the_single_comparisons_table_tells_close_runs_apart():
+    from dataclasses import replace
+
+    from arbiter_tui.session.compare_cmd import table
+
+    runs = [run_one(a, "figure_eight") for a in ("stanley", "go_to_goal")]
+    xte = (0.015611, 0.016049)
+    runs = [replace(r, tracking=replace(r.tracking, xte_mean_m=v)) for r, v in zip(runs, xte, strict=True)]
+    lines = table(runs).splitlines()
+    head = lines[1].split()
+    col = head.index("avg") - 1  # "time s" is two words
+    means = [line.replace(" * ", " ").split()[col] for line in lines[2:4]]
+    assert means[0] != means[1], lines[:4]
+
+
+def test_the_sweeps_last_table_has_one_form_per_column(capsys):
+    assert main(["compare", "--latency", "0,100", "--trials", "3", "--mission", "figure_eight"]) == 0
+    out = capsys.readouterr().out.strip().splitlines()
+    rows = out[-len(AUTONOMOUS) :]
+    assert all(cell.count("±") == 1 for row in rows for cell in row.split()[2:]), rows
