@@ -308,3 +308,46 @@ def test_the_sweeps_last_table_has_one_form_per_column(capsys):
     out = capsys.readouterr().out.strip().splitlines()
     rows = out[-len(AUTONOMOUS) :]
     assert all(cell.count("±") == 1 for row in rows for cell in row.split()[2:]), rows
+
+
+def test_the_plots_legend_is_off_the_data_and_in_the_image(tmp_path, monkeypatch):
+    """Issue 31: the legend sat inside a panel, over the 300 ms points. Now no legend overlaps any panel's
+    axes, and the saved image holds the legend."""
+    from matplotlib.figure import Figure
+
+    from arbiter_core.linkmodel import LinkModel
+    from arbiter_tui.session.compare_cmd import Sweep, run_sweep
+    from arbiter_tui.session.plotfile import write_plot
+
+    seen = []
+    original = Figure.savefig
+
+    def savefig(fig, *args, **kwargs):  # what the saved figure holds, as it was drawn
+        out = original(fig, *args, **kwargs)
+        renderer = fig.canvas.get_renderer()
+        panels = [ax.get_window_extent(renderer) for ax in fig.axes if ax.get_visible()]
+        legends = [*fig.legends, *(ax.get_legend() for ax in fig.axes if ax.get_legend() is not None)]
+        seen.append((fig.bbox, panels, [lg.get_window_extent(renderer) for lg in legends], kwargs))
+        return out
+
+    monkeypatch.setattr(Figure, "savefig", savefig)
+    links = [LinkModel(0.0), LinkModel(0.3)]
+    cells = run_sweep(Sweep(["corner", "square", "slalom"], list(AUTONOMOUS), 0.5, 1.0, links))
+    write_plot(tmp_path / "sweep.png", cells)
+    ((page, panels, legends, kwargs),) = seen
+    assert len(panels) == 3 and legends
+    for box in legends:
+        assert not any(box.overlaps(panel) for panel in panels), (box, panels)
+        # in the image: the figure's own area, unless the image is cut to what it draws
+        assert kwargs.get("bbox_inches") == "tight" or page.contains(box.x1, box.y1)
+
+
+def test_plot_without_matplotlib_says_how_to_install_it_from_pypi_and_a_clone(tmp_path, capsys, monkeypatch):
+    import sys
+
+    monkeypatch.setitem(sys.modules, "matplotlib", None)  # import matplotlib -> ImportError
+    out = tmp_path / "sweep.svg"
+    assert main(["compare", "--latency", "0", "--mission", "corner", "--plot", str(out)]) == 1
+    (err,) = capsys.readouterr().err.strip().splitlines()
+    assert "pip install 'arbiter-tui[report]'" in err and "pip install -e '.[report]'" in err, err
+    assert not out.exists()
