@@ -239,5 +239,68 @@ def test_by_run_reads_every_format_of_a_compare_export(tmp_path):
         for name, expected in want.items():
             for k in STATS_FIELDS:
                 assert stats[name][k] == pytest.approx(expected[k], rel=1e-9), (path, name, k)
-    table = run(body["exports"][0], "--by", "run").stdout.splitlines()
-    assert sorted(line for line in table if line.startswith("[")) == sorted(f"[{name}]" for name in want)
+    runs = sorted(body["runs"], key=lambda r: r["run"])
+    for path in body["exports"]:  # each run headed with its algorithm, and its mission where the file says
+        on = {r["run"]: "" if path.endswith(".csv") else f" on {r['mission']}" for r in runs}
+        table = run(path, "--by", "run").stdout.splitlines()
+        assert [line for line in table if line.startswith("[")] == [
+            f"[run {r['run']} {r['algorithm']}{on[r['run']]}]" for r in runs
+        ], path
+
+
+def _store_with_idle_samples():
+    """Samples outside every run first and between runs (as the console records them), then two runs."""
+    from dataclasses import replace
+
+    from arbiter_tui.analytics.store import AnalyticsStore
+
+    from ..support.points import make_point
+
+    store = AnalyticsStore()
+    store.start_collection()
+    t = 0
+
+    def record(algorithm, n, run_id=None):
+        nonlocal t
+        for _ in range(n):
+            t += 1
+            store.record(replace(make_point(t, algorithm, run=run_id), linearVel=0.3))
+
+    def ms():
+        return 1_700_000_000_000.0 + 100.0 * t
+
+    record("manual", 3)
+    first = store.begin_run("pure_pursuit", "square", ms())
+    record("pure_pursuit", 5, first)
+    store.end_run("completed", ms(), 0.1)
+    record("manual", 2)
+    second = store.begin_run("stanley", "corner", ms())
+    record("stanley", 4, second)
+    store.end_run("aborted", ms(), 0.5)
+    return store
+
+
+def test_by_run_has_one_order_for_every_format_and_names_each_runs_algorithm(tmp_path, capsys):
+    """Issue 31: `[no run]` came first from a CSV and last from JSON and MCAP, and a run was only its
+    number. Now: runs in run order, `no run` last, each run with its algorithm (and mission where the file
+    says: not in a CSV), in the text and in --json (added fields; the keys stay `run N`)."""
+    from arbiter_tui.analytics.files import export_store
+    from arbiter_tui.cli import main
+
+    store = _store_with_idle_samples()
+    for fmt in ("csv", "json", "mcap"):
+        path = export_store(store, fmt, tmp_path, stem="e")
+        assert main(["stats", str(path), "--by", "run"]) == 0
+        headings = [line for line in capsys.readouterr().out.splitlines() if line.startswith("[")]
+        on = ("", "") if fmt == "csv" else (" on square", " on corner")
+        assert headings == [f"[run 1 pure_pursuit{on[0]}]", f"[run 2 stanley{on[1]}]", "[no run]"], fmt
+        assert main(["stats", str(path), "--by", "run", "--json"]) == 0
+        body = json.loads(capsys.readouterr().out)
+        assert list(body) == ["run 1", "run 2", "no run"], fmt
+        mission = (None, None) if fmt == "csv" else ("square", "corner")
+        assert {k: (v.get("run"), v.get("algorithm"), v.get("mission")) for k, v in body.items()} == {
+            "run 1": (1, "pure_pursuit", mission[0]),
+            "run 2": (2, "stanley", mission[1]),
+            "no run": (None, None, None),
+        }, fmt
+        assert [body[k]["sampleCount"] for k in body] == [5, 4, 5], fmt
