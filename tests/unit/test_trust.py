@@ -312,7 +312,7 @@ def test_config_keys_have_the_same_bounds(tmp_path, capsys):
     cfg.write_text("repeat-rate = 1000\n")
     assert main(["--config", str(cfg), "--sim"]) == 2
     (line,) = capsys.readouterr().err.strip().splitlines()
-    assert "line 1, key 'repeat-rate'" in line and "must be in [2, 50] Hz" in line
+    assert f"{cfg}:1: repeat-rate: " in line and "must be in [2, 50] Hz" in line
 
 
 def test_help_names_the_subcommands(capsys):
