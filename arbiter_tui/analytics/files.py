@@ -56,6 +56,15 @@ def write_new_file(directory: Path, stem: str, suffix: str, data: bytes) -> Path
     directory = Path(directory)
     if not directory.is_dir():
         raise ExportError(f"export directory {directory} does not exist")
+    try:
+        return _write_new_file(directory, stem, suffix, data)
+    except ExportError:
+        raise
+    except OSError as exc:  # e.g. a directory that lists but takes no files (/proc/1), a full disk
+        raise ExportError(f"cannot write export to {directory}: {exc.strerror or exc}") from exc
+
+
+def _write_new_file(directory: Path, stem: str, suffix: str, data: bytes) -> Path:
     fd, tmp = tempfile.mkstemp(prefix=f".{stem}.", suffix=".tmp", dir=directory)
     try:
         # mkstemp makes the file 0600; an export is an ordinary file: 0666 less the umask, as open() gives
@@ -117,12 +126,7 @@ def export_store(
         data = to_json(points, stats, runs, algorithms).encode()
     else:
         data = to_mcap(points, stats, runs, algorithms)
-    try:
-        return write_new_file(Path(directory), stem or export_stem(clock_ms), fmt, data)
-    except ExportError:
-        raise
-    except OSError as exc:
-        raise ExportError(f"cannot write export to {directory}: {exc.strerror or exc}") from exc
+    return write_new_file(Path(directory), stem or export_stem(clock_ms), fmt, data)
 
 
 def load_points(path: Path) -> list[DataPoint]:

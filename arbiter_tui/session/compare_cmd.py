@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from arbiter_core.cliargs import OneLineParser, count, non_negative_float, positive_float
+from arbiter_core.cliargs import OneLineParser, count, non_negative_float, positive_float, writable_dir
 from arbiter_core.kinematics import DEFAULT_LIMITS
 from arbiter_core.linkmodel import LinkModel, LinkModelError
 from arbiter_core.record import LatencyRecord, RecordError
@@ -62,7 +62,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="one JSON object: runs, missions (each ranked), overall (best, the missions it is over, mean "
         "ranks, wins, rule), best, rule",
     )
-    p.add_argument("--export-dir", type=Path, help="also write every run's data points as CSV, JSON and MCAP")
+    p.add_argument(
+        "--export-dir",
+        type=writable_dir,
+        help="also write every run's data points as CSV, JSON and MCAP there (an existing directory you "
+        "can write to)",
+    )
     link = p.add_argument_group(
         "a modelled link (in simulated time): commands reach the robot late, some never; odometry "
         "reaches the console late"
@@ -232,9 +237,6 @@ def run(argv: list[str]) -> int:
         algorithms = parse_names(args.algorithms, AUTONOMOUS, "algorithms")
     except CompareError as exc:
         print(f"arbiter-tui compare: {exc}", file=sys.stderr)
-        return 2
-    if args.export_dir is not None and not args.export_dir.is_dir():
-        print(f"arbiter-tui compare: --export-dir {args.export_dir} is not a directory", file=sys.stderr)
         return 2
     speed, note = cap_setting("speed", args.speed, DEFAULT_LIMITS.max_linear, "m/s")
     turn, note_turn = cap_setting("turn", args.turn, DEFAULT_LIMITS.max_angular, "rad/s")

@@ -351,3 +351,45 @@ def test_plot_without_matplotlib_says_how_to_install_it_from_pypi_and_a_clone(tm
     (err,) = capsys.readouterr().err.strip().splitlines()
     assert "pip install 'arbiter-tui[report]'" in err and "pip install -e '.[report]'" in err, err
     assert not out.exists()
+
+
+def _compare_exit(capsys, *args):
+    try:
+        code = main(["compare", "--mission", "corner", "--algorithms", "stanley", *args])
+    except SystemExit as exc:
+        code = exc.code
+    return code, capsys.readouterr().err.strip().splitlines()
+
+
+@pytest.mark.parametrize("target", ["proc", "file", "read-only", "missing"])
+def test_an_export_dir_that_takes_no_files_is_one_line(tmp_path, capsys, target):
+    """Issue 31: `compare --export-dir /proc/1` ended in a FileNotFoundError traceback. A directory this
+    user cannot write to, a file, or nothing at all: one line on stderr and exit 2, before running."""
+    import os
+
+    where = {"proc": "/proc/1", "file": tmp_path / "f", "read-only": tmp_path / "ro"}
+    directory = where.get(target, tmp_path / "missing")
+    if target == "file":
+        directory.write_text("")
+    if target == "read-only":
+        directory.mkdir(mode=0o555)
+    if target in ("proc", "read-only") and (not os.path.isdir(directory) or os.access(directory, os.W_OK)):
+        pytest.skip(f"{directory} is writable here (root)")
+    code, err = _compare_exit(capsys, "--export-dir", str(directory))
+    assert code == 2 and len(err) == 1 and err[0].startswith("arbiter-tui compare: "), err
+    assert str(directory) in err[0]
+
+
+def test_an_export_that_fails_while_writing_is_one_line(tmp_path, capsys, monkeypatch):
+    """A directory that passed the check but takes no file when written (as /proc/1 does for root)."""
+    import os
+
+    from arbiter_tui.analytics import files
+
+    def refuse(*args, **kwargs):
+        raise FileNotFoundError(2, "No such file or directory")
+
+    monkeypatch.setattr(files.tempfile, "mkstemp", refuse)
+    code, err = _compare_exit(capsys, "--export-dir", str(tmp_path))
+    assert code == 1 and err == [f"arbiter-tui compare: cannot write export to {tmp_path}: {os.strerror(2)}"]
+    assert list(tmp_path.iterdir()) == []
