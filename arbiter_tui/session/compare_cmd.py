@@ -101,7 +101,8 @@ def build_parser() -> argparse.ArgumentParser:
     link.add_argument(
         "--trials", type=count, default=1, metavar="N",
         help="run every cell N times, each with jitter and loss drawn from its own seed; figures become "
-        f"the {INTERVAL}, and a mission's best is named only when {VERDICT_RULE} (default 1)",
+        f"the {INTERVAL.replace('%', '%%')}, and a mission's best is named only when {VERDICT_RULE} "
+        "(default 1)",  # argparse formats help with %: the interval's "95 %" must be "95 %%" here
     )  # fmt: skip
     link.add_argument(
         "--cmd-timeout", type=positive_float, default=CMD_TIMEOUT_S, metavar="S",

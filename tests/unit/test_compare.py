@@ -393,3 +393,14 @@ def test_an_export_that_fails_while_writing_is_one_line(tmp_path, capsys, monkey
     code, err = _compare_exit(capsys, "--export-dir", str(tmp_path))
     assert code == 1 and err == [f"arbiter-tui compare: cannot write export to {tmp_path}: {os.strerror(2)}"]
     assert list(tmp_path.iterdir()) == []
+
+
+def test_help_prints_and_names_every_option(capsys):
+    """`compare --help` raised ValueError: the --trials help quoted the interval's "95 %" unescaped."""
+    with pytest.raises(SystemExit) as exit_:
+        main(["compare", "--help"])
+    assert exit_.value.code == 0
+    out = " ".join(capsys.readouterr().out.split())
+    for flag in ("--export-dir", "--trials", "--plot", "--latency", "--seed"):
+        assert flag in out, flag
+    assert "95 % t-interval" in out
