@@ -4,8 +4,36 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 from collections.abc import Callable
-from typing import NoReturn
+from pathlib import Path
+from typing import Any, NoReturn
+
+from . import topics
+from .urls import UrlError, rosbridge_endpoint, tracker_endpoint
+
+# What a TOML config file must give for an option whose argparse type is a given function (the console
+# reads its file through these same functions, so one rule decides each value): a number, a whole
+# number, or a string of some kind (the default, and the only other TOML type a value may have).
+NUMBER = "a number"
+WHOLE_NUMBER = "a whole number"
+_TAKES: dict[Callable[..., Any], str] = {}
+
+
+def takes(value_type: Callable[..., Any] | None) -> str:
+    """What a config file must give for an option of this argparse type (``NUMBER``, ``WHOLE_NUMBER``
+    or a string's description)."""
+    if value_type is Path:
+        return "a path string"
+    return _TAKES.get(value_type, "a string") if value_type is not None else "a string"
+
+
+def _kind(kind: str) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
+    def mark(fn: Callable[..., Any]) -> Callable[..., Any]:
+        _TAKES[fn] = kind
+        return fn
+
+    return mark
 
 
 class OneLineParser(argparse.ArgumentParser):
@@ -16,6 +44,7 @@ class OneLineParser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: {message} (see --help)\n")
 
 
+@_kind(WHOLE_NUMBER)
 def port(text: str) -> int:
     try:
         value = int(text)
@@ -33,6 +62,7 @@ def _float(text: str) -> float:
         raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
 
 
+@_kind(NUMBER)
 def positive_float(text: str) -> float:
     value = _float(text)
     if not (math.isfinite(value) and value > 0):
@@ -53,9 +83,11 @@ def bounded_float(low: float, high: float, unit: str = "", low_open: bool = Fals
         return value
 
     parse.__name__ = f"number in {where}"  # argparse names the type in some errors
+    _TAKES[parse] = NUMBER
     return parse
 
 
+@_kind(NUMBER)
 def non_negative_float(text: str) -> float:
     value = _float(text)
     if not (math.isfinite(value) and value >= 0):
@@ -63,6 +95,7 @@ def non_negative_float(text: str) -> float:
     return value
 
 
+@_kind(WHOLE_NUMBER)
 def count(text: str, high: int = 1_000_000) -> int:
     try:
         value = int(text)
@@ -71,6 +104,70 @@ def count(text: str, high: int = 1_000_000) -> int:
     if not 1 <= value <= high:
         raise argparse.ArgumentTypeError(f"must be between 1 and {high}, got {value}")
     return value
+
+
+@_kind("a ws:// or wss:// URL string")
+def rosbridge_url(text: str) -> str:
+    """A rosbridge URL (``arbiter_core.urls``), kept as written."""
+    try:
+        rosbridge_endpoint(text, what="URL")
+    except UrlError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+    return text
+
+
+@_kind("an http:// or https:// URL string")
+def tracker_url(text: str) -> str:
+    """A tracker URL (``arbiter_core.urls``), kept as written."""
+    try:
+        tracker_endpoint(text, what="URL")
+    except UrlError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+    return text
+
+
+@_kind("a namespace string")
+def namespace(text: str) -> str:
+    """A ROS namespace (``/robot1``, or empty for none), kept as written."""
+    try:
+        topics.namespace(text)
+    except topics.TopicNameError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+    return text
+
+
+@_kind("a topic name string")
+def topic_name(text: str) -> str:
+    """A topic name, relative or absolute (not ``~`` private), kept as written."""
+    try:
+        topics.resolve(text, what="topic")
+    except topics.TopicNameError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+    return text
+
+
+@_kind("a path string")
+def existing_file(text: str) -> Path:
+    path = Path(text)
+    if path.is_dir():
+        raise argparse.ArgumentTypeError(f"{text} is a directory, not a file")
+    if not path.is_file():
+        raise argparse.ArgumentTypeError(f"no such file: {text}")
+    return path
+
+
+@_kind("a path string")
+def writable_dir(text: str) -> Path:
+    """A directory that exists and this user may create files in (files are written there later: an
+    export). Creating it is left to the user: a typo should not make a directory."""
+    path = Path(text)
+    if not path.exists():
+        raise argparse.ArgumentTypeError(f"no such directory: {text}")
+    if not path.is_dir():
+        raise argparse.ArgumentTypeError(f"{text} is a file, not a directory")
+    if not os.access(path, os.W_OK | os.X_OK):
+        raise argparse.ArgumentTypeError(f"{text}: not a directory this user can write to")
+    return path
 
 
 LOG_LEVELS = ("DEBUG", "INFO", "WARNING", "ERROR")

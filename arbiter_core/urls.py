@@ -59,14 +59,15 @@ def _parse(text: str, what: str, schemes: dict[str, int], default_port: int | No
     return Endpoint(parts.scheme, parts.hostname, port, parts.path or "/")
 
 
-def rosbridge_endpoint(text: str) -> Endpoint:
-    """``ws://host[:port][/path]`` or ``wss://…``; the port defaults to 9090 (rosbridge's)."""
-    return _parse(text, "--rosbridge", ROSBRIDGE_SCHEMES, 9090)
+def rosbridge_endpoint(text: str, what: str = "--rosbridge") -> Endpoint:
+    """``ws://host[:port][/path]`` or ``wss://…``; the port defaults to 9090 (rosbridge's). ``what``
+    starts an error's message."""
+    return _parse(text, what, ROSBRIDGE_SCHEMES, 9090)
 
 
-def tracker_endpoint(text: str) -> Endpoint:
+def tracker_endpoint(text: str, what: str = "--tracker") -> Endpoint:
     """``http://host[:port][/path]`` or ``https://…``; the port defaults to 8085 (the tracker's)."""
-    return _parse(text, "--tracker", TRACKER_SCHEMES, DEFAULT_TRACKER_PORT)
+    return _parse(text, what, TRACKER_SCHEMES, DEFAULT_TRACKER_PORT)
 
 
 def tracker_beside(rosbridge: Endpoint) -> Endpoint:

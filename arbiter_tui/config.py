@@ -1,9 +1,12 @@
 """The console's config file: ``$XDG_CONFIG_HOME/arbiter-tui/config.toml`` (or ``--config FILE``).
 
 Keys are the long option names (``odom-topic = "diff_drive_controller/odom"``, ``connect = true``),
-plus ``theme``, which the console writes when a theme is chosen in the command palette. Values go
-through the same checks as on the command line, and command-line flags win. Any problem is one line
-naming the file, the line and the key, and exit status 2.
+plus ``theme``, which the console writes when a theme is chosen in the command palette. Every value is
+checked when the file is read: its TOML type (a number, a string, true/false: what the option's
+argparse type says, ``arbiter_core.cliargs.takes``), then through the very function the command line
+parses the flag with, so one rule decides each value. Command-line flags win. Any problem is one line
+naming the file, the line and the key (``config FILE:3: rosbridge: must be a ws:// or wss:// URL
+string, got 5``), and exit status 2.
 
 Why these libraries: ``platformdirs`` knows where each platform keeps user config (XDG on Linux,
 honouring ``$XDG_CONFIG_HOME``); ``tomllib`` (``tomli`` before Python 3.11) is the standard TOML
@@ -20,6 +23,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
+
+from arbiter_core import cliargs
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -49,6 +54,8 @@ class Loaded:
 
 
 def _line_of(text: str, key: str) -> int | None:
+    """The line that sets ``key``: tomllib reports no positions for the values it parsed, so the text is
+    scanned for ``key =`` (bare or quoted) at the start of a line."""
     pattern = re.compile(rf"""^\s*["']?{re.escape(key)}["']?\s*=""")
     for number, line in enumerate(text.splitlines(), 1):
         if pattern.match(line):
@@ -83,10 +90,11 @@ def load(path: Path, parser: argparse.ArgumentParser, themes: Sequence[str] = ()
     options = _options(parser)
     loaded = Loaded(path, exists=True)
     for key, value in data.items():
-        where = f"config {path}, line {_line_of(text, key) or '?'}, key {key!r}"
+        line = _line_of(text, key)
+        where = f"config {path}:{line}: {key}" if line else f"config {path}: {key}"
         if key == THEME:
             if not isinstance(value, str) or (themes and value not in themes):
-                raise ConfigError(f"{where}: not a theme; one of {', '.join(themes)}")
+                raise ConfigError(f"{where}: not a theme, got {_shown(value)}; one of {', '.join(themes)}")
             loaded.theme = value
             continue
         action = options.get(key)
@@ -98,13 +106,22 @@ def load(path: Path, parser: argparse.ArgumentParser, themes: Sequence[str] = ()
 
 
 def _convert(action: argparse.Action, value: Any, where: str) -> Any:
+    """A file's value through the command line's own rule for the option: its TOML type first (what the
+    flag's argparse type takes), then the type function itself, then the choices."""
     if isinstance(action, (argparse._StoreTrueAction, argparse._StoreFalseAction)):
         if not isinstance(value, bool):
-            raise ConfigError(f"{where}: must be true or false, got {value!r}")
+            raise ConfigError(f"{where}: must be true or false, got {_shown(value)}")
         return value if isinstance(action, argparse._StoreTrueAction) else not value
-    if isinstance(value, (dict, list, bool)):
-        raise ConfigError(f"{where}: must be a single value, got {value!r}")
-    text = str(value)
+    wanted = cliargs.takes(action.type if callable(action.type) else None)
+    if wanted == cliargs.NUMBER:
+        fits = isinstance(value, (int, float)) and not isinstance(value, bool)
+    elif wanted == cliargs.WHOLE_NUMBER:
+        fits = isinstance(value, int) and not isinstance(value, bool)
+    else:
+        fits = isinstance(value, str)
+    if not fits:
+        raise ConfigError(f"{where}: must be {wanted}, got {_shown(value)}")
+    text = value if isinstance(value, str) else repr(value)
     try:
         converted = action.type(text) if callable(action.type) else text
     except (argparse.ArgumentTypeError, ValueError, TypeError) as exc:
@@ -112,6 +129,15 @@ def _convert(action: argparse.Action, value: Any, where: str) -> Any:
     if action.choices is not None and converted not in action.choices:
         raise ConfigError(f"{where}: must be one of {', '.join(map(str, action.choices))}, got {text!r}")
     return converted
+
+
+def _shown(value: Any) -> str:
+    """A value as the file wrote it (TOML), for an error message."""
+    if isinstance(value, dict):
+        return "a table"
+    if isinstance(value, list):
+        return "an array"
+    return _toml(value)
 
 
 def given_on_command_line(parser: argparse.ArgumentParser, argv: Sequence[str]) -> set[str]:

@@ -16,8 +16,14 @@ from arbiter_core.cliargs import (
     add_version,
     bounded_float,
     count,
+    existing_file,
+    namespace,
     port,
     positive_float,
+    rosbridge_url,
+    topic_name,
+    tracker_url,
+    writable_dir,
 )
 from arbiter_core.kinematics import DEFAULT_LIMITS
 from arbiter_core.logs import default_log_path, log_to_file
@@ -63,28 +69,32 @@ def build_parser() -> argparse.ArgumentParser:
     m.add_argument("--sim", action="store_true", help="client-side simulation: no network, latency N/A")
     p.add_argument(
         "--rosbridge",
+        type=rosbridge_url,
         help=f"rosbridge URL, ws:// or wss://, path kept (implies --connect; default {DEFAULT_ROSBRIDGE})",
     )
     p.add_argument(
         "--tracker",
+        type=tracker_url,
         help="latency tracker URL, http:// or https:// (implies --connect; default: the rosbridge host, "
         "port 8085)",
     )
     p.add_argument(
         "--namespace",
+        type=namespace,
         default="",
         help="the robot's namespace, e.g. /robot1: the stamped-command, report and odometry topics "
         "resolve under it (the embedded backend runs under it too)",
     )
     p.add_argument(
         "--odom-topic",
+        type=topic_name,
         default="odom",
         help="nav_msgs/Odometry topic; relative names resolve under --namespace, absolute ones are used "
         "as given (default: odom; a Jazzy diff_drive_controller: diff_drive_controller/odom)",
     )
     p.add_argument(
         "--ca-file",
-        type=Path,
+        type=existing_file,
         help="PEM certificate(s) to trust for wss:// and https:// (a private CA; default: the system's)",
     )
     p.add_argument(
@@ -100,7 +110,10 @@ def build_parser() -> argparse.ArgumentParser:
         help="embedded mode: the backend's transport; ros runs its nodes on DDS (needs the [ros] extra)",
     )
     p.add_argument(
-        "--export-dir", type=Path, default=Path("."), help="where exports are written (default: .)"
+        "--export-dir",
+        type=writable_dir,
+        default=Path("."),
+        help="where exports are written: an existing directory you can write to (default: .)",
     )
     p.add_argument(
         "--collection-rate",
@@ -154,7 +167,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument(
         "--token-file",
-        type=Path,
+        type=existing_file,
         help="--connect: file whose first line is the backend's token (default: $ARBITER_TOKEN), sent as "
         "an Authorization: Bearer header to the rosbridge endpoint and the tracker API",
     )
@@ -220,9 +233,6 @@ def run_app(argv: list[str]) -> int:
     except OSError as exc:
         print(f"arbiter-tui: --log-file {args.log_file}: {exc.strerror or exc}", file=sys.stderr)
         return 2
-    if not args.export_dir.is_dir():
-        print(f"arbiter-tui: --export-dir {args.export_dir} is not a directory", file=sys.stderr)
-        return 2
     try:
         ns = topics.namespace(args.namespace)
         topics.resolve(args.odom_topic, ns, what="odom-topic")
@@ -243,8 +253,6 @@ def run_app(argv: list[str]) -> int:
             tracker = tracker_endpoint(args.tracker) if args.tracker else tracker_beside(bridge)
             check_token_transport(bridge, "--rosbridge", token)
             check_token_transport(tracker, "--tracker", token)
-            if args.ca_file is not None and not args.ca_file.is_file():
-                raise UrlError(f"--ca-file {args.ca_file}: no such file")
         except (AuthConfigError, UrlError) as exc:
             print(f"arbiter-tui: {exc}", file=sys.stderr)
             return 2

@@ -456,23 +456,35 @@ def parse_mcap(data: bytes) -> list[DataPoint]:
     return read_mcap(data).points
 
 
+NOT_ARBITER_MCAP = "MCAP, but not an arbiter analytics export"
+
+
 def read_mcap(data: bytes) -> Export:
-    """An MCAP export: its DataPoints, and the run and algorithm summaries where it has those channels."""
-    from mcap.exceptions import McapError
+    """An MCAP export: its DataPoints, and the run and algorithm summaries where it has those channels.
+    A damaged or foreign file is an ``ExportFormatError`` that says which: ``truncated MCAP: …``,
+    ``corrupt MCAP: …``, ``MCAP, but not an arbiter analytics export: …``, ``bad arbiter MCAP export: …``."""
     from mcap.reader import make_reader
     from mcap_ros2.decoder import DecoderFactory
 
     if not data.startswith(MCAP_MAGIC):
         raise ExportFormatError("not an MCAP file")
+    if len(data) < 2 * len(MCAP_MAGIC) or not data.endswith(MCAP_MAGIC):
+        # a finished MCAP ends with its magic after the footer; the reader would report some length it
+        # read from wherever the file stops
+        raise ExportFormatError(
+            f"truncated MCAP: {len(data)} bytes and no end marker (cut short, or its writer never finished)"
+        )
     points: list[DataPoint] = []
     runs: list[dict[str, Any]] = []
     algorithms: list[dict[str, Any]] = []
     topics = {MCAP_POINT_TOPIC, MCAP_RUNS_TOPIC, MCAP_ALGORITHMS_TOPIC}
     seen: set[str] = set()
+    topic = ""
     try:
         reader = make_reader(io.BytesIO(data), decoder_factories=[DecoderFactory()])
         for _schema, channel, _message, m in reader.iter_decoded_messages(topics=list(topics)):
-            seen.add(channel.topic)
+            topic = channel.topic
+            seen.add(topic)
             if channel.topic == MCAP_RUNS_TOPIC:
                 runs.append({
                     "id": m.id, "algorithm": m.algorithm, "mission": m.mission, "outcome": m.outcome,
@@ -503,15 +515,28 @@ def read_mcap(data: bytes) -> Export:
                 "runId": getattr(m, "run_id", 0) or None,  # exports before runs had none
             }
             points.append(_point_from_mapping(row, where))
-    except (McapError, AttributeError, ValueError, EOFError) as exc:
-        if isinstance(exc, ExportFormatError):
+        if not seen:
+            summary = reader.get_summary()
+            channels = sorted({c.topic for c in summary.channels.values()}) if summary else []
+            if not any(t.startswith("/arbiter/") for t in channels):
+                named = ", ".join(channels[:5]) + (", …" if len(channels) > 5 else "")
+                has = f"its topics: {named}" if channels else "it has no channels"
+                raise ExportFormatError(f"{NOT_ARBITER_MCAP}: no {MCAP_POINT_TOPIC} channel ({has})")
+        return Export(
+            points,
+            runs_from(runs, samples_per_run(points)) if MCAP_RUNS_TOPIC in seen else None,
+            algorithms_from(algorithms) if MCAP_ALGORITHMS_TOPIC in seen else None,
+        )
+    except ExportFormatError as exc:
+        if str(exc).startswith(NOT_ARBITER_MCAP):
             raise
-        raise ExportFormatError(f"not an arbiter MCAP export: {exc}") from None
-    return Export(
-        points,
-        runs_from(runs, samples_per_run(points)) if MCAP_RUNS_TOPIC in seen else None,
-        algorithms_from(algorithms) if MCAP_ALGORITHMS_TOPIC in seen else None,
-    )
+        raise ExportFormatError(f"bad arbiter MCAP export: {exc}") from None
+    except AttributeError as exc:  # a message on one of our topics without our fields
+        field = f" {exc.name!r}" if getattr(exc, "name", None) else ""
+        raise ExportFormatError(f"{NOT_ARBITER_MCAP}: its {topic} messages have no field{field}") from None
+    except Exception as exc:  # the reader raises McapError, struct.error, KeyError, EOFError,
+        # ValueError... on a damaged file: every one of them means "damaged", none a traceback
+        raise ExportFormatError(f"corrupt MCAP: {str(exc) or type(exc).__name__}") from None
 
 
 def _mcap_point(p: DataPoint) -> dict[str, Any]:
@@ -584,20 +609,44 @@ def _run_id(raw: Any, where: str) -> int | None:
     return raw
 
 
+NOT_ARBITER_CSV = "CSV, but not an arbiter analytics export"
+
+
 def parse_csv(text: str) -> list[DataPoint]:
+    """The points of a CSV export (ours, or the seed's ten columns). What is wrong is said with what the
+    file is: ``empty file``, ``CSV, but not an arbiter analytics export: …``, ``truncated CSV: …``,
+    ``bad arbiter CSV export: line N: …``."""
     lines = text.splitlines()
-    if not lines:
+    if not lines or not text.strip():
         raise ExportFormatError("empty file")
     header = lines[0].strip().lstrip("\ufeff")
     if header not in (CSV_HEADER, SEED_CSV_HEADER):
-        raise ExportFormatError(f"not an arbiter analytics CSV: header must be {CSV_HEADER!r}")
+        first = header[:60] + ("…" if len(header) > 60 else "")
+        if "," not in header:
+            raise ExportFormatError(f"text, but not a CSV, JSON or MCAP export: its first line is {first!r}")
+        raise ExportFormatError(
+            f"{NOT_ARBITER_CSV}: its header is {first!r}; an export's is {CSV_HEADER!r} (the seed's: without "
+            "runId)"
+        )
     columns = header.count(",") + 1
     reader = csv.DictReader(io.StringIO(text.lstrip("\ufeff")))
     points = []
-    for i, row in enumerate(reader, start=2):
-        if None in row or any(v is None for v in row.values()):
-            raise ExportFormatError(f"line {i}: expected {columns} columns")
-        points.append(_point_from_mapping(row, f"line {i}"))
+    i = 1
+    try:
+        for i, row in enumerate(reader, start=2):
+            if None in row or any(v is None for v in row.values()):
+                given = sum(v is not None for k, v in row.items() if k is not None)
+                if i == len(lines) and not text.endswith(("\n", "\r")) and None not in row:
+                    raise ExportFormatError(
+                        f"truncated CSV: its last line ({i}) stops after {given} of {columns} columns"
+                    )
+                raise ExportFormatError(f"bad arbiter CSV export: line {i}: expected {columns} columns")
+            try:
+                points.append(_point_from_mapping(row, f"line {i}"))
+            except ExportFormatError as exc:
+                raise ExportFormatError(f"bad arbiter CSV export: {exc}") from None
+    except csv.Error as exc:  # a field over the csv module's size limit, a stray quote...
+        raise ExportFormatError(f"bad arbiter CSV export: line {i + 1}: {exc}") from None
     return points
 
 
@@ -605,25 +654,63 @@ def parse_json(text: str) -> list[DataPoint]:
     return read_json(text).points
 
 
+NOT_ARBITER_JSON = "JSON, but not an arbiter analytics export"
+
+
+def _json_kind(value: Any) -> str:
+    if isinstance(value, list):
+        return "a list" if value else "an empty list"
+    if isinstance(value, dict):
+        return "an object"
+    if isinstance(value, str):
+        return "a string"
+    if value is None:
+        return "null"
+    return "true/false" if isinstance(value, bool) else "a number"
+
+
 def read_json(text: str) -> Export:
+    """A JSON export. What is wrong is said with what the file is: ``truncated JSON: …``, ``invalid
+    JSON: …``, ``JSON, but not an arbiter analytics export: …``, ``bad arbiter JSON export: …``."""
+
     def reject(token: str) -> Any:
-        raise ExportFormatError(f"non-standard JSON token {token}")
+        raise ExportFormatError(f"non-standard JSON token {token} (an export is strict JSON)")
 
     try:
         doc = json.loads(text, parse_constant=reject)
     except ExportFormatError:
         raise
+    except json.JSONDecodeError as exc:
+        # the text ran out inside the document (a string with no closing quote runs to the end too)
+        if exc.pos >= len(text.rstrip()) or exc.msg.startswith("Unterminated string"):
+            raise ExportFormatError(
+                f"truncated JSON: it ends at line {exc.lineno} column {exc.colno} inside the document"
+            ) from None
+        raise ExportFormatError(f"invalid JSON: {exc}") from None
     except (ValueError, RecursionError) as exc:
         raise ExportFormatError(f"invalid JSON: {exc}") from None
-    if not isinstance(doc, dict) or not isinstance(doc.get("dataPoints"), list):
-        raise ExportFormatError('not an arbiter analytics JSON export: expected {"dataPoints": [...]}')
-    out = []
-    for i, row in enumerate(doc["dataPoints"]):
-        if not isinstance(row, dict):
-            raise ExportFormatError(f"dataPoints[{i}] must be an object")
-        out.append(_point_from_mapping(row, f"dataPoints[{i}]"))
-    runs = runs_from(doc["runs"], samples_per_run(out)) if "runs" in doc else None
-    algorithms = algorithms_from(doc["algorithms"]) if "algorithms" in doc else None
+    if not isinstance(doc, dict):
+        raise ExportFormatError(
+            f'{NOT_ARBITER_JSON}: the top level is {_json_kind(doc)}, not an object {{"dataPoints": [...]}}'
+        )
+    if "dataPoints" not in doc:
+        keys = ", ".join(repr(k)[:30] for k in list(doc)[:5]) + (", …" if len(doc) > 5 else "")
+        has = f"its keys: {keys}" if doc else "an empty object"
+        raise ExportFormatError(f'{NOT_ARBITER_JSON}: no "dataPoints" ({has})')
+    if not isinstance(doc["dataPoints"], list):
+        raise ExportFormatError(
+            f'{NOT_ARBITER_JSON}: "dataPoints" is {_json_kind(doc["dataPoints"])}, not a list'
+        )
+    try:
+        out = []
+        for i, row in enumerate(doc["dataPoints"]):
+            if not isinstance(row, dict):
+                raise ExportFormatError(f"dataPoints[{i}] must be an object")
+            out.append(_point_from_mapping(row, f"dataPoints[{i}]"))
+        runs = runs_from(doc["runs"], samples_per_run(out)) if "runs" in doc else None
+        algorithms = algorithms_from(doc["algorithms"]) if "algorithms" in doc else None
+    except ExportFormatError as exc:
+        raise ExportFormatError(f"bad arbiter JSON export: {exc}") from None
     return Export(out, runs, algorithms)
 
 

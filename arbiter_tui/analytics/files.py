@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import json
 import os
 import stat
 import tempfile
@@ -55,6 +56,15 @@ def write_new_file(directory: Path, stem: str, suffix: str, data: bytes) -> Path
     directory = Path(directory)
     if not directory.is_dir():
         raise ExportError(f"export directory {directory} does not exist")
+    try:
+        return _write_new_file(directory, stem, suffix, data)
+    except ExportError:
+        raise
+    except OSError as exc:  # e.g. a directory that lists but takes no files (/proc/1), a full disk
+        raise ExportError(f"cannot write export to {directory}: {exc.strerror or exc}") from exc
+
+
+def _write_new_file(directory: Path, stem: str, suffix: str, data: bytes) -> Path:
     fd, tmp = tempfile.mkstemp(prefix=f".{stem}.", suffix=".tmp", dir=directory)
     try:
         # mkstemp makes the file 0600; an export is an ordinary file: 0666 less the umask, as open() gives
@@ -116,12 +126,7 @@ def export_store(
         data = to_json(points, stats, runs, algorithms).encode()
     else:
         data = to_mcap(points, stats, runs, algorithms)
-    try:
-        return write_new_file(Path(directory), stem or export_stem(clock_ms), fmt, data)
-    except ExportError:
-        raise
-    except OSError as exc:
-        raise ExportError(f"cannot write export to {directory}: {exc.strerror or exc}") from exc
+    return write_new_file(Path(directory), stem or export_stem(clock_ms), fmt, data)
 
 
 def load_points(path: Path) -> list[DataPoint]:
@@ -146,11 +151,39 @@ def load_export(path: Path) -> Export:
         raise ExportFormatError(f"{path} is a directory") from None
     if raw.startswith(MCAP_MAGIC):
         return read_mcap(raw)
+    if not raw.strip():
+        raise ExportFormatError("empty file" if not raw else "empty file: only blank lines")
+    for magic, what in _NOT_EXPORTS:
+        if raw.startswith(magic):
+            raise ExportFormatError(f"{what}, not a CSV, JSON or MCAP export")
     try:
+        if b"\0" in raw[:4096]:
+            raise UnicodeDecodeError("utf-8", raw, 0, 1, "NUL byte")
         text = raw.decode("utf-8")
     except UnicodeDecodeError:
-        raise ExportFormatError("not a CSV, JSON or MCAP export") from None
+        head = raw[:8].hex(" ")
+        raise ExportFormatError(f"binary data (starts {head}), not a CSV, JSON or MCAP export") from None
     stripped = text.lstrip("\ufeff \t\r\n")
-    if stripped.startswith("{"):
+    if stripped.startswith(("{", "[")) or _is_json_scalar(stripped):
         return read_json(text)
     return Export(parse_csv(text))
+
+
+# files people mistake for an export, by their first bytes
+_NOT_EXPORTS = (
+    (b"\x1f\x8b", "gzip-compressed data (gunzip it first)"),
+    (b"\x28\xb5\x2f\xfd", "zstd-compressed data (unzstd it first)"),
+    (b"PK\x03\x04", "a zip archive (unzip it first)"),
+    (b"SQLite format 3\0", "an SQLite database (a ROS 2 .db3 bag?)"),
+    (b"\xff\xfe", "UTF-16 text (save it as UTF-8)"),
+    (b"\xfe\xff", "UTF-16 text (save it as UTF-8)"),
+)
+
+
+def _is_json_scalar(text: str) -> bool:
+    """``42``, ``"x"``, ``true``: JSON, so said to be JSON rather than a CSV with an odd header."""
+    try:
+        json.loads(text)
+    except ValueError:
+        return False
+    return True

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -29,10 +30,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--by",
         choices=("algorithm", "run"),
-        help="one set of stats per group (with --json: an object keyed by group). run: key 'run N'; where "
-        "the file carries run summaries (JSON and MCAP exports) each run's stats over all of its samples, "
-        "as the analytics screen shows them, with 'in file K/N' when the file holds only part of the run; "
-        "otherwise over the file's samples, with samples outside every run under 'no run'. algorithm: as "
+        help="one set of stats per group (with --json: an object keyed by group). run: in run order, "
+        "headed 'run N ALGORITHM on MISSION' (key 'run N' with 'run', 'algorithm' and 'mission' fields; a "
+        "CSV does not carry the mission: null); where the file carries run summaries (JSON and MCAP "
+        "exports) each run's stats over all of its samples, as the analytics screen shows them, with 'in "
+        "file K/N' when the file holds only part of the run; otherwise over the file's samples; samples "
+        "outside every run last, under 'no run'. algorithm: as "
         "the screen groups them, 'ALGORITHM on MISSION' from the file's summaries, else per algorithm over "
         "the file's run samples (samples outside every run belong to no algorithm). A path length never "
         "spans a gap between separate stretches",
@@ -41,22 +44,54 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 Groups = dict[str, tuple[AnalyticsStats, int | None]]  # name -> (stats, samples in the file when partial)
+NO_RUN = "no run"
 
 
-def by_run(export: Export) -> Groups:
-    """Per run: the file's summaries where it has them (all samples, partial runs marked), else the
-    file's samples per run id, samples without one under "no run"."""
+@dataclass(frozen=True)
+class RunLabel:
+    """What the file says a run was: its algorithm (from its summary, else from its samples) and its
+    mission (summaries only: a CSV does not carry it; "" for manual driving)."""
+
+    run: int
+    algorithm: str
+    mission: str | None
+
+    def title(self) -> str:
+        """``run 3 pure_pursuit on square``, ``run 2 manual``; ``run 4 stanley`` with the mission unknown."""
+        on = f" on {self.mission}" if self.mission else ""
+        return f"run {self.run} {self.algorithm}{on}"
+
+    def as_dict(self) -> dict[str, object]:
+        return {"run": self.run, "algorithm": self.algorithm, "mission": self.mission}
+
+
+def by_run(export: Export) -> tuple[Groups, dict[str, RunLabel]]:
+    """Per run, in run order, then the samples outside every run (``no run``) last, whatever the format:
+    the file's summaries where it has them (all samples, partial runs marked), else the file's samples per
+    run id. Beside them, each run's algorithm and mission where the file says."""
     points = export.points
+    out: Groups = {}
+    labels: dict[str, RunLabel] = {}
     if export.runs is not None:
-        out: Groups = {}
-        for r in export.runs:
+        for r in sorted(export.runs, key=lambda r: r.id):
             out[f"run {r.id}"] = (r.stats, _partial(r.in_ring, r.stats))
-        labels = ["no run" if p.runId is None else "" for p in points]
-        if "no run" in labels:
-            out["no run"] = (_grouped(points, labels)["no run"], None)
-        return out
-    labels = ["no run" if p.runId is None else f"run {p.runId}" for p in points]
-    return {k: (v, None) for k, v in _grouped(points, labels).items()}
+            labels[f"run {r.id}"] = RunLabel(r.id, r.algorithm, r.mission)
+        names = [NO_RUN if p.runId is None else "" for p in points]
+        if NO_RUN in names:
+            out[NO_RUN] = (_grouped(points, names)[NO_RUN], None)
+        return out, labels
+    names = [NO_RUN if p.runId is None else f"run {p.runId}" for p in points]
+    grouped = _grouped(points, names)
+    algorithms: dict[int, dict[str, None]] = {}
+    for p in points:
+        if p.runId is not None:
+            algorithms.setdefault(p.runId, {})[p.algorithm] = None
+    for run_id in sorted(algorithms):
+        out[f"run {run_id}"] = (grouped[f"run {run_id}"], None)
+        labels[f"run {run_id}"] = RunLabel(run_id, "+".join(algorithms[run_id]), None)
+    if NO_RUN in grouped:
+        out[NO_RUN] = (grouped[NO_RUN], None)
+    return out, labels
 
 
 def _in_file(part: int | None) -> dict[str, int]:
@@ -103,24 +138,28 @@ def run(argv: list[str]) -> int:
     except (ExportFormatError, OSError) as exc:
         print(f"arbiter-tui stats: {args.file}: {exc}", file=sys.stderr)
         return 1
+    labels: dict[str, RunLabel] = {}
     if args.by is None:
         groups: Groups = {"": (stats_of_points(export.points), None)}
     elif args.by == "run":
-        groups = by_run(export)
+        groups, labels = by_run(export)
     else:
         groups = by_algorithm(export)
     if args.json:
         if args.by is None:
             body: dict[str, object] = groups[""][0].as_dict()
         else:
-            body = {k: v.as_dict() | _in_file(part) for k, (v, part) in groups.items()}
+            body = {
+                k: v.as_dict() | _in_file(part) | (labels[k].as_dict() if k in labels else {})
+                for k, (v, part) in groups.items()
+            }
         print(json.dumps(body, allow_nan=False))
         return 0
     width = max(len(f) for f in STATS_FIELDS)
     for group, (stats, part) in groups.items():
         if group:
             note = "" if part is None else f"  in file {part}/{stats.sampleCount} (stats: all its samples)"
-            print(f"[{group}]{note}")
+            print(f"[{labels[group].title() if group in labels else group}]{note}")
         for name in STATS_FIELDS:
             print(f"{name:<{width}}  {format_stat(name, getattr(stats, name), decimals=6)}")
     return 0

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from arbiter_core.cliargs import OneLineParser, count, non_negative_float, positive_float
+from arbiter_core.cliargs import OneLineParser, count, non_negative_float, positive_float, writable_dir
 from arbiter_core.kinematics import DEFAULT_LIMITS
 from arbiter_core.linkmodel import LinkModel, LinkModelError
 from arbiter_core.record import LatencyRecord, RecordError
@@ -62,7 +62,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="one JSON object: runs, missions (each ranked), overall (best, the missions it is over, mean "
         "ranks, wins, rule), best, rule",
     )
-    p.add_argument("--export-dir", type=Path, help="also write every run's data points as CSV, JSON and MCAP")
+    p.add_argument(
+        "--export-dir",
+        type=writable_dir,
+        help="also write every run's data points as CSV, JSON and MCAP there (an existing directory you "
+        "can write to)",
+    )
     link = p.add_argument_group(
         "a modelled link (in simulated time): commands reach the robot late, some never; odometry "
         "reaches the console late"
@@ -96,7 +101,8 @@ def build_parser() -> argparse.ArgumentParser:
     link.add_argument(
         "--trials", type=count, default=1, metavar="N",
         help="run every cell N times, each with jitter and loss drawn from its own seed; figures become "
-        f"the {INTERVAL}, and a mission's best is named only when {VERDICT_RULE} (default 1)",
+        f"the {INTERVAL.replace('%', '%%')}, and a mission's best is named only when {VERDICT_RULE} "
+        "(default 1)",  # argparse formats help with %: the interval's "95 %" must be "95 %%" here
     )  # fmt: skip
     link.add_argument(
         "--cmd-timeout", type=positive_float, default=CMD_TIMEOUT_S, metavar="S",
@@ -175,12 +181,14 @@ def table(results: list[RunResult]) -> str:
     for m in answer.missions:
         rows.append([m.mission])
         rows.append(list(HEAD))
+        # avg e_xt (what the ranking orders by) to as many decimals as tell the ranked runs apart
+        d = TR.decimals([TR.Figure(r.tracking.xte_mean_m, 0.0) for r in groups[m.mission]])
         for i, r in enumerate(groups[m.mission], 1):
             mark = " *" if i == 1 and r.completed else ""
             t = r.tracking
             rows.append([
                 f"{i}{mark}", r.algorithm, "yes" if r.completed else "NO", f"{r.time_s:.1f}",
-                f"{t.xte_mean_m:.3f}", f"{t.xte_p95_m:.3f}", f"{t.xte_max_m:.3f}", _ratio(t.path_ratio),
+                f"{t.xte_mean_m:.{d}f}", f"{t.xte_p95_m:.3f}", f"{t.xte_max_m:.3f}", _ratio(t.path_ratio),
                 f"{t.mean_abs_dw_dt:.2f}", f"{r.stats.avgDistanceError:.3f}", f"{r.final_error_m:.3f}",
             ])  # fmt: skip
         rows.extend([["", name, "not run"] for name in m.not_run])
@@ -230,9 +238,6 @@ def run(argv: list[str]) -> int:
         algorithms = parse_names(args.algorithms, AUTONOMOUS, "algorithms")
     except CompareError as exc:
         print(f"arbiter-tui compare: {exc}", file=sys.stderr)
-        return 2
-    if args.export_dir is not None and not args.export_dir.is_dir():
-        print(f"arbiter-tui compare: --export-dir {args.export_dir} is not a directory", file=sys.stderr)
         return 2
     speed, note = cap_setting("speed", args.speed, DEFAULT_LIMITS.max_linear, "m/s")
     turn, note_turn = cap_setting("turn", args.turn, DEFAULT_LIMITS.max_angular, "rad/s")
@@ -372,28 +377,44 @@ TRIAL_HEAD = ("rank", "algorithm", "done", "avg e_xt m", "p95 e_xt m", "time s",
 
 
 def trial_table(verdicts: list[TR.Verdict]) -> str:
+    """Per mission its ranking; every cell of a column in one form (``mean±ci95`` when the figures are
+    over several trials), avg e_xt to as many decimals as the ranking and the verdict need to be seen."""
     lines = []
     for v in verdicts:
         lines.append(v.mission)
+        several = v.ranking[0].trials > 1
+        digits = TR.decimals([c.figures["xte_mean_m"] for c in v.ranking], verdict=v)
         rows = [list(TRIAL_HEAD)]
         for i, c in enumerate(v.ranking, 1):
             f = c.figures
             rows.append([
                 f"{i}{' *' if c.algorithm == v.best else ''}", c.algorithm, f"{c.completions}/{c.trials}",
-                f["xte_mean_m"].text(), f["xte_p95_m"].text(), f["time_s"].text(1),
-                f["mean_abs_dw_dt"].text(2), f["avgDistanceError"].text(),
+                f["xte_mean_m"].text(digits, several), f["xte_p95_m"].text(3, several),
+                f["time_s"].text(1, several), f["mean_abs_dw_dt"].text(2, several),
+                f["avgDistanceError"].text(3, several),
             ])  # fmt: skip
         lines.extend("  " + line.rstrip() for line in _aligned(rows))
-        lines.append(f"  verdict: {v.reason}")
+        lines.append(f"  verdict: {v.text(digits, several)}")
     lines.append(f"* {ranking.RULE_MISSION}; {VERDICT_RULE}")
     return "\n".join(lines)
 
 
 def error_vs_latency(cells: list[SweepCell]) -> list[str]:
+    """avg e_xt per controller (rows) and latency (columns); each mission's rows to the decimals its
+    tables needed at any latency, every cell ``mean±ci95`` when the figures are over several trials."""
+    several = len(cells[0].runs) > 1
+    digits: dict[str, int] = {}
+    for c in cells:
+        for v in c.verdicts:
+            d = TR.decimals([s.figures["xte_mean_m"] for s in v.ranking], verdict=v)
+            digits[v.mission] = max(digits.get(v.mission, 3), d)
     head = ["mission", "algorithm", *(f"{c.link.latency_s * 1e3:g} ms" for c in cells)]
     rows = [head]
     for i, s in enumerate(cells[0].summaries):
-        rows.append([s.mission, s.algorithm, *(c.summaries[i].figures["xte_mean_m"].text() for c in cells)])
+        d = digits.get(s.mission, 3)
+        rows.append([
+            s.mission, s.algorithm, *(c.summaries[i].figures["xte_mean_m"].text(d, several) for c in cells)
+        ])  # fmt: skip
     return _aligned(rows)
 
 

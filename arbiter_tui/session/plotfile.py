@@ -13,6 +13,8 @@ from typing import TYPE_CHECKING
 from ..analytics.styles import style_of
 
 if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
     from .compare_cmd import SweepCell
 
 
@@ -28,15 +30,20 @@ def series(cells: list[SweepCell]) -> dict[str, dict[str, list[tuple[float, floa
     return out
 
 
-def write_plot(path: Path, cells: list[SweepCell]) -> None:
-    """Write the figure; ImportError (with how to install) when matplotlib is missing."""
+INSTALL = "pip install 'arbiter-tui[report]' (from a clone: pip install -e '.[report]')"
+
+
+def figure(cells: list[SweepCell]) -> Figure:
+    """The figure: one panel per mission, and one legend for them all to the right of the panels, off
+    the data (inside a panel it covered the points at the longest latencies). ImportError (with how to
+    install) when matplotlib is missing."""
     try:
         import matplotlib
 
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
     except ImportError:
-        raise ImportError("needs matplotlib: pip install 'arbiter-tui[report]'") from None
+        raise ImportError(f"needs matplotlib: {INSTALL}") from None
     data = series(cells)
     n = len(data)
     cols = min(n, 2)
@@ -56,7 +63,6 @@ def write_plot(path: Path, cells: list[SweepCell]) -> None:
         ax.set_xlabel("one-way command latency (ms)")
         ax.set_ylabel("avg cross-track error (m)")
         ax.grid(True, alpha=0.3)
-        ax.legend(fontsize="small")
     for ax in list(axes.flat)[n:]:
         ax.set_visible(False)
     trials = len(cells[0].runs)
@@ -66,5 +72,20 @@ def write_plot(path: Path, cells: list[SweepCell]) -> None:
         + (", bands: 95 % interval" if trials > 1 else "")
     )
     fig.tight_layout()
-    fig.savefig(path, format=path.suffix.lower().lstrip("."))
-    plt.close(fig)
+    # every panel has the same controllers in the same colours: one legend, outside every panel (the
+    # saved image grows to hold it: bbox_inches="tight")
+    handles, labels = axes.flat[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="upper left", bbox_to_anchor=(1.0, 0.95), fontsize="small")
+    return fig
+
+
+def write_plot(path: Path, cells: list[SweepCell]) -> None:
+    """Write the figure as SVG or PNG (by the suffix); ImportError (with how to install) when matplotlib
+    is missing."""
+    fig = figure(cells)
+    import matplotlib.pyplot as plt
+
+    try:
+        fig.savefig(path, format=path.suffix.lower().lstrip("."), bbox_inches="tight")
+    finally:
+        plt.close(fig)

@@ -11,6 +11,8 @@ mission's verdict is "no clear winner" and names the entries whose intervals ove
 
 from __future__ import annotations
 
+import itertools
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, fields
 from typing import Any
@@ -42,9 +44,20 @@ class Figure:
     def high(self) -> float:
         return self.mean + self.ci95
 
-    def text(self, digits: int = 3) -> str:
+    def text(self, digits: int = 3, interval: bool | None = None) -> str:
+        """``mean±ci95`` to ``digits`` decimals (``—`` for no value). ``interval``: True or False gives
+        every cell of a table's column the same form (a table passes whether it holds several trials);
+        None shows the interval only when it has width (the verdict's ``reason`` in ``--json``)."""
+        if not math.isfinite(self.mean):
+            return "—"
         mean = f"{self.mean:.{digits}f}"
-        return mean if self.ci95 == 0 else f"{mean}±{self.ci95:.{digits}f}"
+        if interval is None:
+            interval = self.ci95 != 0
+        return f"{mean}±{self.ci95:.{digits}f}" if interval else mean
+
+    def shown(self, digits: int) -> Figure:
+        """The figure as a reader sees it printed to ``digits`` decimals."""
+        return Figure(float(f"{self.mean:.{digits}f}"), float(f"{self.ci95:.{digits}f}"))
 
     def as_dict(self) -> dict[str, float]:
         return {"mean": round(self.mean, 6), "ci95": round(self.ci95, 6)}
@@ -128,7 +141,11 @@ class Verdict:
     ranking: tuple[CellSummary, ...]  # in rank order
     best: str | None  # a clear winner, or None
     overlapping: tuple[str, ...]  # with the best (empty when it is clear)
-    reason: str
+    reason: str  # as --json carries it (the figure to 3 decimals); the tables print text()
+
+    def text(self, digits: int = 3, interval: bool | None = None) -> str:
+        """The reason with its figure as the mission's table prints it."""
+        return _reason(self.ranking[0], self.best, self.overlapping, digits, interval)
 
     def as_dict(self) -> dict[str, Any]:
         return {
@@ -141,6 +158,18 @@ class Verdict:
         }
 
 
+def _reason(
+    top: CellSummary, best: str | None, overlap: Sequence[str], digits: int = 3, interval: bool | None = None
+) -> str:
+    if not top.completed:
+        return "no controller completed every trial"
+    xte = top.figures["xte_mean_m"].text(digits, interval)
+    if best is None:
+        names = ", ".join((top.algorithm, *overlap))
+        return f"no clear winner: {names} overlap (avg e_xt {xte} m for {top.algorithm})"
+    return f"{top.algorithm} (avg e_xt {xte} m, apart from every other)"
+
+
 def verdicts(summaries: Sequence[CellSummary]) -> list[Verdict]:
     """Per mission: the ranking, and a best only when its interval of mean cross-track error is apart from
     the runner-up's."""
@@ -148,16 +177,45 @@ def verdicts(summaries: Sequence[CellSummary]) -> list[Verdict]:
     for mission, group in ranking.by_mission(summaries).items():
         top = group[0]
         xte = top.figures["xte_mean_m"]
-        if not top.completed:
-            out.append(Verdict(mission, tuple(group), None, (), "no controller completed every trial"))
-            continue
-        rivals = [c for c in group[1:] if c.completed]
-        overlap = tuple(c.algorithm for c in rivals if c.figures["xte_mean_m"].low <= xte.high)
-        if overlap:
-            names = ", ".join((top.algorithm, *overlap))
-            reason = f"no clear winner: {names} overlap (avg e_xt {xte.text()} m for {top.algorithm})"
-            out.append(Verdict(mission, tuple(group), None, overlap, reason))
-        else:
-            reason = f"{top.algorithm} (avg e_xt {xte.text()} m, apart from every other)"
-            out.append(Verdict(mission, tuple(group), top.algorithm, (), reason))
+        best: str | None = None
+        overlap: tuple[str, ...] = ()
+        if top.completed:
+            rivals = [c for c in group[1:] if c.completed]
+            overlap = tuple(c.algorithm for c in rivals if _overlaps(c.figures["xte_mean_m"], xte))
+            best = None if overlap else top.algorithm
+        out.append(Verdict(mission, tuple(group), best, overlap, _reason(top, best, overlap)))
     return out
+
+
+def _overlaps(rival: Figure, top: Figure) -> bool:
+    return rival.low <= top.high
+
+
+MORE_DIGITS = 3  # at most this many decimals beyond a column's usual ones (metres: down to the micrometre)
+
+
+def decimals(ranked: Sequence[Figure], base: int = 3, verdict: Verdict | None = None) -> int:
+    """The fewest decimals (at least ``base``, at most ``base + MORE_DIGITS``) at which a ranked column
+    shows what the ranking and the verdict see: neighbours in rank order whose means differ print
+    different means, and, given the mission's verdict (``ranked`` is then its avg e_xt column), each
+    completed rival's printed interval overlaps the best's printed one exactly when the verdict says so."""
+    rivals: list[tuple[Figure, bool]] = []
+    if verdict is not None and verdict.ranking[0].completed:
+        top = verdict.ranking[0].figures["xte_mean_m"]
+        rivals = [
+            (c.figures["xte_mean_m"], _overlaps(c.figures["xte_mean_m"], top))
+            for c in verdict.ranking[1:]
+            if c.completed
+        ]
+
+    def tells_apart(d: int) -> bool:
+        for a, b in itertools.pairwise(ranked):
+            finite = math.isfinite(a.mean) and math.isfinite(b.mean)
+            if finite and a.mean != b.mean and f"{a.mean:.{d}f}" == f"{b.mean:.{d}f}":
+                return False
+        if verdict is None or not rivals:
+            return True
+        top_shown = verdict.ranking[0].figures["xte_mean_m"].shown(d)
+        return all(_overlaps(f.shown(d), top_shown) == seen for f, seen in rivals)
+
+    return next((d for d in range(base, base + MORE_DIGITS) if tells_apart(d)), base + MORE_DIGITS)

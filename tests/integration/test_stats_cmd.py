@@ -1,5 +1,7 @@
 """``arbiter-tui stats FILE`` as a user runs it: a real subprocess on real files."""
 
+import contextlib
+import io
 import json
 import os
 import subprocess
@@ -110,7 +112,90 @@ def test_a_broken_mcap_is_one_line(tmp_path):
     f.write_bytes(good[: len(good) // 2])  # truncated mid-file
     r = run(f)
     assert r.returncode == 1 and "Traceback" not in r.stderr
-    assert len(r.stderr.strip().splitlines()) == 1 and "MCAP" in r.stderr
+    # issue 31: it said "record has length 5480051801619705163 that exceeds limit"
+    (line,) = r.stderr.strip().splitlines()
+    assert line.startswith(f"arbiter-tui stats: {f}: truncated MCAP: ") and "length" not in line, line
+
+
+def _foreign_mcap(topic: str) -> bytes:
+    from mcap_ros2.writer import Writer
+
+    buf = io.BytesIO()
+    writer = Writer(buf)
+    schema = writer.register_msgdef("std_msgs/msg/String", "string data")
+    writer.write_message(topic, schema, {"data": "hi"}, log_time=1, publish_time=1)
+    writer.finish()
+    return buf.getvalue()
+
+
+def _flipped(data: bytes, at: float) -> bytes:
+    i = int(len(data) * at)
+    return data[:i] + bytes(b ^ 0xFF for b in data[i : i + 16]) + data[i + 16 :]
+
+
+GOOD_MCAP = to_mcap(random_points(30))
+GOOD_CSV = to_csv(random_points(10)).encode()
+GOOD_JSON = to_json(random_points(10)).encode()
+
+
+@pytest.mark.parametrize(
+    ("content", "says"),
+    [
+        (b"", "empty file"),
+        (b" \n\n", "empty file: only blank lines"),
+        (bytes(range(256)), "binary data (starts 00 01 02"),
+        (b"\x1f\x8b\x08\x00" + bytes(40), "gzip-compressed data (gunzip it first), not a CSV, JSON or MCAP"),
+        ("timestamp,x\n".encode("utf-16"), "UTF-16 text (save it as UTF-8)"),
+        (b"hello world\n", "text, but not a CSV, JSON or MCAP export: its first line is 'hello world'"),
+        (b"a,b,c\n1,2,3\n", "CSV, but not an arbiter analytics export: its header is 'a,b,c'"),
+        (GOOD_CSV[:-40], "truncated CSV: its last line (11) stops after"),
+        (HEADER + b"1,0,0\n2,0,0,0,0,0,0,0,manual,\n", "bad arbiter CSV export: line 2: expected 10 columns"),
+        (HEADER + b"1,x,0,0,0,0,0,0,manual,\n", "bad arbiter CSV export: line 2: x is not a number"),
+        (b"[]", "JSON, but not an arbiter analytics export: the top level is an empty list"),
+        (b"42", "JSON, but not an arbiter analytics export: the top level is a number"),
+        (b'{"foo": 1}', "JSON, but not an arbiter analytics export: no \"dataPoints\" (its keys: 'foo')"),
+        (b"{}", "JSON, but not an arbiter analytics export: no \"dataPoints\" (an empty object)"),
+        (b'{"dataPoints": {}}', "JSON, but not an arbiter analytics export: \"dataPoints\" is an object"),
+        (GOOD_JSON[:200], "truncated JSON: it ends at line"),
+        (b"{oops", "invalid JSON: "),
+        (b'{"dataPoints": [{"timestamp": "x"}]}', "bad arbiter JSON export: dataPoints[0]: timestamp is not"),
+        (GOOD_MCAP[:8], "truncated MCAP: 8 bytes and no end marker"),
+        (GOOD_MCAP[:-1], f"truncated MCAP: {len(GOOD_MCAP) - 1} bytes"),
+        (_flipped(GOOD_MCAP, 0.5), "corrupt MCAP: "),
+        (_foreign_mcap("/chatter"), "MCAP, but not an arbiter analytics export: no /arbiter/data_point "
+         "channel (its topics: /chatter)"),
+        (_foreign_mcap("/arbiter/data_point"), "MCAP, but not an arbiter analytics export: its "
+         "/arbiter/data_point messages have no field 'timestamp'"),
+    ],
+    ids=lambda v: repr(v[:24]) if isinstance(v, bytes) else None,
+)
+def test_each_broken_input_says_what_the_file_is_and_what_is_wrong(tmp_path, capsys, content, says):
+    """Issue 31: `[]` was called "not an arbiter analytics CSV", a cut MCAP printed the reader's record
+    length. One line each, naming the kind of file and the fault; exit 1; never a traceback."""
+    from arbiter_tui.cli import main
+
+    f = tmp_path / "input"
+    f.write_bytes(content)
+    assert main(["stats", str(f)]) == 1
+    captured = capsys.readouterr()
+    (line,) = captured.err.strip().splitlines()
+    assert line.startswith(f"arbiter-tui stats: {f}: {says}"), line
+    assert captured.out == ""
+
+
+def test_a_damaged_mcap_is_always_an_export_error():
+    """Bytes flipped anywhere in an MCAP: the reader's many exceptions all become one kind of error."""
+    import random
+
+    from arbiter_tui.analytics.exports import ExportFormatError, read_mcap
+
+    rng = random.Random(31)
+    for _ in range(300):
+        data = bytearray(GOOD_MCAP)
+        for _ in range(rng.randint(1, 8)):
+            data[rng.randrange(8, len(data) - 8)] = rng.randrange(256)
+        with contextlib.suppress(ExportFormatError):  # anything else (struct.error, ...) fails the test
+            read_mcap(bytes(data))
 
 
 def test_by_algorithm_matches_the_analytics_screens_grouping(tmp_path):
@@ -154,5 +239,68 @@ def test_by_run_reads_every_format_of_a_compare_export(tmp_path):
         for name, expected in want.items():
             for k in STATS_FIELDS:
                 assert stats[name][k] == pytest.approx(expected[k], rel=1e-9), (path, name, k)
-    table = run(body["exports"][0], "--by", "run").stdout.splitlines()
-    assert sorted(line for line in table if line.startswith("[")) == sorted(f"[{name}]" for name in want)
+    runs = sorted(body["runs"], key=lambda r: r["run"])
+    for path in body["exports"]:  # each run headed with its algorithm, and its mission where the file says
+        on = {r["run"]: "" if path.endswith(".csv") else f" on {r['mission']}" for r in runs}
+        table = run(path, "--by", "run").stdout.splitlines()
+        assert [line for line in table if line.startswith("[")] == [
+            f"[run {r['run']} {r['algorithm']}{on[r['run']]}]" for r in runs
+        ], path
+
+
+def _store_with_idle_samples():
+    """Samples outside every run first and between runs (as the console records them), then two runs."""
+    from dataclasses import replace
+
+    from arbiter_tui.analytics.store import AnalyticsStore
+
+    from ..support.points import make_point
+
+    store = AnalyticsStore()
+    store.start_collection()
+    t = 0
+
+    def record(algorithm, n, run_id=None):
+        nonlocal t
+        for _ in range(n):
+            t += 1
+            store.record(replace(make_point(t, algorithm, run=run_id), linearVel=0.3))
+
+    def ms():
+        return 1_700_000_000_000.0 + 100.0 * t
+
+    record("manual", 3)
+    first = store.begin_run("pure_pursuit", "square", ms())
+    record("pure_pursuit", 5, first)
+    store.end_run("completed", ms(), 0.1)
+    record("manual", 2)
+    second = store.begin_run("stanley", "corner", ms())
+    record("stanley", 4, second)
+    store.end_run("aborted", ms(), 0.5)
+    return store
+
+
+def test_by_run_has_one_order_for_every_format_and_names_each_runs_algorithm(tmp_path, capsys):
+    """Issue 31: `[no run]` came first from a CSV and last from JSON and MCAP, and a run was only its
+    number. Now: runs in run order, `no run` last, each run with its algorithm (and mission where the file
+    says: not in a CSV), in the text and in --json (added fields; the keys stay `run N`)."""
+    from arbiter_tui.analytics.files import export_store
+    from arbiter_tui.cli import main
+
+    store = _store_with_idle_samples()
+    for fmt in ("csv", "json", "mcap"):
+        path = export_store(store, fmt, tmp_path, stem="e")
+        assert main(["stats", str(path), "--by", "run"]) == 0
+        headings = [line for line in capsys.readouterr().out.splitlines() if line.startswith("[")]
+        on = ("", "") if fmt == "csv" else (" on square", " on corner")
+        assert headings == [f"[run 1 pure_pursuit{on[0]}]", f"[run 2 stanley{on[1]}]", "[no run]"], fmt
+        assert main(["stats", str(path), "--by", "run", "--json"]) == 0
+        body = json.loads(capsys.readouterr().out)
+        assert list(body) == ["run 1", "run 2", "no run"], fmt
+        mission = (None, None) if fmt == "csv" else ("square", "corner")
+        assert {k: (v.get("run"), v.get("algorithm"), v.get("mission")) for k, v in body.items()} == {
+            "run 1": (1, "pure_pursuit", mission[0]),
+            "run 2": (2, "stanley", mission[1]),
+            "no run": (None, None, None),
+        }, fmt
+        assert [body[k]["sampleCount"] for k in body] == [5, 4, 5], fmt

@@ -218,3 +218,189 @@ def test_plot_writes_the_error_vs_latency_figure(tmp_path, capsys, suffix):
         assert "corner" in text and "one-way command latency" in text  # the panel and its axis
     else:
         assert data.startswith(b"\x89PNG\r\n\x1a\n") and len(data) > 10_000
+
+
+def _cell(algorithm: str, xte: float, ci95: float, trials: int = 3):
+    """A controller's summary on figure_eight over ``trials`` trials with avg e_xt ``xte ± ci95``."""
+    from dataclasses import replace
+
+    from arbiter_tui.session import trials as TR
+
+    base = TR.summarize([run_one(algorithm, "figure_eight")] * trials)
+    figures = {**base.figures, "xte_mean_m": TR.Figure(xte, ci95)}
+    return replace(base, figures=figures, tracking=replace(base.tracking, xte_mean_m=xte))
+
+
+def _xte_cells(table: str) -> dict[str, str]:
+    """algorithm -> its avg e_xt cell, from a trial table of one mission."""
+    lines = table.splitlines()
+    col = lines[1].split().index("avg")  # "rank algorithm done avg e_xt m ..."
+    rows = [line.replace(" * ", " ").split() for line in lines[2:]]
+    return {row[1]: row[col] for row in rows if row[0].isdigit()}
+
+
+def _interval(cell: str) -> tuple[float, float]:
+    mean, ci = (float(v) for v in cell.split("±"))
+    return mean - ci, mean + ci
+
+
+def test_a_trial_tables_column_has_one_form_and_the_digits_the_verdict_needs():
+    """Issue 31: figure_eight at 0 ms printed stanley `0.016±0.000` (an interval of 1e-18, rounding noise)
+    beside go_to_goal `0.016` under the verdict "stanley, apart from every other". Every cell of a column
+    now has the same form, and avg e_xt has as many decimals as tell the ranked means apart."""
+    from arbiter_tui.session import trials as TR
+    from arbiter_tui.session.compare_cmd import trial_table
+
+    summaries = [
+        _cell("stanley", 0.015611, 1e-18),
+        _cell("go_to_goal", 0.016049, 0.0),
+        _cell("pure_pursuit", 0.026231, 0.0),
+    ]
+    (v,) = TR.verdicts(summaries)
+    assert v.best == "stanley"
+    cells = _xte_cells(trial_table([v]))
+    assert all("±" in c for c in cells.values()), cells  # one form: every cell with its interval
+    assert len({c.split("±")[0] for c in cells.values()}) == 3, cells  # the ranked means differ visibly
+    assert cells["stanley"] in trial_table([v]).splitlines()[-2]  # the verdict quotes the cell as printed
+    # --json keeps its reason as it was
+    assert v.reason == "stanley (avg e_xt 0.016±0.000 m, apart from every other)"
+    # one trial: no interval in any cell
+    (one,) = TR.verdicts([_cell("stanley", 0.015611, 0.0, 1), _cell("go_to_goal", 0.016049, 0.0, 1)])
+    assert all("±" not in c for c in _xte_cells(trial_table([one])).values())
+
+
+@pytest.mark.parametrize(
+    ("best", "rival"),
+    [
+        ((0.0104, 0.0003), (0.0110, 0.0004)),  # overlapping, though 3 decimals print 0.010 and 0.011 apart
+        ((0.0104, 0.0002), (0.0108, 0.0001)),  # apart by 0.0001
+        ((0.015611, 1e-18), (0.016049, 0.0)),  # apart, equal at 3 decimals
+    ],
+)
+def test_the_printed_intervals_overlap_exactly_when_the_verdict_says_so(best, rival):
+    from arbiter_tui.session import trials as TR
+    from arbiter_tui.session.compare_cmd import trial_table
+
+    (v,) = TR.verdicts([_cell("stanley", *best), _cell("go_to_goal", *rival)])
+    cells = _xte_cells(trial_table([v]))
+    low, _ = _interval(cells["go_to_goal"])
+    _, high = _interval(cells["stanley"])
+    assert (low <= high) == (v.best is None), (cells, v.reason)
+
+
+def test_the_single_comparisons_table_tells_close_runs_apart():
+    from dataclasses import replace
+
+    from arbiter_tui.session.compare_cmd import table
+
+    runs = [run_one(a, "figure_eight") for a in ("stanley", "go_to_goal")]
+    xte = (0.015611, 0.016049)
+    runs = [replace(r, tracking=replace(r.tracking, xte_mean_m=v)) for r, v in zip(runs, xte, strict=True)]
+    lines = table(runs).splitlines()
+    head = lines[1].split()
+    col = head.index("avg") - 1  # "time s" is two words
+    means = [line.replace(" * ", " ").split()[col] for line in lines[2:4]]
+    assert means[0] != means[1], lines[:4]
+
+
+def test_the_sweeps_last_table_has_one_form_per_column(capsys):
+    assert main(["compare", "--latency", "0,100", "--trials", "3", "--mission", "figure_eight"]) == 0
+    out = capsys.readouterr().out.strip().splitlines()
+    rows = out[-len(AUTONOMOUS) :]
+    assert all(cell.count("±") == 1 for row in rows for cell in row.split()[2:]), rows
+
+
+def test_the_plots_legend_is_off_the_data_and_in_the_image(tmp_path, monkeypatch):
+    """Issue 31: the legend sat inside a panel, over the 300 ms points. Now no legend overlaps any panel's
+    axes, and the saved image holds the legend."""
+    from matplotlib.figure import Figure
+
+    from arbiter_core.linkmodel import LinkModel
+    from arbiter_tui.session.compare_cmd import Sweep, run_sweep
+    from arbiter_tui.session.plotfile import write_plot
+
+    seen = []
+    original = Figure.savefig
+
+    def savefig(fig, *args, **kwargs):  # what the saved figure holds, as it was drawn
+        out = original(fig, *args, **kwargs)
+        renderer = fig.canvas.get_renderer()
+        panels = [ax.get_window_extent(renderer) for ax in fig.axes if ax.get_visible()]
+        legends = [*fig.legends, *(ax.get_legend() for ax in fig.axes if ax.get_legend() is not None)]
+        seen.append((fig.bbox, panels, [lg.get_window_extent(renderer) for lg in legends], kwargs))
+        return out
+
+    monkeypatch.setattr(Figure, "savefig", savefig)
+    links = [LinkModel(0.0), LinkModel(0.3)]
+    cells = run_sweep(Sweep(["corner", "square", "slalom"], list(AUTONOMOUS), 0.5, 1.0, links))
+    write_plot(tmp_path / "sweep.png", cells)
+    ((page, panels, legends, kwargs),) = seen
+    assert len(panels) == 3 and legends
+    for box in legends:
+        assert not any(box.overlaps(panel) for panel in panels), (box, panels)
+        # in the image: the figure's own area, unless the image is cut to what it draws
+        assert kwargs.get("bbox_inches") == "tight" or page.contains(box.x1, box.y1)
+
+
+def test_plot_without_matplotlib_says_how_to_install_it_from_pypi_and_a_clone(tmp_path, capsys, monkeypatch):
+    import sys
+
+    monkeypatch.setitem(sys.modules, "matplotlib", None)  # import matplotlib -> ImportError
+    out = tmp_path / "sweep.svg"
+    assert main(["compare", "--latency", "0", "--mission", "corner", "--plot", str(out)]) == 1
+    (err,) = capsys.readouterr().err.strip().splitlines()
+    assert "pip install 'arbiter-tui[report]'" in err and "pip install -e '.[report]'" in err, err
+    assert not out.exists()
+
+
+def _compare_exit(capsys, *args):
+    try:
+        code = main(["compare", "--mission", "corner", "--algorithms", "stanley", *args])
+    except SystemExit as exc:
+        code = exc.code
+    return code, capsys.readouterr().err.strip().splitlines()
+
+
+@pytest.mark.parametrize("target", ["proc", "file", "read-only", "missing"])
+def test_an_export_dir_that_takes_no_files_is_one_line(tmp_path, capsys, target):
+    """Issue 31: `compare --export-dir /proc/1` ended in a FileNotFoundError traceback. A directory this
+    user cannot write to, a file, or nothing at all: one line on stderr and exit 2, before running."""
+    import os
+
+    where = {"proc": "/proc/1", "file": tmp_path / "f", "read-only": tmp_path / "ro"}
+    directory = where.get(target, tmp_path / "missing")
+    if target == "file":
+        directory.write_text("")
+    if target == "read-only":
+        directory.mkdir(mode=0o555)
+    if target in ("proc", "read-only") and (not os.path.isdir(directory) or os.access(directory, os.W_OK)):
+        pytest.skip(f"{directory} is writable here (root)")
+    code, err = _compare_exit(capsys, "--export-dir", str(directory))
+    assert code == 2 and len(err) == 1 and err[0].startswith("arbiter-tui compare: "), err
+    assert str(directory) in err[0]
+
+
+def test_an_export_that_fails_while_writing_is_one_line(tmp_path, capsys, monkeypatch):
+    """A directory that passed the check but takes no file when written (as /proc/1 does for root)."""
+    import os
+
+    from arbiter_tui.analytics import files
+
+    def refuse(*args, **kwargs):
+        raise FileNotFoundError(2, "No such file or directory")
+
+    monkeypatch.setattr(files.tempfile, "mkstemp", refuse)
+    code, err = _compare_exit(capsys, "--export-dir", str(tmp_path))
+    assert code == 1 and err == [f"arbiter-tui compare: cannot write export to {tmp_path}: {os.strerror(2)}"]
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_help_prints_and_names_every_option(capsys):
+    """`compare --help` raised ValueError: the --trials help quoted the interval's "95 %" unescaped."""
+    with pytest.raises(SystemExit) as exit_:
+        main(["compare", "--help"])
+    assert exit_.value.code == 0
+    out = " ".join(capsys.readouterr().out.split())
+    for flag in ("--export-dir", "--trials", "--plot", "--latency", "--seed"):
+        assert flag in out, flag
+    assert "95 % t-interval" in out

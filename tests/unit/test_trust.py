@@ -159,7 +159,8 @@ def test_stats_by_run_reports_the_whole_run_and_marks_a_partial_file(tmp_path, c
     assert got["run 1"]["totalPathLength"] == pytest.approx(run.stats.totalPathLength)
     assert got["run 1"]["samplesInFile"] == run.in_ring
     assert main(["stats", str(path), "--by", "run"]) == 0
-    assert f"[run 1]  in file {run.in_ring}/{run.stats.sampleCount}" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert f"[run 1 go_to_goal on square]  in file {run.in_ring}/{run.stats.sampleCount}" in out
     assert main(["stats", str(path), "--by", "algorithm", "--json"]) == 0
     (row,) = store.runs_by_algorithm()
     by_algo = json.loads(capsys.readouterr().out)
@@ -311,7 +312,7 @@ def test_config_keys_have_the_same_bounds(tmp_path, capsys):
     cfg.write_text("repeat-rate = 1000\n")
     assert main(["--config", str(cfg), "--sim"]) == 2
     (line,) = capsys.readouterr().err.strip().splitlines()
-    assert "line 1, key 'repeat-rate'" in line and "must be in [2, 50] Hz" in line
+    assert f"{cfg}:1: repeat-rate: " in line and "must be in [2, 50] Hz" in line
 
 
 def test_help_names_the_subcommands(capsys):
