@@ -18,6 +18,12 @@ SORTS: dict[str, tuple[Callable[[TopicFigures], float | str], bool]] = {
 SORT_ORDER = tuple(SORTS)
 COLUMNS = ("topic", "type", "state", "Hz", "usual", "B/s", "size", "delay", "age", "pub/sub")
 TEXT_COLUMNS = ("topic", "type", "state")  # left-aligned; the figures are right-aligned
+ABSENT = "—"  # a figure that was not measured: never a unit after it
+
+
+def unit(value: str, suffix: str) -> str:
+    """``value`` followed by its unit, unless it is absent."""
+    return value if value == ABSENT else f"{value}{suffix}"
 
 
 def aligned(value: str, width: int, column: str) -> str:
@@ -48,23 +54,23 @@ def short_type(type_name: str) -> str:
 
 def rate(hz: float | None) -> str:
     if hz is None:
-        return "-"
+        return ABSENT
     return f"{hz:.0f}" if hz >= 100 else f"{hz:.1f}" if hz >= 10 else f"{hz:.2f}"
 
 
 def size(n: float | None) -> str:
     """Bytes with a binary-ish unit: 512, 1.4k, 1.0M."""
     if n is None:
-        return "-"
-    for unit, scale in (("G", 1e9), ("M", 1e6), ("k", 1e3)):
+        return ABSENT
+    for suffix, scale in (("G", 1e9), ("M", 1e6), ("k", 1e3)):
         if n >= scale:
-            return f"{n / scale:.1f}{unit}"
+            return f"{n / scale:.1f}{suffix}"
     return f"{n:.0f}"
 
 
 def ms(v: float | None) -> str:
     if v is None:
-        return "-"
+        return ABSENT
     if v >= 10_000:
         return f"{v / 1000:.0f}s"
     if v >= 1000:
@@ -77,7 +83,7 @@ FRESH_MS = 100.0  # an age below this is shown as "<0.1s": a 50 Hz topic's age w
 
 def age(v: float | None) -> str:
     if v is None:
-        return "-"
+        return ABSENT
     return "<0.1s" if v < FRESH_MS else ms(v)
 
 
@@ -110,10 +116,11 @@ def detail(t: TopicFigures, window_s: float) -> list[str]:
             f"period min {ms(t.period_min_ms)}  max {ms(t.period_max_ms)}  std {ms(t.period_std_ms)}"
         )
     else:
-        lines.append(f"rate - ({t.count} msgs in the last {window_s:g} s, {t.total} in all)")
+        lines.append(f"rate {ABSENT} ({t.count} msgs in the last {window_s:g} s, {t.total} in all)")
     if t.usual_rate_hz is not None:
         lines.append(f"usual {rate(t.usual_rate_hz)} Hz")
-    lines.append(f"bandwidth {size(t.bandwidth_bps)}B/s  mean size {size(t.mean_size_bytes)}B")
+    bandwidth, mean_size = unit(size(t.bandwidth_bps), "B/s"), unit(size(t.mean_size_bytes), "B")
+    lines.append(f"bandwidth {bandwidth}  mean size {mean_size}")
     if t.stamped:
         lines.append(f"delay mean {ms(t.delay_mean_ms)}  p95 {ms(t.delay_p95_ms)} (now - header.stamp)")
     if t.malformed_stamps:
