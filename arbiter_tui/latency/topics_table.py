@@ -18,7 +18,16 @@ SORTS: dict[str, tuple[Callable[[TopicFigures], float | str], bool]] = {
 SORT_ORDER = tuple(SORTS)
 COLUMNS = ("topic", "type", "state", "Hz", "usual", "B/s", "size", "delay", "age", "pub/sub")
 TEXT_COLUMNS = ("topic", "type", "state")  # left-aligned; the figures are right-aligned
+SORT_COLUMNS = {"name": "topic", "rate": "Hz", "bandwidth": "B/s", "delay": "delay", "age": "age"}
+DOWN, UP = "▼", "▲"  # the sorted column's mark: largest (or Z) first, smallest (or A) first
 ABSENT = "—"  # a figure that was not measured: never a unit after it
+
+
+def headers(sort: str, reverse: bool = False) -> tuple[str, ...]:
+    """The column names, the sorted one marked with the order shown (``Hz ▼``: the busiest first)."""
+    column, descending = SORT_COLUMNS[sort], SORTS[sort][1]
+    mark = DOWN if descending != reverse else UP
+    return tuple(f"{c} {mark}" if c == column else c for c in COLUMNS)
 
 
 def unit(value: str, suffix: str) -> str:

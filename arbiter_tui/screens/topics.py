@@ -17,7 +17,7 @@ from textual_plot import HiResMode
 
 from .. import axes
 from ..latency.topics_client import TopicsState
-from ..latency.topics_table import COLUMNS, SORT_ORDER, aligned, cells, detail, select
+from ..latency.topics_table import COLUMNS, SORT_ORDER, aligned, cells, detail, headers, select
 from ..plots import MIN_GAP_X, MIN_GAP_Y, Plot
 from ..views import PLOT_PERIOD_S
 from .base import BaseScreen
@@ -91,7 +91,8 @@ class TopicsList(Widget, can_focus=True):
         widths[0] += max(0, self.size.width - sum(widths) - len(widths) + 1)  # the topic column
         out = Text(no_wrap=True, overflow="ellipsis")
         names_shown = tuple(COLUMNS[i] for i in shown)
-        out.append(_line(names_shown, widths, names_shown) + "\n", style="bold")
+        titles = headers(self.sort, self.reverse)  # the sorted column marked ▼ or ▲
+        out.append(_line(tuple(titles[i] for i in shown), widths, names_shown) + "\n", style="bold")
         rows = self.rows()
         if not rows:
             out.append(self._empty(), style="dim")
@@ -204,7 +205,7 @@ class TopicsScreen(BaseScreen):
     BINDINGS = [
         Binding("slash", "filter", "Filter"),
         Binding("s", "sort", "Sort"),
-        Binding("r", "reverse", "Reverse", show=False),
+        Binding("r", "reverse", "Flip", tooltip="Reverse the order of the sorted column"),
     ]
     # data for the widgets bound to them: a change repaints those widgets, never the whole screen
     state: reactive[TopicsState] = reactive(TopicsState, repaint=False)

@@ -82,3 +82,34 @@ async def test_filter_sort_and_select_with_the_keys_a_user_presses():
         # teleop keys do nothing here, and 1 goes back to driving
         await pilot.press("escape", "1")
         assert app.current_mode == "control"
+
+
+async def test_the_header_marks_the_sorted_column_and_the_footer_lists_every_key_within_80_columns():
+    from textual.widgets._footer import FooterKey
+
+    app = topics_app()
+    async with app.run_test(size=(80, 24)) as pilot:
+        await pilot.press("4")
+        table = app.screen.query_one(TopicsList)
+
+        def header() -> list[str]:
+            return table.render().plain.splitlines()[0].split()
+
+        assert header()[:2] == ["topic", "▲"]  # names A to Z
+        await pilot.press("s")  # by rate: the busiest first
+        await pilot.pause()
+        words = header()
+        assert words[words.index("Hz") + 1] == "▼" and words.count("▼") + words.count("▲") == 1
+        await pilot.press("r")  # reversed: the quietest first
+        await pilot.pause()
+        words = header()
+        assert words[words.index("Hz") + 1] == "▲" and "▼" not in words
+        await pilot.press("s", "s", "s")  # bandwidth, delay, age (still reversed: the youngest first)
+        await pilot.pause()
+        words = header()
+        assert words[words.index("age") + 1] == "▲"
+        # the footer names r (what it does: reverse the order) and every key fits in 80 columns
+        keys = {k.key: k for k in app.screen.query(FooterKey)}
+        assert {"slash", "s", "r"} <= set(keys) and keys["r"].description == "Flip"
+        assert all(k.region.right <= 80 and k.region.width > 0 for k in keys.values())
+        assert max(k.region.right for k in keys.values()) == keys["question_mark"].region.right

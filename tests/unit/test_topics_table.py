@@ -1,7 +1,7 @@
 """The topics screen's rows: filter by words of name or type, sorts, and cell text."""
 
 from arbiter_core.topicstats import TopicFigures
-from arbiter_tui.latency.topics_table import cells, detail, select
+from arbiter_tui.latency.topics_table import cells, detail, headers, select
 
 ROWS = [
     TopicFigures("/odom", "nav_msgs/msg/Odometry", "ok", rate_hz=50.0, bandwidth_bps=30_900.0, age_ms=5.0,
@@ -55,3 +55,12 @@ def test_the_detail_shows_an_absent_figure_as_a_dash_with_no_unit_as_the_table_d
     assert cells(ROWS[3])[3:7] == ("—", "—", "—", "—")
     measured = detail(ROWS[0], 5.0)
     assert "bandwidth 30.9kB/s  mean size 618B" in measured
+
+
+def test_the_header_marks_the_sorted_column_with_the_order_shown():
+    assert headers("name")[0] == "topic ▲" and headers("name", reverse=True)[0] == "topic ▼"
+    assert headers("rate")[3] == "Hz ▼" and headers("rate", reverse=True)[3] == "Hz ▲"
+    assert headers("bandwidth")[5] == "B/s ▼" and headers("delay")[7] == "delay ▼"
+    assert headers("age")[8] == "age ▼"
+    for sort in ("name", "rate", "bandwidth", "delay", "age"):
+        assert sum(("▼" in h) + ("▲" in h) for h in headers(sort)) == 1
