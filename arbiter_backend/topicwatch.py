@@ -69,7 +69,8 @@ class TopicWatch:
         with self._lock:
             w = self._windows.get(topic)
             if w is None or w.type != type_name:
-                w = self._windows[topic] = TopicWindow(topic, type_name, self.window_s, stamped)
+                w = TopicWindow(topic, type_name, self.window_s, stamped, created=self.clock())
+                self._windows[topic] = w
             w.stamped, w.unmeasured = stamped, unmeasured
         return True
 
@@ -150,6 +151,7 @@ class EmbeddedTopics:
         self.watch = watch
         self._heard: set[str] = set()  # topics that have carried a message (their stamped-ness is known)
         bus.taps.append(self._on_publish)
+        self.refresh()  # the topics declared so far are watched from now: one that waits is on demand
 
     def _on_publish(self, topic: str, type_name: str, msg: dict[str, Any]) -> None:
         if topic not in self._heard:

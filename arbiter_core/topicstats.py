@@ -11,10 +11,21 @@ answer with :func:`parse_topics` into frozen :class:`TopicFigures`. One definiti
 - delay: receive wall time - ``header.stamp`` of each stamped message (as ``ros2 topic delay``), mean
   and p95;
 - age: now - the last message's receive time;
-- state: ``waiting`` (never a message), ``silent`` (none for a whole window), ``slow`` (the rate fell
+- state: ``waiting`` (never a message), ``silent`` (a steady topic that stopped, see below), ``quiet``
+  (nothing in the window, and not ``silent``: a topic that publishes on demand), ``slow`` (the rate fell
   below ``SLOW_FRACTION`` of the usual rate: the highest rate seen, decaying with a half-life of
   ``USUAL_HALF_LIFE_S``, so a topic that settles at a new rate is usual again a minute later), else
   ``ok``; ``unmeasured`` when the backend cannot subscribe (its type is not installed there).
+
+Stopped or quiet: a sensor that stops is a fault, a command topic that stops is a robot standing still.
+Each topic's rhythm is followed message by message: its period and the period's spread, averaged over
+about a window of time. It is **steady** when its periods are regular (spread at most ``REGULAR_CV`` of
+the period, over at least ``MIN_GAPS`` periods) and it has published that way, with no pause, for a
+whole window, and either since it first published (it did not wait a window or more for its first
+message and never paused) or for ``STEADY_S``. A pause is a gap of ``STOP_PERIODS`` of its periods and
+at least ``STOP_MIN_S`` (a window, while its period is not known yet). A steady topic that then misses
+``STOP_PERIODS`` of its periods (at least ``STOP_MIN_S``) is ``silent``; any other topic with nothing in
+the window is ``quiet``: it has shown it publishes on demand (commands, events, logs) or in bursts.
 """
 
 from __future__ import annotations
@@ -31,8 +42,14 @@ MAX_SAMPLES = 20_000  # per topic: a 4 kHz topic fills the window; beyond, the o
 SLOW_FRACTION = 0.7
 USUAL_HALF_LIFE_S = 60.0
 NOT_INSTALLED = "type not installed here"
+# stopped or quiet (see the module's docstring)
+REGULAR_CV = 0.5  # periods are regular when their standard deviation is at most half their mean
+MIN_GAPS = 5  # periods seen before a rhythm is judged
+STOP_PERIODS = 5.0  # a steady topic has stopped after missing this many of its periods...
+STOP_MIN_S = 1.0  # ...and at least this long: a hiccup is not a stop
+STEADY_S = 60.0  # a topic that waited or paused before is steady after publishing regularly this long
 
-STATES = ("ok", "slow", "silent", "waiting", "unmeasured")
+STATES = ("ok", "slow", "silent", "quiet", "waiting", "unmeasured")
 
 
 class TopicsError(ValueError):
@@ -78,11 +95,20 @@ def _finite(v: Any) -> Any:
 class TopicWindow:
     """The messages of one topic received in the last ``window_s`` seconds (receive times monotonic)."""
 
-    def __init__(self, name: str, type_name: str, window_s: float = WINDOW_S, stamped: bool = False) -> None:
+    def __init__(
+        self,
+        name: str,
+        type_name: str,
+        window_s: float = WINDOW_S,
+        stamped: bool = False,
+        created: float | None = None,
+    ) -> None:
         self.name = name
         self.type = type_name
         self.window_s = window_s
         self.stamped = stamped
+        self.created = created  # when watching began (monotonic s); None: not known
+        self.rhythm = Rhythm(window_s)
         self.times: deque[float] = deque(maxlen=MAX_SAMPLES)
         self.sizes: deque[int] = deque(maxlen=MAX_SAMPLES)
         self.delays: deque[tuple[float, float]] = deque(maxlen=MAX_SAMPLES)  # (receive time, delay s)
@@ -94,6 +120,9 @@ class TopicWindow:
 
     def add(self, now: float, size: int, delay_s: float | None = None) -> None:
         """One message, received at ``now`` (monotonic s), ``size`` bytes, ``delay_s`` behind its stamp."""
+        if self.total == 0 and self.created is not None and now - self.created >= self.window_s:
+            self.rhythm.on_demand = True  # on the graph a window or more before it had anything to say
+        self.rhythm.add(now)
         self.times.append(now)
         self.sizes.append(size)
         self.total += 1
@@ -142,8 +171,10 @@ class TopicWindow:
             state = "unmeasured"
         elif self.total == 0:
             state = "waiting"
-        elif n == 0:
+        elif self.rhythm.stopped(now):
             state = "silent"
+        elif n == 0:
+            state = "quiet"
         elif rate is not None and usual is not None and rate < SLOW_FRACTION * usual:
             state = "slow"
         else:
@@ -184,6 +215,60 @@ class TopicWindow:
         if rate is not None and full and (self.usual_hz is None or rate > self.usual_hz):
             self.usual_hz = rate
         return self.usual_hz
+
+
+class Rhythm:
+    """One topic's rhythm, message by message (O(1) each): its period and the period's spread as
+    exponentially weighted averages over about ``tau_s`` of time (each period weighs by its length), the
+    current stretch without a pause, and whether the topic has shown it publishes on demand."""
+
+    def __init__(self, tau_s: float) -> None:
+        self.tau_s = tau_s
+        self.last: float | None = None  # the latest message's receive time
+        self.since: float | None = None  # when the current stretch (no pause) began
+        self.gaps = 0  # periods in the current stretch
+        self.period = 0.0  # s, their weighted mean
+        self.var = 0.0  # s², their weighted variance
+        self.on_demand = False  # it waited for its first message, or paused and came back
+
+    def pause_after(self) -> float:
+        """The gap that breaks the rhythm: STOP_PERIODS of its periods, at least STOP_MIN_S; while the
+        period is not known, a whole window."""
+        if self.gaps < MIN_GAPS:
+            return self.tau_s
+        return max(STOP_PERIODS * self.period, STOP_MIN_S)
+
+    def add(self, now: float) -> None:
+        if self.last is None:
+            self.since = now
+        else:
+            gap = max(0.0, now - self.last)
+            if gap >= self.pause_after():  # a pause: it came back, so it publishes on demand
+                self.on_demand = True
+                self.since, self.gaps, self.period, self.var = now, 0, 0.0, 0.0
+            elif self.gaps == 0:
+                self.gaps, self.period = 1, gap
+            else:
+                alpha = min(1.0, gap / self.tau_s)
+                diff = gap - self.period
+                self.period += alpha * diff
+                self.var = (1.0 - alpha) * (self.var + alpha * diff * diff)
+                self.gaps += 1
+        self.last = now
+
+    def regular(self) -> bool:
+        return self.gaps >= MIN_GAPS and math.sqrt(self.var) <= REGULAR_CV * self.period
+
+    def steady(self) -> bool:
+        """Regular, without a pause, for a whole window, and either from the start or for STEADY_S."""
+        if self.last is None or self.since is None or not self.regular():
+            return False
+        stretch = self.last - self.since
+        return stretch >= self.tau_s and (stretch >= STEADY_S or not self.on_demand)
+
+    def stopped(self, now: float) -> bool:
+        """Steady up to its latest message, and nothing since for STOP_PERIODS of its periods."""
+        return self.last is not None and self.steady() and now - self.last >= self.pause_after()
 
 
 # -- QoS compatibility, from the graph's endpoint profiles -------------------------------------------

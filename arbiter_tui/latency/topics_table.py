@@ -42,7 +42,13 @@ def aligned(value: str, width: int, column: str) -> str:
 
 
 # the state a row is marked with (a word, and a style the screen maps to colour): never colour alone
-MARKS = {"ok": "", "slow": "slow", "silent": "SILENT", "waiting": "waiting", "unmeasured": "n/a"}
+MARKS = {
+    "ok": "", "slow": "slow", "silent": "SILENT", "quiet": "quiet", "waiting": "waiting", "unmeasured": "n/a",
+}  # fmt: skip
+STATE_NOTES = {  # the detail pane's word on what a state means
+    "silent": "steady until it stopped: 5 of its periods without a message",
+    "quiet": "nothing in the window; it publishes on demand or in bursts, not a fault",
+}
 
 
 def select(topics: Iterable[TopicFigures], text: str, sort: str, reverse: bool = False) -> list[TopicFigures]:
@@ -113,7 +119,8 @@ def cells(t: TopicFigures) -> tuple[str, ...]:
 
 def detail(t: TopicFigures, window_s: float) -> list[str]:
     """The detail pane's lines for one topic."""
-    lines = [t.name, f"type {t.type}", f"state {t.state}" + (f" ({t.note})" if t.note else "")]
+    note = t.note or STATE_NOTES.get(t.state)
+    lines = [t.name, f"type {t.type}", f"state {t.state}" + (f" ({note})" if note else "")]
     lines.append(f"publishers {t.publishers}  subscribers {t.subscribers}")
     if t.publisher_nodes:
         lines.append("  published by " + ", ".join(t.publisher_nodes))

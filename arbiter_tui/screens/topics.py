@@ -39,7 +39,7 @@ def layout(width: int) -> tuple[int, ...]:
     return tuple(i for i, c in enumerate(COLUMNS) if c in shown)
 
 
-STYLES = {"slow": "yellow", "silent": "bold red", "waiting": "dim", "unmeasured": "dim"}
+STYLES = {"slow": "yellow", "silent": "bold red", "quiet": "dim", "waiting": "dim", "unmeasured": "dim"}
 
 
 class TopicsList(Widget, can_focus=True):

@@ -22,6 +22,7 @@ TOPICS = (
                  "match a best-effort publisher"),
     TopicFigures("/tf", "tf2_msgs/msg/TFMessage", "silent", 2, 3, 0, 1200, usual_rate_hz=100.0),
 )  # fmt: skip
+QUIET = TopicFigures("/stamped_cmd_vel", "std_msgs/msg/String", "quiet", 1, 1, 0, 240)  # commands, then none
 HISTORY = tuple(
     (t.name, tuple((t.rate_hz or 0.0) * (1.0 if i < 40 else 0.5) for i in range(60))) for t in TOPICS
 )
@@ -113,3 +114,30 @@ async def test_the_header_marks_the_sorted_column_and_the_footer_lists_every_key
         assert {"slash", "s", "r"} <= set(keys) and keys["r"].description == "Flip"
         assert all(k.region.right <= 80 and k.region.width > 0 for k in keys.values())
         assert max(k.region.right for k in keys.values()) == keys["question_mark"].region.right
+
+
+async def test_a_quiet_command_topic_is_dim_and_explained_a_stopped_sensor_is_red():
+    from dataclasses import replace
+
+    app = topics_app(replace(STATE, topics=(*TOPICS, QUIET)))
+    async with app.run_test(size=(100, 30)) as pilot:
+        await pilot.press("4", "end")
+        table = app.screen.query_one(TopicsList)
+        detail = app.screen.query_one(TopicDetail)
+
+        def row_style(name: str) -> str:
+            text = table.render()
+            start = text.plain.index(name)
+            return " ".join(str(s.style) for s in text.spans if s.start <= start < s.end)
+
+        assert table.selected == "/tf"
+        table.selected = "/stamped_cmd_vel"
+        await pilot.pause()
+        quiet = row_style("/stamped_cmd_vel")
+        assert "dim" in quiet and "red" not in quiet
+        line = next(x for x in table.render().plain.splitlines() if x.startswith("/stamped_cmd_vel"))
+        assert line.split()[2] == "quiet"
+        assert "not a fault" in str(detail.render())
+        table.selected = "/scan"
+        await pilot.pause()
+        assert "red" in row_style("/tf") and "SILENT" in table.render().plain
