@@ -1,10 +1,11 @@
 """The backend's topic monitor: every topic's rate, bandwidth, delay and age, for ``GET /api/topics``.
 
 ``TopicWatch`` holds one ``arbiter_core.topicstats.TopicWindow`` per watched topic behind a lock (in ROS
-mode messages arrive on the executor's thread, the API reads on the asyncio loop). What feeds it is the
-transport's: ``EmbeddedTopics`` taps every publish on the embedded bus (size = the message's JSON, the
-only form it has there); ``ros.topicwatch.RosTopics`` subscribes to every topic on the graph with raw
-(serialized) messages.
+mode messages arrive on the monitor's thread, the API reads on the asyncio loop), and samples each
+topic's rate once a second for its history (``sample``, called by either transport's own loop). What
+feeds it is the transport's: ``EmbeddedTopics`` taps every publish on the embedded bus (size = the
+message's JSON, the only form it has there); ``ros.topicwatch.RosTopics`` subscribes to every topic on
+the graph with raw (serialized) messages.
 """
 
 from __future__ import annotations
@@ -113,6 +114,15 @@ class TopicWatch:
         with self._lock:
             self._graph[topic] = _Graph(publishers, subscribers, qos_note, nodes)
 
+    def sample(self) -> None:
+        """Each topic's rate history (one sample a second, ``TopicWindow.sample``): the transports call this
+        a few times a second whether or not anyone asks, so the history covers the last minute the moment
+        a console opens its topics screen."""
+        now = self.clock()
+        with self._lock:
+            for w in self._windows.values():
+                w.sample(now)
+
     def figures(self) -> list[TopicFigures]:
         now = self.clock()
         with self._lock:
@@ -164,6 +174,11 @@ class EmbeddedTopics:
     def answer(self) -> dict[str, Any]:
         self.refresh()
         return self.watch.answer()
+
+    def tick(self) -> None:
+        """A few times a second (the backend's task): topics declared meanwhile, and the rate history."""
+        self.refresh()
+        self.watch.sample()
 
     def refresh(self) -> None:
         """Every topic the bus knows (declared, advertised or published), with its counts: advertisers

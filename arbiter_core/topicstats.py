@@ -11,6 +11,8 @@ answer with :func:`parse_topics` into frozen :class:`TopicFigures`. One definiti
 - delay: receive wall time - ``header.stamp`` of each stamped message (as ``ros2 topic delay``), mean
   and p95;
 - age: now - the last message's receive time;
+- rate history: the rate, once a second (``sample``, which the backend calls whether or not anyone asks),
+  over the last ``RATE_HISTORY`` seconds, so the console can plot the last minute the moment it opens;
 - state: ``waiting`` (never a message), ``silent`` (a steady topic that stopped, see below), ``quiet``
   (nothing in the window, and not ``silent``: a topic that publishes on demand), ``slow`` (the rate fell
   below ``SLOW_FRACTION`` of the usual rate: the highest rate seen, decaying with a half-life of
@@ -48,6 +50,8 @@ MIN_GAPS = 5  # periods seen before a rhythm is judged
 STOP_PERIODS = 5.0  # a steady topic has stopped after missing this many of its periods...
 STOP_MIN_S = 1.0  # ...and at least this long: a hiccup is not a stop
 STEADY_S = 60.0  # a topic that waited or paused before is steady after publishing regularly this long
+SAMPLE_S = 1.0  # the rate history: one sample a second...
+RATE_HISTORY = 60  # ...over the last minute
 
 STATES = ("ok", "slow", "silent", "quiet", "waiting", "unmeasured")
 
@@ -83,6 +87,7 @@ class TopicFigures:
     note: str | None = None
     publisher_nodes: tuple[str, ...] = ()  # fully qualified node names, where the graph has them
     subscriber_nodes: tuple[str, ...] = ()
+    rate_history: tuple[float | None, ...] = ()  # Hz once a second, oldest first (None: no rate then)
 
     def to_json(self) -> dict[str, Any]:
         return {k: list(v) if isinstance(v, tuple) else _finite(v) for k, v in self.__dict__.items()}
@@ -117,6 +122,8 @@ class TopicWindow:
         self.usual_hz: float | None = None
         self._usual_at = 0.0
         self.unmeasured: str | None = None  # why the backend cannot take this topic's messages
+        self.rate_history: deque[float | None] = deque(maxlen=RATE_HISTORY)
+        self._sampled: float | None = None  # when the newest rate sample is due from
 
     def add(self, now: float, size: int, delay_s: float | None = None) -> None:
         """One message, received at ``now`` (monotonic s), ``size`` bytes, ``delay_s`` behind its stamp."""
@@ -140,6 +147,27 @@ class TopicWindow:
         while self.delays and self.delays[0][0] < start:
             self.delays.popleft()
 
+    def _rate(self) -> float | None:
+        """(n - 1) / (t_last - t_first) over the window (after ``_trim``); None under two messages."""
+        n = len(self.times)
+        span = self.times[-1] - self.times[0] if n >= 2 else 0.0
+        return (n - 1) / span if span > 0 else None
+
+    def sample(self, now: float) -> None:
+        """The rate history's samples due by ``now``: one per SAMPLE_S since the first (a call that
+        comes late fills the seconds it missed with the rate now). Call it as often as you like."""
+        if self._sampled is None:
+            due, self._sampled = 1, now
+        else:
+            due = int((now - self._sampled) // SAMPLE_S)
+            if due <= 0:
+                return
+            self._sampled += due * SAMPLE_S
+        self._trim(now)
+        rate = self._rate()
+        value = None if rate is None else float(f"{rate:.4g}")  # what a plot can show, in a short JSON
+        self.rate_history.extend([value] * min(due, RATE_HISTORY))
+
     def figures(
         self,
         now: float,
@@ -154,7 +182,7 @@ class TopicWindow:
         if n >= 2:
             span = times[-1] - times[0]
             if span > 0:
-                rate = (n - 1) / span
+                rate = self._rate()
                 periods = [b - a for a, b in zip(times, list(times)[1:], strict=False)]
                 mean_p = span / (n - 1)
                 period_min, period_max = min(periods) * 1e3, max(periods) * 1e3
@@ -203,6 +231,7 @@ class TopicWindow:
             note=self.unmeasured,
             publisher_nodes=nodes[0],
             subscriber_nodes=nodes[1],
+            rate_history=tuple(self.rate_history),
         )
 
     def _usual(self, now: float, rate: float | None) -> float | None:
@@ -314,7 +343,24 @@ def _topic(obj: Any) -> TopicFigures:
     notes = {k: obj.get(k) if isinstance(obj.get(k), str) else None for k in ("qos_note", "note")}
     nodes = {k: _names(obj.get(k), name, k) for k in ("publisher_nodes", "subscriber_nodes")}
     stamped = obj.get("stamped") is True
-    return TopicFigures(name=name, type=type_name, state=state, stamped=stamped, **values, **notes, **nodes)
+    history = _history(obj.get("rate_history"), name)
+    return TopicFigures(
+        name=name, type=type_name, state=state, stamped=stamped, rate_history=history,
+        **values, **notes, **nodes,
+    )  # fmt: skip
+
+
+def _history(v: Any, topic: str) -> tuple[float | None, ...]:
+    """A rate history (absent from a backend that predates it: empty), its last RATE_HISTORY samples."""
+    if v is None:
+        return ()
+    ok = isinstance(v, list) and all(
+        x is None or (isinstance(x, int | float) and not isinstance(x, bool) and math.isfinite(x) and x >= 0)
+        for x in v
+    )
+    if not ok:
+        raise TopicsError(f"{topic}: rate_history is not a list of rates")
+    return tuple(None if x is None else float(x) for x in v[-RATE_HISTORY:])
 
 
 def _names(v: Any, topic: str, key: str) -> tuple[str, ...]:

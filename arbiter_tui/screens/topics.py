@@ -15,6 +15,8 @@ from textual.widget import Widget
 from textual.widgets import Input
 from textual_plot import HiResMode
 
+from arbiter_core.topicstats import SAMPLE_S
+
 from .. import axes
 from ..latency.topics_client import TopicsState
 from ..latency.topics_table import COLUMNS, SORT_ORDER, aligned, cells, detail, headers, select
@@ -166,7 +168,7 @@ class TopicDetail(Widget):
 
 
 class RatePlot(Plot):
-    """The selected topic's rate at each of the last polls (a minute at 2 Hz)."""
+    """The selected topic's rate over the last minute, once a second, as the backend sampled it."""
 
     SOURCE = "topics"
     selected: reactive[str | None] = reactive(None)
@@ -191,7 +193,7 @@ class RatePlot(Plot):
         values = np.array([np.nan if r is None else r for r in rates], dtype=np.float64)
         if values.size < 2 or np.all(np.isnan(values)):
             return
-        t = (np.arange(values.size) - (values.size - 1)) * 0.5  # seconds before the newest poll
+        t = (np.arange(values.size) - (values.size - 1)) * SAMPLE_S  # seconds before the newest sample
         ok = ~np.isnan(values)
         self.plot(t[ok], values[ok], line_style="cyan", hires_mode=HiResMode.BRAILLE)
         cols, rows = self.scale_size()

@@ -85,6 +85,24 @@ def test_a_command_topic_that_stops_is_quiet_not_silent(backend):
     assert "silent" not in seen and seen[-1] == "quiet", seen
 
 
+def test_the_first_answer_already_holds_each_topics_rate_over_the_time_before_it():
+    """Nobody asked this backend anything for 4 s: its first answer has /odom's rate once a second since
+    it started (the console's plot covers the last minute the moment its topics screen opens)."""
+    import time
+
+    fresh = start_backend("--topics-window", "2")
+    try:
+        time.sleep(4.0)
+        odom = topics(fresh)["/odom"]
+        history = odom["rate_history"]
+        assert 3 <= len(history) <= 6, history
+        assert history[-1] == pytest.approx(50.0, rel=0.1), history
+        assert all(r is None or r == pytest.approx(50.0, rel=0.1) for r in history), history
+        assert {"rate_hz", "count", "state", "usual_rate_hz"} <= set(odom)  # the fields before it, kept
+    finally:
+        fresh.stop()
+
+
 def test_cli_prints_the_table_json_and_checks_expectations(backend):
     assert wait_for(lambda: (topics(backend)["/odom"]["rate_hz"] or 0) > 40, 10)
     table = cli("--tracker", backend.api)

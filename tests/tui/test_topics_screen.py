@@ -1,5 +1,7 @@
 """Screen 4, topics: snapshots at 80x24 and 100x30 with fixed figures, and the keys a user presses."""
 
+from dataclasses import replace
+
 import pytest
 
 from arbiter_core.topicstats import NOT_INSTALLED, TopicFigures
@@ -23,10 +25,12 @@ TOPICS = (
     TopicFigures("/tf", "tf2_msgs/msg/TFMessage", "silent", 2, 3, 0, 1200, usual_rate_hz=100.0),
 )  # fmt: skip
 QUIET = TopicFigures("/stamped_cmd_vel", "std_msgs/msg/String", "quiet", 1, 1, 0, 240)  # commands, then none
-HISTORY = tuple(
-    (t.name, tuple((t.rate_hz or 0.0) * (1.0 if i < 40 else 0.5) for i in range(60))) for t in TOPICS
+# the last minute as the backend sampled it (once a second): each topic at its rate, then half of it
+TOPICS = tuple(
+    replace(t, rate_history=tuple((t.rate_hz or 0.0) * (1.0 if i < 40 else 0.5) for i in range(60)))
+    for t in TOPICS
 )
-STATE = TopicsState(polls=60, window_s=5.0, topics=TOPICS, history=HISTORY)
+STATE = TopicsState(polls=60, window_s=5.0, topics=TOPICS)
 
 
 def topics_app(state: TopicsState = STATE):
@@ -117,8 +121,6 @@ async def test_the_header_marks_the_sorted_column_and_the_footer_lists_every_key
 
 
 async def test_a_quiet_command_topic_is_dim_and_explained_a_stopped_sensor_is_red():
-    from dataclasses import replace
-
     app = topics_app(replace(STATE, topics=(*TOPICS, QUIET)))
     async with app.run_test(size=(100, 30)) as pilot:
         await pilot.press("4", "end")
@@ -141,3 +143,18 @@ async def test_a_quiet_command_topic_is_dim_and_explained_a_stopped_sensor_is_re
         table.selected = "/scan"
         await pilot.pause()
         assert "red" in row_style("/tf") and "SILENT" in table.render().plain
+
+
+async def test_the_rate_plot_covers_the_last_minute_the_moment_the_screen_opens():
+    """The backend samples every topic's rate once a second whoever asks: the first answer the screen gets
+    holds the last minute, and the plot draws all of it (from -59 s), not only what came since it opened."""
+    app = topics_app()
+    async with app.run_test(size=(100, 30)) as pilot:
+        await pilot.press("4")
+        plot = app.screen.query_one(RatePlot)
+        await pilot.pause()
+        assert plot.selected == "/camera/image_raw" and plot.draws >= 1
+        assert plot._user_x_min <= -59.0 and plot._user_x_max >= 0.0
+        x = plot._datasets[0].x
+        assert len(x) == 60 and x[0] == -59.0 and x[-1] == 0.0
+        assert app.topics.rates("/camera/image_raw")[:2] == (15.0, 15.0)

@@ -6,6 +6,7 @@ import pytest
 
 from arbiter_core.topicstats import (
     NOT_INSTALLED,
+    RATE_HISTORY,
     TopicsError,
     TopicWindow,
     parse_expect,
@@ -169,6 +170,43 @@ def test_the_usual_rate_decays_so_a_new_steady_rate_becomes_usual():
     f = w.figures(t)
     assert f.rate_hz == pytest.approx(5.0, rel=0.01)
     assert f.state == "ok", f.usual_rate_hz
+
+
+def test_the_rate_history_holds_one_sample_a_second_over_the_last_minute():
+    w = TopicWindow("/scan", "sensor_msgs/msg/LaserScan", 5.0)
+    sampled = []
+    for i in range(1000):  # 10 Hz for 100 s, then 5 Hz; sampled twice a second
+        w.add(i / 10, 10)
+        if i % 5 == 0:
+            w.sample(i / 10)
+            sampled.append(len(w.rate_history))
+    t = 100.0
+    assert sampled[:9] == [1, 1, 2, 2, 3, 3, 4, 4, 5]  # once a second, however often it is called
+    assert len(w.rate_history) == RATE_HISTORY  # bounded: the last minute
+    assert all(r == pytest.approx(10.0) for r in w.rate_history)
+    for i in range(50):
+        w.add(t + i * 0.2, 10)
+    w.sample(t + 10.0)  # ten seconds late: the seconds it missed take the rate now
+    f = w.figures(t + 10.0)
+    assert f.rate_history[-10:] == (pytest.approx(5.0),) * 10 and len(f.rate_history) == RATE_HISTORY
+    w.sample(t + 30.0)  # stopped: no rate in the window
+    assert w.figures(t + 30.0).rate_history[-1] is None
+    assert f.to_json()["rate_history"][-1] == pytest.approx(5.0)
+
+
+def test_the_rate_history_is_parsed_bounded_and_checked():
+    body = {"window_s": 5, "topics": [
+        good(rate_history=[None, 1.5, 2]),
+        good(name="/long", rate_history=list(range(100))),
+        good(name="/old"),  # a backend that predates it
+        good(name="/bad", rate_history=[1.0, "fast"]),
+        good(name="/neg", rate_history=[-1.0]),
+    ]}  # fmt: skip
+    answer = parse_topics(body)
+    by = {t.name: t for t in answer.topics}
+    assert by["/odom"].rate_history == (None, 1.5, 2.0)
+    assert by["/long"].rate_history == tuple(float(i) for i in range(40, 100))
+    assert by["/old"].rate_history == () and answer.skipped == 2
 
 
 def test_qos_mismatch_notes():

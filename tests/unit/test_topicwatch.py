@@ -36,3 +36,23 @@ def test_a_topic_declared_at_start_that_waits_for_commands_is_quiet_after_them_n
         bus.publish("/scan", {"data": "scan"})
     clock.now = 61.5
     assert state(topics, "/scan") == "silent"
+
+
+def test_the_backend_samples_each_topics_rate_once_a_second_whether_or_not_anyone_asks():
+    clock, bus = Clock(), TopicBus()
+    bus.declare("/odom", "std_msgs/String")
+    topics = EmbeddedTopics(bus, TopicWatch(clock=clock))
+    for i in range(1, 90 * 50 + 1):  # 50 Hz for 90 s; the backend's beat (tick) four times a second
+        clock.now = i / 50
+        bus.publish("/odom", {"data": "odom"})
+        if i % 12 == 0:
+            topics.tick()
+    odom = next(t for t in topics.answer()["topics"] if t["name"] == "/odom")  # the first answer
+    history = odom["rate_history"]
+    assert len(history) == 60 and all(abs(r - 50.0) < 0.01 for r in history)
+    bus.declare("/late", "std_msgs/String")  # declared later: watched from the next beat
+    topics.tick()
+    clock.now += 3.0
+    topics.tick()
+    late = next(t for t in topics.answer()["topics"] if t["name"] == "/late")
+    assert late["state"] == "waiting" and late["rate_history"] == [None] * 4
