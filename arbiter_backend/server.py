@@ -31,6 +31,7 @@ from .topicwatch import EmbeddedTopics, TopicFilter, TopicWatch
 from .tracker import DEFAULT_MAX_COMMAND_AGE_MS, LatencyTracker
 
 log = logging.getLogger(__name__)
+TOPICS_TICK_S = 0.25  # the topic monitor's beat (its rate history samples once a second of it)
 
 
 @dataclass
@@ -194,6 +195,12 @@ class Backend(Servers):
                     topics.measured_message(0.0, 0.0, self.config.measured_type, time.time_ns()),
                 )
 
+    async def _topics_loop(self) -> None:
+        """The topic monitor's own beat: new topics watched, each one's rate sampled once a second."""
+        while True:
+            await asyncio.sleep(TOPICS_TICK_S)
+            self.topics.tick()
+
     async def _sim_loop(self) -> None:
         assert self.simulator is not None
         period = 1.0 / RATE_HZ
@@ -213,6 +220,7 @@ class Backend(Servers):
         await self.start_servers(self.endpoint if self.config.bridge else None, self.tracker, self.topics)
         loop = asyncio.get_running_loop()
         self._tasks.append(loop.create_task(self._watchdog()))
+        self._tasks.append(loop.create_task(self._topics_loop()))
         if self.simulator is not None:
             self._tasks.append(loop.create_task(self._sim_loop()))
 

@@ -1,10 +1,11 @@
 """The backend's topic monitor: every topic's rate, bandwidth, delay and age, for ``GET /api/topics``.
 
 ``TopicWatch`` holds one ``arbiter_core.topicstats.TopicWindow`` per watched topic behind a lock (in ROS
-mode messages arrive on the executor's thread, the API reads on the asyncio loop). What feeds it is the
-transport's: ``EmbeddedTopics`` taps every publish on the embedded bus (size = the message's JSON, the
-only form it has there); ``ros.topicwatch.RosTopics`` subscribes to every topic on the graph with raw
-(serialized) messages.
+mode messages arrive on the monitor's thread, the API reads on the asyncio loop), and samples each
+topic's rate once a second for its history (``sample``, called by either transport's own loop). What
+feeds it is the transport's: ``EmbeddedTopics`` taps every publish on the embedded bus (size = the
+message's JSON, the only form it has there); ``ros.topicwatch.RosTopics`` subscribes to every topic on
+the graph with raw (serialized) messages.
 """
 
 from __future__ import annotations
@@ -69,7 +70,8 @@ class TopicWatch:
         with self._lock:
             w = self._windows.get(topic)
             if w is None or w.type != type_name:
-                w = self._windows[topic] = TopicWindow(topic, type_name, self.window_s, stamped)
+                w = TopicWindow(topic, type_name, self.window_s, stamped, created=self.clock())
+                self._windows[topic] = w
             w.stamped, w.unmeasured = stamped, unmeasured
         return True
 
@@ -112,6 +114,15 @@ class TopicWatch:
         with self._lock:
             self._graph[topic] = _Graph(publishers, subscribers, qos_note, nodes)
 
+    def sample(self) -> None:
+        """Each topic's rate history (one sample a second, ``TopicWindow.sample``): the transports call this
+        a few times a second whether or not anyone asks, so the history covers the last minute the moment
+        a console opens its topics screen."""
+        now = self.clock()
+        with self._lock:
+            for w in self._windows.values():
+                w.sample(now)
+
     def figures(self) -> list[TopicFigures]:
         now = self.clock()
         with self._lock:
@@ -150,6 +161,7 @@ class EmbeddedTopics:
         self.watch = watch
         self._heard: set[str] = set()  # topics that have carried a message (their stamped-ness is known)
         bus.taps.append(self._on_publish)
+        self.refresh()  # the topics declared so far are watched from now: one that waits is on demand
 
     def _on_publish(self, topic: str, type_name: str, msg: dict[str, Any]) -> None:
         if topic not in self._heard:
@@ -162,6 +174,11 @@ class EmbeddedTopics:
     def answer(self) -> dict[str, Any]:
         self.refresh()
         return self.watch.answer()
+
+    def tick(self) -> None:
+        """A few times a second (the backend's task): topics declared meanwhile, and the rate history."""
+        self.refresh()
+        self.watch.sample()
 
     def refresh(self) -> None:
         """Every topic the bus knows (declared, advertised or published), with its counts: advertisers

@@ -11,10 +11,23 @@ answer with :func:`parse_topics` into frozen :class:`TopicFigures`. One definiti
 - delay: receive wall time - ``header.stamp`` of each stamped message (as ``ros2 topic delay``), mean
   and p95;
 - age: now - the last message's receive time;
-- state: ``waiting`` (never a message), ``silent`` (none for a whole window), ``slow`` (the rate fell
+- rate history: the rate, once a second (``sample``, which the backend calls whether or not anyone asks),
+  over the last ``RATE_HISTORY`` seconds, so the console can plot the last minute the moment it opens;
+- state: ``waiting`` (never a message), ``silent`` (a steady topic that stopped, see below), ``quiet``
+  (nothing in the window, and not ``silent``: a topic that publishes on demand), ``slow`` (the rate fell
   below ``SLOW_FRACTION`` of the usual rate: the highest rate seen, decaying with a half-life of
   ``USUAL_HALF_LIFE_S``, so a topic that settles at a new rate is usual again a minute later), else
   ``ok``; ``unmeasured`` when the backend cannot subscribe (its type is not installed there).
+
+Stopped or quiet: a sensor that stops is a fault, a command topic that stops is a robot standing still.
+Each topic's rhythm is followed message by message: its period and the period's spread, averaged over
+about a window of time. It is **steady** when its periods are regular (spread at most ``REGULAR_CV`` of
+the period, over at least ``MIN_GAPS`` periods) and it has published that way, with no pause, for a
+whole window, and either since it first published (it did not wait a window or more for its first
+message and never paused) or for ``STEADY_S``. A pause is a gap of ``STOP_PERIODS`` of its periods and
+at least ``STOP_MIN_S`` (a window, while its period is not known yet). A steady topic that then misses
+``STOP_PERIODS`` of its periods (at least ``STOP_MIN_S``) is ``silent``; any other topic with nothing in
+the window is ``quiet``: it has shown it publishes on demand (commands, events, logs) or in bursts.
 """
 
 from __future__ import annotations
@@ -31,8 +44,16 @@ MAX_SAMPLES = 20_000  # per topic: a 4 kHz topic fills the window; beyond, the o
 SLOW_FRACTION = 0.7
 USUAL_HALF_LIFE_S = 60.0
 NOT_INSTALLED = "type not installed here"
+# stopped or quiet (see the module's docstring)
+REGULAR_CV = 0.5  # periods are regular when their standard deviation is at most half their mean
+MIN_GAPS = 5  # periods seen before a rhythm is judged
+STOP_PERIODS = 5.0  # a steady topic has stopped after missing this many of its periods...
+STOP_MIN_S = 1.0  # ...and at least this long: a hiccup is not a stop
+STEADY_S = 60.0  # a topic that waited or paused before is steady after publishing regularly this long
+SAMPLE_S = 1.0  # the rate history: one sample a second...
+RATE_HISTORY = 60  # ...over the last minute
 
-STATES = ("ok", "slow", "silent", "waiting", "unmeasured")
+STATES = ("ok", "slow", "silent", "quiet", "waiting", "unmeasured")
 
 
 class TopicsError(ValueError):
@@ -66,6 +87,7 @@ class TopicFigures:
     note: str | None = None
     publisher_nodes: tuple[str, ...] = ()  # fully qualified node names, where the graph has them
     subscriber_nodes: tuple[str, ...] = ()
+    rate_history: tuple[float | None, ...] = ()  # Hz once a second, oldest first (None: no rate then)
 
     def to_json(self) -> dict[str, Any]:
         return {k: list(v) if isinstance(v, tuple) else _finite(v) for k, v in self.__dict__.items()}
@@ -78,11 +100,20 @@ def _finite(v: Any) -> Any:
 class TopicWindow:
     """The messages of one topic received in the last ``window_s`` seconds (receive times monotonic)."""
 
-    def __init__(self, name: str, type_name: str, window_s: float = WINDOW_S, stamped: bool = False) -> None:
+    def __init__(
+        self,
+        name: str,
+        type_name: str,
+        window_s: float = WINDOW_S,
+        stamped: bool = False,
+        created: float | None = None,
+    ) -> None:
         self.name = name
         self.type = type_name
         self.window_s = window_s
         self.stamped = stamped
+        self.created = created  # when watching began (monotonic s); None: not known
+        self.rhythm = Rhythm(window_s)
         self.times: deque[float] = deque(maxlen=MAX_SAMPLES)
         self.sizes: deque[int] = deque(maxlen=MAX_SAMPLES)
         self.delays: deque[tuple[float, float]] = deque(maxlen=MAX_SAMPLES)  # (receive time, delay s)
@@ -91,9 +122,14 @@ class TopicWindow:
         self.usual_hz: float | None = None
         self._usual_at = 0.0
         self.unmeasured: str | None = None  # why the backend cannot take this topic's messages
+        self.rate_history: deque[float | None] = deque(maxlen=RATE_HISTORY)
+        self._sampled: float | None = None  # when the newest rate sample is due from
 
     def add(self, now: float, size: int, delay_s: float | None = None) -> None:
         """One message, received at ``now`` (monotonic s), ``size`` bytes, ``delay_s`` behind its stamp."""
+        if self.total == 0 and self.created is not None and now - self.created >= self.window_s:
+            self.rhythm.on_demand = True  # on the graph a window or more before it had anything to say
+        self.rhythm.add(now)
         self.times.append(now)
         self.sizes.append(size)
         self.total += 1
@@ -111,6 +147,27 @@ class TopicWindow:
         while self.delays and self.delays[0][0] < start:
             self.delays.popleft()
 
+    def _rate(self) -> float | None:
+        """(n - 1) / (t_last - t_first) over the window (after ``_trim``); None under two messages."""
+        n = len(self.times)
+        span = self.times[-1] - self.times[0] if n >= 2 else 0.0
+        return (n - 1) / span if span > 0 else None
+
+    def sample(self, now: float) -> None:
+        """The rate history's samples due by ``now``: one per SAMPLE_S since the first (a call that
+        comes late fills the seconds it missed with the rate now). Call it as often as you like."""
+        if self._sampled is None:
+            due, self._sampled = 1, now
+        else:
+            due = int((now - self._sampled) // SAMPLE_S)
+            if due <= 0:
+                return
+            self._sampled += due * SAMPLE_S
+        self._trim(now)
+        rate = self._rate()
+        value = None if rate is None else float(f"{rate:.4g}")  # what a plot can show, in a short JSON
+        self.rate_history.extend([value] * min(due, RATE_HISTORY))
+
     def figures(
         self,
         now: float,
@@ -125,7 +182,7 @@ class TopicWindow:
         if n >= 2:
             span = times[-1] - times[0]
             if span > 0:
-                rate = (n - 1) / span
+                rate = self._rate()
                 periods = [b - a for a, b in zip(times, list(times)[1:], strict=False)]
                 mean_p = span / (n - 1)
                 period_min, period_max = min(periods) * 1e3, max(periods) * 1e3
@@ -142,8 +199,10 @@ class TopicWindow:
             state = "unmeasured"
         elif self.total == 0:
             state = "waiting"
-        elif n == 0:
+        elif self.rhythm.stopped(now):
             state = "silent"
+        elif n == 0:
+            state = "quiet"
         elif rate is not None and usual is not None and rate < SLOW_FRACTION * usual:
             state = "slow"
         else:
@@ -172,6 +231,7 @@ class TopicWindow:
             note=self.unmeasured,
             publisher_nodes=nodes[0],
             subscriber_nodes=nodes[1],
+            rate_history=tuple(self.rate_history),
         )
 
     def _usual(self, now: float, rate: float | None) -> float | None:
@@ -184,6 +244,60 @@ class TopicWindow:
         if rate is not None and full and (self.usual_hz is None or rate > self.usual_hz):
             self.usual_hz = rate
         return self.usual_hz
+
+
+class Rhythm:
+    """One topic's rhythm, message by message (O(1) each): its period and the period's spread as
+    exponentially weighted averages over about ``tau_s`` of time (each period weighs by its length), the
+    current stretch without a pause, and whether the topic has shown it publishes on demand."""
+
+    def __init__(self, tau_s: float) -> None:
+        self.tau_s = tau_s
+        self.last: float | None = None  # the latest message's receive time
+        self.since: float | None = None  # when the current stretch (no pause) began
+        self.gaps = 0  # periods in the current stretch
+        self.period = 0.0  # s, their weighted mean
+        self.var = 0.0  # s², their weighted variance
+        self.on_demand = False  # it waited for its first message, or paused and came back
+
+    def pause_after(self) -> float:
+        """The gap that breaks the rhythm: STOP_PERIODS of its periods, at least STOP_MIN_S; while the
+        period is not known, a whole window."""
+        if self.gaps < MIN_GAPS:
+            return self.tau_s
+        return max(STOP_PERIODS * self.period, STOP_MIN_S)
+
+    def add(self, now: float) -> None:
+        if self.last is None:
+            self.since = now
+        else:
+            gap = max(0.0, now - self.last)
+            if gap >= self.pause_after():  # a pause: it came back, so it publishes on demand
+                self.on_demand = True
+                self.since, self.gaps, self.period, self.var = now, 0, 0.0, 0.0
+            elif self.gaps == 0:
+                self.gaps, self.period = 1, gap
+            else:
+                alpha = min(1.0, gap / self.tau_s)
+                diff = gap - self.period
+                self.period += alpha * diff
+                self.var = (1.0 - alpha) * (self.var + alpha * diff * diff)
+                self.gaps += 1
+        self.last = now
+
+    def regular(self) -> bool:
+        return self.gaps >= MIN_GAPS and math.sqrt(self.var) <= REGULAR_CV * self.period
+
+    def steady(self) -> bool:
+        """Regular, without a pause, for a whole window, and either from the start or for STEADY_S."""
+        if self.last is None or self.since is None or not self.regular():
+            return False
+        stretch = self.last - self.since
+        return stretch >= self.tau_s and (stretch >= STEADY_S or not self.on_demand)
+
+    def stopped(self, now: float) -> bool:
+        """Steady up to its latest message, and nothing since for STOP_PERIODS of its periods."""
+        return self.last is not None and self.steady() and now - self.last >= self.pause_after()
 
 
 # -- QoS compatibility, from the graph's endpoint profiles -------------------------------------------
@@ -229,7 +343,24 @@ def _topic(obj: Any) -> TopicFigures:
     notes = {k: obj.get(k) if isinstance(obj.get(k), str) else None for k in ("qos_note", "note")}
     nodes = {k: _names(obj.get(k), name, k) for k in ("publisher_nodes", "subscriber_nodes")}
     stamped = obj.get("stamped") is True
-    return TopicFigures(name=name, type=type_name, state=state, stamped=stamped, **values, **notes, **nodes)
+    history = _history(obj.get("rate_history"), name)
+    return TopicFigures(
+        name=name, type=type_name, state=state, stamped=stamped, rate_history=history,
+        **values, **notes, **nodes,
+    )  # fmt: skip
+
+
+def _history(v: Any, topic: str) -> tuple[float | None, ...]:
+    """A rate history (absent from a backend that predates it: empty), its last RATE_HISTORY samples."""
+    if v is None:
+        return ()
+    ok = isinstance(v, list) and all(
+        x is None or (isinstance(x, int | float) and not isinstance(x, bool) and math.isfinite(x) and x >= 0)
+        for x in v
+    )
+    if not ok:
+        raise TopicsError(f"{topic}: rate_history is not a list of rates")
+    return tuple(None if x is None else float(x) for x in v[-RATE_HISTORY:])
 
 
 def _names(v: Any, topic: str, key: str) -> tuple[str, ...]:

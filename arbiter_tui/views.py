@@ -9,6 +9,7 @@ screen would not change: Textual then calls no watcher and the widget does no wo
 from __future__ import annotations
 
 import time
+import unicodedata
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 
@@ -25,6 +26,83 @@ from .control.loop import ControlLoop
 from .latency.clocksync import MeterSummary
 from .latency.tracker_client import LatencyView
 from .link.base import CONNECTED, DISCONNECTED, RECONNECTING, STARTING, Link
+
+# -- the status line: parts by priority, fitted to a width ---------------------------------------------
+SEP = " · "
+DROPPED = "…"  # where parts were left out
+
+
+@dataclass(frozen=True, slots=True)
+class Part:
+    """One part of a line, in its forms, longest first, each with its priority: 0 is never left out, and
+    the form with the highest number gives way first (to the part's next form, or after its last, out of
+    the line)."""
+
+    forms: tuple[tuple[str, int], ...]
+
+    @classmethod
+    def of(cls, text: str, priority: int) -> Part:
+        return cls(((text, priority),))
+
+
+def cells(text: str) -> int:
+    """Terminal columns ``text`` takes (wide East Asian characters take two)."""
+    return sum(2 if unicodedata.east_asian_width(c) in "WF" else 1 for c in text)
+
+
+def fit_parts(parts: Sequence[Part], width: int | None, sep: str = SEP) -> str:
+    """``parts`` joined by ``sep`` in at most ``width`` columns (None: no limit). While the line is too
+    long the least important form gives way (ties: the rightmost first), so every part shown is whole;
+    each run of parts left out shows as one ``…``. If the parts that are never left out (priority 0) are
+    too long on their own, the line ends at the last word that fits, then ``…``."""
+    shown = [p for p in parts if p.forms and p.forms[0][0]]
+    form = [0] * len(shown)  # index into each part's forms; len(forms): left out
+
+    def line() -> str:
+        out: list[str] = []
+        for p, i in zip(shown, form, strict=True):
+            if i < len(p.forms):
+                out.append(p.forms[i][0])
+            elif not out or out[-1] != DROPPED:
+                out.append(DROPPED)
+        return sep.join(out)
+
+    text = line()
+    while width is not None and cells(text) > width:
+        live = [(p.forms[i][1], k) for k, (p, i) in enumerate(zip(shown, form, strict=True)) if p.forms[i:]]
+        priority, k = max(live, default=(0, -1))
+        if priority <= 0:
+            return _cut(text, width)
+        form[k] += 1
+        text = line()
+    return text
+
+
+def _cut(text: str, width: int) -> str:
+    """``text`` up to its last whole word that fits in ``width`` with `` …`` after it (a single word too
+    long for the width: cut, then ``…``)."""
+    best, used = "", 0
+    for i, c in enumerate(text):
+        if c == " ":
+            head = text[:i].rstrip(" ·—")
+            if head and cells(head) + 2 <= width:
+                best = head
+        used += cells(c)
+        if used > width:
+            break
+    if best:
+        return f"{best} {DROPPED}"
+    out, used = "", 0
+    for c in text:
+        used += cells(c)
+        if used > width - 1:
+            break
+        out += c
+    return out + DROPPED if width > 0 else ""
+
+
+# priorities of the status line's parts (0: never left out; the highest goes first)
+ALARM, RECORDING, API_DOWN, ALGORITHM, TARGET, HINT, DEPLOY = 0, 1, 2, 3, 4, 5, 6
 
 
 @dataclass(frozen=True, slots=True)
@@ -45,20 +123,31 @@ class StatusView:
     def alarm(self) -> bool:
         return self.link in (DISCONNECTED, RECONNECTING) or self.error is not None or self.warning is not None
 
-    def text(self) -> str:
+    def parts(self) -> list[Part]:
+        """In the order shown. Kept longest: the link, why it is down, warnings, then whether samples are
+        recorded (and how many), an unreachable API, the algorithm, where the backend is, the hint to
+        press r, the deploy mode."""
         link = "DISCONNECTED (reconnecting)" if self.link == RECONNECTING else self.link
-        parts = [link, self.target]
+        parts = [Part.of(link, ALARM), Part.of(self.target, TARGET)]
         if self.error:
-            parts.append(self.error)
+            parts.append(Part.of(self.error, ALARM))
         if self.deploy:
-            parts.append(f"deploy {self.deploy}")
+            parts.append(Part.of(f"deploy {self.deploy}", DEPLOY))
         if self.warning:
-            parts.append(self.warning)
-        parts.append(self.algorithm)
-        parts.append(f"● REC {self.points}" if self.collecting else f"paused {self.points} — r to record")
+            parts.append(Part.of(self.warning, ALARM))
+        parts.append(Part.of(self.algorithm, ALGORITHM))
+        if self.collecting:
+            parts.append(Part.of(f"● REC {self.points}", RECORDING))
+        else:
+            paused = f"paused {self.points}"
+            parts.append(Part(((f"{paused} — r to record", HINT), (paused, RECORDING))))
         if self.api:
-            parts.append(self.api)
-        return " · ".join(p for p in parts if p)
+            parts.append(Part.of(self.api, API_DOWN if "UNREACHABLE" in self.api else DEPLOY))
+        return parts
+
+    def text(self, width: int | None = None) -> str:
+        """The line, fitted to ``width`` columns (None: all of it): parts left out whole, marked ``…``."""
+        return fit_parts(self.parts(), width)
 
 
 @dataclass(frozen=True, slots=True)

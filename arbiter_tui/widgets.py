@@ -57,7 +57,8 @@ class StatusLine(Bound):
         self.set_class(view.alarm, "alarm")
 
     def draw(self) -> Text:
-        return Text(self.view.text(), no_wrap=True, overflow="ellipsis")
+        # parts that do not fit are left out whole (views.fit_parts), never cut mid-word at the edge
+        return Text(self.view.text(self.size.width or None), no_wrap=True, overflow="ellipsis")
 
 
 class RobotPanel(Bound):

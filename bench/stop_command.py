@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import asyncio
+import itertools
 import statistics
 import sys
 import tempfile
@@ -64,7 +65,7 @@ async def run(missions: int) -> dict[str, object]:
         backend.stop()
     records.sort(key=lambda r: r["seq"])
     stops, driving = [], []
-    for before, r in zip(records, records[1:], strict=False):
+    for before, r in itertools.pairwise(records):
         moving = before["linear_x"] != 0.0 or before["angular_z"] != 0.0
         if r["linear_x"] == 0.0 and r["angular_z"] == 0.0 and moving:
             stops.append(r["latency_ms"])

@@ -9,7 +9,8 @@ lost (a 1 MB image at 15 Hz arrived at 5 Hz), and that loss would be measured as
 When the publishers' reliability changes, the subscription is made again.
 
 Every ``TAKE_S`` the thread takes what each subscription holds, straight from its handle, and notes
-each message's size and the middleware's receive time (so batching does not blur the periods). The
+each message's size and the middleware's receive time (so batching does not blur the periods); then it
+lets the shared ``TopicWatch`` take its once-a-second rate samples (the history of the last minute). The
 executor's per-message machinery (wait set rebuilt over every entity of the process, a task per
 callback) is what made watching as dear as deserialising; it never sees these subscriptions. For a
 type whose first field is a ``std_msgs/Header`` the stamp is read from the bytes right after the
@@ -100,6 +101,7 @@ class RosTopics:
                 self.take()
             except Exception:  # the node is being destroyed, or a handle went away: next sweep
                 log.debug("taking messages failed", exc_info=True)
+            self.watch.sample()  # the rate history: once a second per topic, whoever asks
             self._stop.wait(TAKE_S)
 
     def take(self) -> None:

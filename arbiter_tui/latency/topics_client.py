@@ -1,12 +1,13 @@
 """Polls the backend's ``GET /api/topics`` (same host, port and token as the latency API) into frozen states.
 
-The console polls only while the topics screen is shown, at most every ``PERIOD_S``; each topic's rate
-is remembered over the last ``HISTORY`` polls for the detail pane's plot.
+The console polls only while the topics screen is shown, at most every ``PERIOD_S``. The detail pane's plot
+draws each topic's rate over the last minute as the backend sampled it (``rate_history``, once a second,
+whether or not anyone asked): the console keeps no history of its own, so it pays nothing while the
+screen is closed and the plot covers the minute the moment the screen opens.
 """
 
 from __future__ import annotations
 
-from collections import deque
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
@@ -17,7 +18,6 @@ if TYPE_CHECKING:
     from .tracker_client import TrackerClient
 
 PERIOD_S = 0.5  # 2 Hz: the screen updates at most this often
-HISTORY = 120  # polls of each topic's rate kept: a minute at 2 Hz
 
 
 @dataclass(frozen=True)
@@ -29,19 +29,18 @@ class TopicsState:
     window_s: float = 0.0
     topics: tuple[TopicFigures, ...] = ()
     skipped: int = 0  # topics in the answer that were not the documented shape
-    # per topic, its rate at each of the last polls (None: no rate then), oldest first
-    history: tuple[tuple[str, tuple[float | None, ...]], ...] = ()
     echo: tuple[str, str] | None = None  # (topic, its latest message as text, or why there is none)
 
     def rates(self, name: str) -> tuple[float | None, ...]:
-        return next((h for n, h in self.history if n == name), ())
+        """``name``'s rate once a second over the last minute, oldest first (None: no rate then), as the
+        backend sampled it; empty for a topic not in the answer (or a backend that predates it)."""
+        return next((t.rate_history for t in self.topics if t.name == name), ())
 
 
 @dataclass
 class TopicsPoller:
     client: TrackerClient
     state: TopicsState = field(default_factory=TopicsState)
-    _history: dict[str, deque[float | None]] = field(default_factory=dict)
 
     async def poll(self) -> TopicsState:
         import httpx
@@ -59,17 +58,8 @@ class TopicsPoller:
             return self._failed(polls, connect_failure(type(exc).__name__, str(exc)))
         except (ValueError, TopicsError) as exc:
             return self._failed(polls, f"bad response: {exc}")
-        names = {t.name for t in answer.topics}
-        for gone in set(self._history) - names:
-            del self._history[gone]
-        for t in answer.topics:
-            self._history.setdefault(t.name, deque(maxlen=HISTORY)).append(t.rate_hz)
         self.state = TopicsState(
-            polls=polls,
-            window_s=answer.window_s,
-            topics=answer.topics,
-            skipped=answer.skipped,
-            history=tuple((n, tuple(h)) for n, h in sorted(self._history.items())),
+            polls=polls, window_s=answer.window_s, topics=answer.topics, skipped=answer.skipped
         )
         return self.state
 
@@ -81,6 +71,5 @@ class TopicsPoller:
             window_s=self.state.window_s,
             topics=self.state.topics,
             skipped=self.state.skipped,
-            history=self.state.history,
         )
         return self.state

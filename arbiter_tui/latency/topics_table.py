@@ -18,6 +18,21 @@ SORTS: dict[str, tuple[Callable[[TopicFigures], float | str], bool]] = {
 SORT_ORDER = tuple(SORTS)
 COLUMNS = ("topic", "type", "state", "Hz", "usual", "B/s", "size", "delay", "age", "pub/sub")
 TEXT_COLUMNS = ("topic", "type", "state")  # left-aligned; the figures are right-aligned
+SORT_COLUMNS = {"name": "topic", "rate": "Hz", "bandwidth": "B/s", "delay": "delay", "age": "age"}
+DOWN, UP = "▼", "▲"  # the sorted column's mark: largest (or Z) first, smallest (or A) first
+ABSENT = "—"  # a figure that was not measured: never a unit after it
+
+
+def headers(sort: str, reverse: bool = False) -> tuple[str, ...]:
+    """The column names, the sorted one marked with the order shown (``Hz ▼``: the busiest first)."""
+    column, descending = SORT_COLUMNS[sort], SORTS[sort][1]
+    mark = DOWN if descending != reverse else UP
+    return tuple(f"{c} {mark}" if c == column else c for c in COLUMNS)
+
+
+def unit(value: str, suffix: str) -> str:
+    """``value`` followed by its unit, unless it is absent."""
+    return value if value == ABSENT else f"{value}{suffix}"
 
 
 def aligned(value: str, width: int, column: str) -> str:
@@ -27,7 +42,13 @@ def aligned(value: str, width: int, column: str) -> str:
 
 
 # the state a row is marked with (a word, and a style the screen maps to colour): never colour alone
-MARKS = {"ok": "", "slow": "slow", "silent": "SILENT", "waiting": "waiting", "unmeasured": "n/a"}
+MARKS = {
+    "ok": "", "slow": "slow", "silent": "SILENT", "quiet": "quiet", "waiting": "waiting", "unmeasured": "n/a",
+}  # fmt: skip
+STATE_NOTES = {  # the detail pane's word on what a state means
+    "silent": "steady until it stopped: 5 of its periods without a message",
+    "quiet": "nothing in the window; it publishes on demand or in bursts, not a fault",
+}
 
 
 def select(topics: Iterable[TopicFigures], text: str, sort: str, reverse: bool = False) -> list[TopicFigures]:
@@ -48,23 +69,23 @@ def short_type(type_name: str) -> str:
 
 def rate(hz: float | None) -> str:
     if hz is None:
-        return "-"
+        return ABSENT
     return f"{hz:.0f}" if hz >= 100 else f"{hz:.1f}" if hz >= 10 else f"{hz:.2f}"
 
 
 def size(n: float | None) -> str:
     """Bytes with a binary-ish unit: 512, 1.4k, 1.0M."""
     if n is None:
-        return "-"
-    for unit, scale in (("G", 1e9), ("M", 1e6), ("k", 1e3)):
+        return ABSENT
+    for suffix, scale in (("G", 1e9), ("M", 1e6), ("k", 1e3)):
         if n >= scale:
-            return f"{n / scale:.1f}{unit}"
+            return f"{n / scale:.1f}{suffix}"
     return f"{n:.0f}"
 
 
 def ms(v: float | None) -> str:
     if v is None:
-        return "-"
+        return ABSENT
     if v >= 10_000:
         return f"{v / 1000:.0f}s"
     if v >= 1000:
@@ -77,7 +98,7 @@ FRESH_MS = 100.0  # an age below this is shown as "<0.1s": a 50 Hz topic's age w
 
 def age(v: float | None) -> str:
     if v is None:
-        return "-"
+        return ABSENT
     return "<0.1s" if v < FRESH_MS else ms(v)
 
 
@@ -98,7 +119,8 @@ def cells(t: TopicFigures) -> tuple[str, ...]:
 
 def detail(t: TopicFigures, window_s: float) -> list[str]:
     """The detail pane's lines for one topic."""
-    lines = [t.name, f"type {t.type}", f"state {t.state}" + (f" ({t.note})" if t.note else "")]
+    note = t.note or STATE_NOTES.get(t.state)
+    lines = [t.name, f"type {t.type}", f"state {t.state}" + (f" ({note})" if note else "")]
     lines.append(f"publishers {t.publishers}  subscribers {t.subscribers}")
     if t.publisher_nodes:
         lines.append("  published by " + ", ".join(t.publisher_nodes))
@@ -110,10 +132,11 @@ def detail(t: TopicFigures, window_s: float) -> list[str]:
             f"period min {ms(t.period_min_ms)}  max {ms(t.period_max_ms)}  std {ms(t.period_std_ms)}"
         )
     else:
-        lines.append(f"rate - ({t.count} msgs in the last {window_s:g} s, {t.total} in all)")
+        lines.append(f"rate {ABSENT} ({t.count} msgs in the last {window_s:g} s, {t.total} in all)")
     if t.usual_rate_hz is not None:
         lines.append(f"usual {rate(t.usual_rate_hz)} Hz")
-    lines.append(f"bandwidth {size(t.bandwidth_bps)}B/s  mean size {size(t.mean_size_bytes)}B")
+    bandwidth, mean_size = unit(size(t.bandwidth_bps), "B/s"), unit(size(t.mean_size_bytes), "B")
+    lines.append(f"bandwidth {bandwidth}  mean size {mean_size}")
     if t.stamped:
         lines.append(f"delay mean {ms(t.delay_mean_ms)}  p95 {ms(t.delay_p95_ms)} (now - header.stamp)")
     if t.malformed_stamps:

@@ -15,9 +15,11 @@ from textual.widget import Widget
 from textual.widgets import Input
 from textual_plot import HiResMode
 
+from arbiter_core.topicstats import SAMPLE_S
+
 from .. import axes
 from ..latency.topics_client import TopicsState
-from ..latency.topics_table import COLUMNS, SORT_ORDER, aligned, cells, detail, select
+from ..latency.topics_table import COLUMNS, SORT_ORDER, aligned, cells, detail, headers, select
 from ..plots import MIN_GAP_X, MIN_GAP_Y, Plot
 from ..views import PLOT_PERIOD_S
 from .base import BaseScreen
@@ -39,7 +41,7 @@ def layout(width: int) -> tuple[int, ...]:
     return tuple(i for i, c in enumerate(COLUMNS) if c in shown)
 
 
-STYLES = {"slow": "yellow", "silent": "bold red", "waiting": "dim", "unmeasured": "dim"}
+STYLES = {"slow": "yellow", "silent": "bold red", "quiet": "dim", "waiting": "dim", "unmeasured": "dim"}
 
 
 class TopicsList(Widget, can_focus=True):
@@ -91,7 +93,8 @@ class TopicsList(Widget, can_focus=True):
         widths[0] += max(0, self.size.width - sum(widths) - len(widths) + 1)  # the topic column
         out = Text(no_wrap=True, overflow="ellipsis")
         names_shown = tuple(COLUMNS[i] for i in shown)
-        out.append(_line(names_shown, widths, names_shown) + "\n", style="bold")
+        titles = headers(self.sort, self.reverse)  # the sorted column marked ▼ or ▲
+        out.append(_line(tuple(titles[i] for i in shown), widths, names_shown) + "\n", style="bold")
         rows = self.rows()
         if not rows:
             out.append(self._empty(), style="dim")
@@ -165,7 +168,7 @@ class TopicDetail(Widget):
 
 
 class RatePlot(Plot):
-    """The selected topic's rate at each of the last polls (a minute at 2 Hz)."""
+    """The selected topic's rate over the last minute, once a second, as the backend sampled it."""
 
     SOURCE = "topics"
     selected: reactive[str | None] = reactive(None)
@@ -190,7 +193,7 @@ class RatePlot(Plot):
         values = np.array([np.nan if r is None else r for r in rates], dtype=np.float64)
         if values.size < 2 or np.all(np.isnan(values)):
             return
-        t = (np.arange(values.size) - (values.size - 1)) * 0.5  # seconds before the newest poll
+        t = (np.arange(values.size) - (values.size - 1)) * SAMPLE_S  # seconds before the newest sample
         ok = ~np.isnan(values)
         self.plot(t[ok], values[ok], line_style="cyan", hires_mode=HiResMode.BRAILLE)
         cols, rows = self.scale_size()
@@ -204,7 +207,7 @@ class TopicsScreen(BaseScreen):
     BINDINGS = [
         Binding("slash", "filter", "Filter"),
         Binding("s", "sort", "Sort"),
-        Binding("r", "reverse", "Reverse", show=False),
+        Binding("r", "reverse", "Flip", tooltip="Reverse the order of the sorted column"),
     ]
     # data for the widgets bound to them: a change repaints those widgets, never the whole screen
     state: reactive[TopicsState] = reactive(TopicsState, repaint=False)

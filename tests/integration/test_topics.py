@@ -57,9 +57,50 @@ def test_the_simulators_odometry_is_measured_and_a_clients_topic_appears(backend
             assert topics(backend)["/bad_odom"]["delay_mean_ms"] is None
 
     asyncio.run(publish_chatter())
-    # the client went away: its publisher with it; the rows stay and go silent
-    assert wait_for(lambda: topics(backend)["/chatter"]["state"] == "silent", 10)
+    # the client went away: its publisher with it; the rows stay, quiet (20 messages in a burst: no
+    # steady rhythm that stopped, so not silent)
+    assert wait_for(lambda: topics(backend)["/chatter"]["state"] == "quiet", 10)
     assert topics(backend)["/chatter"]["publishers"] == 0
+
+
+def test_a_command_topic_that_stops_is_quiet_not_silent(backend):
+    """/stamped_cmd_vel is on the graph from the backend's start and waits for its first message: a key
+    held for longer than the window (10 Hz for 3 s) and released leaves it quiet, never silent."""
+    import time
+
+    assert wait_for(lambda: topics(backend)["/odom"]["total"] > topics(backend)["/odom"]["count"], 10)
+
+    async def hold() -> None:
+        async with aiohttp.ClientSession() as s, s.ws_connect(f"ws://127.0.0.1:{backend.bridge_port}") as ws:
+            await ws.send_json({"op": "advertise", "topic": "/stamped_cmd_vel", "type": "std_msgs/String"})
+            for _ in range(30):  # not envelopes: the tracker rejects them, the monitor counts them
+                await ws.send_json({"op": "publish", "topic": "/stamped_cmd_vel", "msg": {"data": "held"}})
+                await asyncio.sleep(0.1)
+
+    asyncio.run(hold())
+    seen, deadline = [], time.monotonic() + 4.0  # the window (2 s) empties, and more
+    while time.monotonic() < deadline:
+        seen.append(topics(backend)["/stamped_cmd_vel"]["state"])
+        time.sleep(0.1)
+    assert "silent" not in seen and seen[-1] == "quiet", seen
+
+
+def test_the_first_answer_already_holds_each_topics_rate_over_the_time_before_it():
+    """Nobody asked this backend anything for 4 s: its first answer has /odom's rate once a second since
+    it started (the console's plot covers the last minute the moment its topics screen opens)."""
+    import time
+
+    fresh = start_backend("--topics-window", "2")
+    try:
+        time.sleep(4.0)
+        odom = topics(fresh)["/odom"]
+        history = odom["rate_history"]
+        assert 3 <= len(history) <= 6, history
+        assert history[-1] == pytest.approx(50.0, rel=0.1), history
+        assert all(r is None or r == pytest.approx(50.0, rel=0.1) for r in history), history
+        assert {"rate_hz", "count", "state", "usual_rate_hz"} <= set(odom)  # the fields before it, kept
+    finally:
+        fresh.stop()
 
 
 def test_cli_prints_the_table_json_and_checks_expectations(backend):

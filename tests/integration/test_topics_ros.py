@@ -128,6 +128,9 @@ def test_rate_bandwidth_delay_and_silence_match_ground_truth():
         print("\ntopic      rate truth / measured (Hz)   bandwidth truth / measured (B/s)")  # pytest -s
         for name, rate, measured, bw, measured_bw in rows:
             print(f"{name:8} {rate:10.3f} / {measured:<10.3f} {bw:14.0f} / {measured_bw:.0f}")
+        # the rate history, sampled once a second by the monitor's own thread (the same TopicWatch)
+        history = got["/arbiter_test/scan"]["rate_history"]
+        assert 1 <= len(history) <= 60 and history[-1] == pytest.approx(10.0, rel=0.1), history
         odom = got["/arbiter_test/odom"]
         print(f"odom delay: injected {OFFSET * 1e3:.1f} ms, measured mean {odom['delay_mean_ms']:.3f} ms")
         assert odom["stamped"] and got["/arbiter_test/scan"]["stamped"]

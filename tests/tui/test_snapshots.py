@@ -99,11 +99,13 @@ def test_the_map_with_a_mission_selected(snap_compare):
 
 def test_dashboard(snap_compare):
     """200x60: control panel and map, the live comparison, the latency figures and plot, and the topics
-    table (slow and silent rows marked) at once."""
-    from .test_topics_screen import STATE
+    table (slow, silent and quiet rows marked) at once."""
+    from dataclasses import replace
+
+    from .test_topics_screen import QUIET, STATE
 
     app = still_app()
-    app.topics = STATE
+    app.topics = replace(STATE, topics=(*STATE.topics, QUIET))
     assert snap_compare(app, terminal_size=(200, 60))
 
 

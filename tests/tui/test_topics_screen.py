@@ -1,5 +1,7 @@
 """Screen 4, topics: snapshots at 80x24 and 100x30 with fixed figures, and the keys a user presses."""
 
+from dataclasses import replace
+
 import pytest
 
 from arbiter_core.topicstats import NOT_INSTALLED, TopicFigures
@@ -22,10 +24,13 @@ TOPICS = (
                  "match a best-effort publisher"),
     TopicFigures("/tf", "tf2_msgs/msg/TFMessage", "silent", 2, 3, 0, 1200, usual_rate_hz=100.0),
 )  # fmt: skip
-HISTORY = tuple(
-    (t.name, tuple((t.rate_hz or 0.0) * (1.0 if i < 40 else 0.5) for i in range(60))) for t in TOPICS
+QUIET = TopicFigures("/stamped_cmd_vel", "std_msgs/msg/String", "quiet", 1, 1, 0, 240)  # commands, then none
+# the last minute as the backend sampled it (once a second): each topic at its rate, then half of it
+TOPICS = tuple(
+    replace(t, rate_history=tuple((t.rate_hz or 0.0) * (1.0 if i < 40 else 0.5) for i in range(60)))
+    for t in TOPICS
 )
-STATE = TopicsState(polls=60, window_s=5.0, topics=TOPICS, history=HISTORY)
+STATE = TopicsState(polls=60, window_s=5.0, topics=TOPICS)
 
 
 def topics_app(state: TopicsState = STATE):
@@ -82,3 +87,74 @@ async def test_filter_sort_and_select_with_the_keys_a_user_presses():
         # teleop keys do nothing here, and 1 goes back to driving
         await pilot.press("escape", "1")
         assert app.current_mode == "control"
+
+
+async def test_the_header_marks_the_sorted_column_and_the_footer_lists_every_key_within_80_columns():
+    from textual.widgets._footer import FooterKey
+
+    app = topics_app()
+    async with app.run_test(size=(80, 24)) as pilot:
+        await pilot.press("4")
+        table = app.screen.query_one(TopicsList)
+
+        def header() -> list[str]:
+            return table.render().plain.splitlines()[0].split()
+
+        assert header()[:2] == ["topic", "▲"]  # names A to Z
+        await pilot.press("s")  # by rate: the busiest first
+        await pilot.pause()
+        words = header()
+        assert words[words.index("Hz") + 1] == "▼" and words.count("▼") + words.count("▲") == 1
+        await pilot.press("r")  # reversed: the quietest first
+        await pilot.pause()
+        words = header()
+        assert words[words.index("Hz") + 1] == "▲" and "▼" not in words
+        await pilot.press("s", "s", "s")  # bandwidth, delay, age (still reversed: the youngest first)
+        await pilot.pause()
+        words = header()
+        assert words[words.index("age") + 1] == "▲"
+        # the footer names r (what it does: reverse the order) and every key fits in 80 columns
+        keys = {k.key: k for k in app.screen.query(FooterKey)}
+        assert {"slash", "s", "r"} <= set(keys) and keys["r"].description == "Flip"
+        assert all(k.region.right <= 80 and k.region.width > 0 for k in keys.values())
+        assert max(k.region.right for k in keys.values()) == keys["question_mark"].region.right
+
+
+async def test_a_quiet_command_topic_is_dim_and_explained_a_stopped_sensor_is_red():
+    app = topics_app(replace(STATE, topics=(*TOPICS, QUIET)))
+    async with app.run_test(size=(100, 30)) as pilot:
+        await pilot.press("4", "end")
+        table = app.screen.query_one(TopicsList)
+        detail = app.screen.query_one(TopicDetail)
+
+        def row_style(name: str) -> str:
+            text = table.render()
+            start = text.plain.index(name)
+            return " ".join(str(s.style) for s in text.spans if s.start <= start < s.end)
+
+        assert table.selected == "/tf"
+        table.selected = "/stamped_cmd_vel"
+        await pilot.pause()
+        quiet = row_style("/stamped_cmd_vel")
+        assert "dim" in quiet and "red" not in quiet
+        line = next(x for x in table.render().plain.splitlines() if x.startswith("/stamped_cmd_vel"))
+        assert line.split()[2] == "quiet"
+        assert "not a fault" in str(detail.render())
+        table.selected = "/scan"
+        await pilot.pause()
+        assert "red" in row_style("/tf") and "SILENT" in table.render().plain
+
+
+async def test_the_rate_plot_covers_the_last_minute_the_moment_the_screen_opens():
+    """The backend samples every topic's rate once a second whoever asks: the first answer the screen gets
+    holds the last minute, and the plot draws all of it (from -59 s), not only what came since it opened."""
+    app = topics_app()
+    async with app.run_test(size=(100, 30)) as pilot:
+        await pilot.press("4")
+        plot = app.screen.query_one(RatePlot)
+        await pilot.pause()
+        assert plot.selected == "/camera/image_raw" and plot.draws >= 1
+        assert plot._user_x_min <= -59.0 and plot._user_x_max >= 0.0
+        x = plot._datasets[0].x
+        assert len(x) == 60 and x[0] == -59.0 and x[-1] == 0.0
+        assert app.topics.rates("/camera/image_raw")[:2] == (15.0, 15.0)

@@ -204,3 +204,24 @@ async def test_the_trajectory_legend_fits_its_border():
                  ("G", "goal")]  # fmt: skip
         assert legend_text(items, 34) == "· man + gtg x pp o wpt G goal"  # too long in full: short names
         assert legend_text(items, 20) == "· man + gtg x pp …"  # too long even so: whole entries, then …
+
+
+async def test_the_status_line_at_80_columns_shows_whole_parts_and_marks_what_it_left_out():
+    """At 80 columns the full line (83 columns here) does not fit: the deploy mode is left out whole (…),
+    the count, the hint and the algorithm stay; widened, everything shows again; on every screen."""
+    from arbiter_tui.widgets import StatusLine
+
+    app = still_app()
+    async with app.run_test(size=(80, 24)) as pilot:
+        await pilot.pause()
+        assert len(app.status_text()) > 78  # what a wide terminal shows
+
+        def line() -> str:
+            return str(app.screen.query_one(StatusLine).render())
+
+        for key in ("1", "2", "3", "4"):
+            await pilot.press(key)
+            await pilot.pause()
+            assert line() == "CONNECTED · embedded 9090/8085 · … · manual · paused 300 — r to record", key
+        await pilot.resize_terminal(120, 30)
+        assert await until(pilot, lambda: line() == app.status_text())

@@ -6,6 +6,7 @@ import pytest
 
 from arbiter_core.topicstats import (
     NOT_INSTALLED,
+    RATE_HISTORY,
     TopicsError,
     TopicWindow,
     parse_expect,
@@ -68,11 +69,90 @@ def test_states_waiting_silent_slow_ok_and_unmeasured():
     for i in range(10):  # then 2 Hz
         w.add(6.0 + i / 2, 10)
     assert w.figures(10.5).state == "slow"
-    assert w.figures(20.0).state == "silent"  # nothing for a whole window
+    assert w.figures(20.0).state == "silent"  # steady from its first message, then stopped
     assert w.figures(20.0).rate_hz is None and w.figures(20.0).age_ms is None
     u = TopicWindow("/img", "sensor_msgs/msg/Image", 2.0)
     u.unmeasured = NOT_INSTALLED
     assert u.figures(1.0).state == "unmeasured" and u.figures(1.0).note == NOT_INSTALLED
+
+
+def walk(w: TopicWindow, arrivals: list[float], until: float, step: float = 0.1) -> list[tuple[float, str]]:
+    """The state at every ``step`` of a clock from the first arrival to ``until``, as a 2 Hz poller (or a
+    faster one) would see it; the arrivals are fed as the clock passes them."""
+    pending, out, t = sorted(arrivals), [], 0.0
+    while t <= until + 1e-9:
+        while pending and pending[0] <= t:
+            w.add(pending.pop(0), 10)
+        out.append((round(t, 3), w.figures(t).state))
+        t += step
+    return out
+
+
+def steady(start: float, end: float, hz: float, jitter: float = 0.0, seed: int = 1) -> list[float]:
+    import random
+
+    rnd, t, out = random.Random(seed), start, []
+    while t < end:
+        out.append(t)
+        t += (1.0 + rnd.uniform(-jitter, jitter)) / hz
+    return out
+
+
+def test_a_steady_topic_that_stops_is_silent_after_five_of_its_periods_and_a_second_at_least():
+    """A 10 Hz scan with ±30 % jitter, from the moment it is on the graph: a sensor. It stops at 20 s."""
+    w = TopicWindow("/scan", "sensor_msgs/msg/LaserScan", 5.0, created=0.0)
+    arrivals = steady(0.3, 20.0, 10.0, jitter=0.3)
+    states = dict(walk(w, arrivals, 30.0))
+    last = arrivals[-1]
+    assert {s for t, s in states.items() if 0.3 <= t < last} == {"ok"}
+    assert states[round(last + 0.55, 1)] == "ok"  # five periods, but less than STOP_MIN_S
+    assert all(s == "silent" for t, s in states.items() if t >= last + 1.0)
+    f = w.figures(30.0)
+    assert f.state == "silent" and f.rate_hz is None
+
+
+def test_bursts_of_commands_then_quiet_are_quiet_never_silent():
+    """/stamped_cmd_vel as teleop makes it: on the graph from the start, 10 Hz while a key is held (holds
+    of 2, 3.5 and 6 s), one zero after each, and the tracker's zero 0.5 s later; then the robot stands."""
+    w = TopicWindow("/stamped_cmd_vel", "std_msgs/msg/String", 5.0, created=0.0)
+    arrivals = []
+    for start, end in ((10.0, 12.0), (15.0, 18.5), (30.0, 36.0)):
+        hold = steady(start, end, 10.0)
+        arrivals += [*hold, hold[-1] + 0.1, hold[-1] + 0.6]
+    states = walk(w, arrivals, 90.0)
+    assert "silent" not in {s for _, s in states}
+    assert states[-1][1] == "quiet" and w.figures(90.0).state == "quiet"
+    assert ("ok" in {s for t, s in states if 30 < t < 36}) and w.figures(90.0).total == len(arrivals)
+
+
+def test_a_mission_that_ends_is_quiet_but_a_minute_of_steady_publishing_makes_a_sensor():
+    """A topic that waited on the graph before it published (a console's commands) is on demand: a 30 s
+    mission at 10 Hz that ends is quiet. Steady for a minute, it is steady whatever came before."""
+    mission = TopicWindow("/cmd_vel_measured", "geometry_msgs/msg/Twist", 5.0, created=0.0)
+    arrivals = steady(20.0, 50.0, 10.0)
+    assert "silent" not in {s for _, s in walk(mission, arrivals, 70.0)}
+    assert mission.figures(70.0).state == "quiet"
+    long_run = TopicWindow("/cmd_vel_measured", "geometry_msgs/msg/Twist", 5.0, created=0.0)
+    arrivals = steady(20.0, 81.0, 10.0)
+    states = dict(walk(long_run, arrivals, 90.0))
+    assert states[90.0] == "silent" and states[round(arrivals[-1] + 0.5, 1)] == "ok"
+    # the same 30 s from the moment it appeared on the graph: a sensor that died
+    sensor = TopicWindow("/scan", "sensor_msgs/msg/LaserScan", 5.0, created=19.5)
+    walk(sensor, steady(20.0, 50.0, 10.0), 52.0)
+    assert sensor.figures(52.0).state == "silent"
+
+
+def test_an_irregular_topic_that_goes_quiet_is_quiet():
+    """/rosout: messages at random (exponential gaps, 2 per second on average) for a minute, then none."""
+    import random
+
+    rnd, t, arrivals = random.Random(7), 0.2, []
+    while t < 60.0:
+        arrivals.append(t)
+        t += rnd.expovariate(2.0)
+    w = TopicWindow("/rosout", "rcl_interfaces/msg/Log", 5.0, created=0.0)
+    states = walk(w, arrivals, 80.0)
+    assert "silent" not in {s for _, s in states} and states[-1][1] == "quiet"
 
 
 def test_the_usual_rate_decays_so_a_new_steady_rate_becomes_usual():
@@ -90,6 +170,43 @@ def test_the_usual_rate_decays_so_a_new_steady_rate_becomes_usual():
     f = w.figures(t)
     assert f.rate_hz == pytest.approx(5.0, rel=0.01)
     assert f.state == "ok", f.usual_rate_hz
+
+
+def test_the_rate_history_holds_one_sample_a_second_over_the_last_minute():
+    w = TopicWindow("/scan", "sensor_msgs/msg/LaserScan", 5.0)
+    sampled = []
+    for i in range(1000):  # 10 Hz for 100 s, then 5 Hz; sampled twice a second
+        w.add(i / 10, 10)
+        if i % 5 == 0:
+            w.sample(i / 10)
+            sampled.append(len(w.rate_history))
+    t = 100.0
+    assert sampled[:9] == [1, 1, 2, 2, 3, 3, 4, 4, 5]  # once a second, however often it is called
+    assert len(w.rate_history) == RATE_HISTORY  # bounded: the last minute
+    assert all(r == pytest.approx(10.0) for r in w.rate_history)
+    for i in range(50):
+        w.add(t + i * 0.2, 10)
+    w.sample(t + 10.0)  # ten seconds late: the seconds it missed take the rate now
+    f = w.figures(t + 10.0)
+    assert f.rate_history[-10:] == (pytest.approx(5.0),) * 10 and len(f.rate_history) == RATE_HISTORY
+    w.sample(t + 30.0)  # stopped: no rate in the window
+    assert w.figures(t + 30.0).rate_history[-1] is None
+    assert f.to_json()["rate_history"][-1] == pytest.approx(5.0)
+
+
+def test_the_rate_history_is_parsed_bounded_and_checked():
+    body = {"window_s": 5, "topics": [
+        good(rate_history=[None, 1.5, 2]),
+        good(name="/long", rate_history=list(range(100))),
+        good(name="/old"),  # a backend that predates it
+        good(name="/bad", rate_history=[1.0, "fast"]),
+        good(name="/neg", rate_history=[-1.0]),
+    ]}  # fmt: skip
+    answer = parse_topics(body)
+    by = {t.name: t for t in answer.topics}
+    assert by["/odom"].rate_history == (None, 1.5, 2.0)
+    assert by["/long"].rate_history == tuple(float(i) for i in range(40, 100))
+    assert by["/old"].rate_history == () and answer.skipped == 2
 
 
 def test_qos_mismatch_notes():
