@@ -18,6 +18,7 @@ import threading
 import time
 from collections.abc import Callable, Iterable
 from dataclasses import replace
+from pathlib import Path
 
 from textual import events, on, work
 from textual.app import App, SystemCommand
@@ -716,7 +717,8 @@ class ArbiterApp(App[None]):
     @on(ExportWritten)
     def _export_written(self, event: ExportWritten) -> None:
         r = event.result
-        self.notify(f"wrote {r.path} ({r.points} points)", timeout=4)
+        where = Path(r.path).resolve() if r.path is not None else r.path  # the whole path: no guessing where
+        self.notify(f"wrote {where} ({r.points} points)", timeout=4)
 
     @on(ExportFailed)
     def _export_failed(self, event: ExportFailed) -> None:

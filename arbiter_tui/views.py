@@ -171,6 +171,7 @@ class RobotView:
     mission: str = ""
     done: int = 0
     total: int = 0
+    finished: str | None = None  # the last run completed: "done: 4/4 in 20.7 s", until a key or run
     goal: tuple[float, float] | None = None  # None in manual mode: there is no goal
     e_d: float | None = None
     e_th: float | None = None
@@ -337,6 +338,7 @@ def robot_view(link: Link, loop: ControlLoop, too_small: bool = False, now: floa
         mission=loop.mission_label,
         done=len(mission.waypoints) if mission.done else mission.index,
         total=len(mission.waypoints),
+        finished=None if loop.running else loop.finished,
         goal=None if goal is None else (round(goal[0], 2), round(goal[1], 2)),
         e_d=e_d,
         e_th=e_th,

@@ -91,7 +91,10 @@ class RobotPanel(Bound):
         t.append("Algo     ", "bold")
         t.append(f"{r.algorithm} ({r.state})\n")
         t.append("Mission  ", "bold")
-        t.append(f"{r.mission} {r.done}/{r.total}\n")
+        if r.finished is not None:
+            t.append(f"{r.mission} {r.finished}\n", "bold green")
+        else:
+            t.append(f"{r.mission} {r.done}/{r.total}\n")
         t.append("Goal     ", "bold")
         t.append("none (manual)\n" if r.goal is None else f"({r.goal[0]:+.2f}, {r.goal[1]:+.2f})\n")
         t.append("Errors   ", "bold")

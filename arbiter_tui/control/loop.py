@@ -67,6 +67,8 @@ class ControlLoop:
         self._manual_at: tuple[float, float] | None = None  # (monotonic, wall ms) of the last manual move
         self.controller = make_controller(self.algorithm)
         self.running = False  # an autonomous controller is driving
+        self.finished: str | None = None  # "done: 4/4 in 20.7 s" until the next run or key
+        self._run_started_ms = 0.0
         self.command = (0.0, 0.0)  # the last command sent
         self.unsent = 0  # commands refused by the link (disconnected)
         self.trail: deque[tuple[float, float]] = deque(maxlen=TRAIL_POINTS)
@@ -111,8 +113,10 @@ class ControlLoop:
         self.mission_label = label
         self.interrupted = None
         self.running = True
+        self.finished = None
+        self._run_started_ms = self._wall_ms()
         path = reference_path(mission.start, mission.waypoints[mission.index :])
-        self.store.begin_run(self.algorithm, label, self._wall_ms(), path)
+        self.store.begin_run(self.algorithm, label, self._run_started_ms, path)
 
     def start_autonomous(self) -> bool:
         """Start the selected controller on the named mission, from the robot's current pose."""
@@ -140,6 +144,14 @@ class ControlLoop:
         if self.algorithm == MANUAL:
             return None
         return self._named_from(pose)
+
+    def sample_goal(self, pose: Pose) -> tuple[float, float] | None:
+        """What a sample's errors are measured to: the goal the control screen shows (the run's, the
+        interrupted mission's that ``g`` resumes, or the selected mission's first from here). None while
+        driving manually with nothing to resume: no goal, so the sample's errors are 0 (README, "What a
+        manual sample's error means")."""
+        plan = self.plan(pose)
+        return None if plan is None else plan.goal
 
     def go(self) -> bool:
         """``g``: resume an interrupted mission from its current waypoint (with the selected controller,
@@ -244,7 +256,10 @@ class ControlLoop:
         if self.running:
             if self.mission.done:
                 self.running = False
-                completed.append((self._wall_ms(), self._final_error()))
+                t_ms = self._wall_ms()
+                completed.append((t_ms, self._final_error()))
+                n = len(self.mission.waypoints)
+                self.finished = f"done: {n}/{n} in {(t_ms - self._run_started_ms) / 1000.0:.1f} s"
                 self.teleop.stop()
                 cmd = self.teleop.tick(now)
             else:
@@ -294,7 +309,7 @@ class ControlLoop:
         if not self.store.is_collecting:
             return None
         pose, v_odom, w_odom, latency = self.link.telemetry.snapshot()
-        goal = self.mission.goal
+        goal = self.sample_goal(pose)
         run = self.store.active_run
         if run is not None and not self.running and self.command == (0.0, 0.0):
             run = None
@@ -315,8 +330,8 @@ class ControlLoop:
             theta=pose.theta,
             linearVel=self.command[0],
             angularVel=self.command[1],
-            distanceError=distance_error(pose, goal),
-            headingError=heading_error(pose, goal),
+            distanceError=0.0 if goal is None else distance_error(pose, goal),
+            headingError=0.0 if goal is None else heading_error(pose, goal),
             algorithm=self.algorithm,
             latencyMs=latency,
             runId=run,

@@ -208,6 +208,7 @@ class RobotSession:
             result = self.teleop.press(key, self.clock())
             if result is None:
                 return False
+            self.loop.finished = None  # the last run's "done" stays until the next mission or key
             if result == "move" and not was_manual:
                 # Manual keys take over from an autonomous controller (g resumes its mission).
                 self.loop.override()

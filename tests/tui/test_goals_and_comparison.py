@@ -1,6 +1,7 @@
 """Pilot tests of goals from the console (a click on the map, a typed goal, the palette, g after an
 override) and of the ranked comparison (per algorithm / per run, sorting, marks, the ring warning)."""
 
+import pytest
 from textual.widgets import Static
 
 from arbiter_tui.analytics import table as T
@@ -96,6 +97,67 @@ async def test_the_hints_name_the_controller_that_will_drive_from_the_registry(t
         assert "drive there with stanley" in str(app.screen.query_one(Static).render())
         await pilot.press(*"0.5 0", "enter")
         assert app.loop.running and app.store.run(app.store.active_run).algorithm == "stanley"
+
+
+async def test_a_finished_run_stays_on_the_panel_until_the_next_key(tmp_path):
+    from arbiter_tui.widgets import RobotPanel
+
+    app, clock = sim_app(tmp_path)
+    async with app.run_test(size=SIZE) as pilot:
+
+        def panel() -> str:
+            app.publish_views(force=True)
+            return str(app.screen.query_one(RobotPanel).render())
+
+        await pilot.press("t", *"0.6 0", "enter")
+        assert app.loop.running
+        run = app.store.active_run
+        drive(app, clock, 10.0)
+        assert not app.loop.running
+        await pilot.pause()
+        first = panel()
+        assert "goal (+0.60, +0.00) done: 1/1 in " in first
+        seconds = first.split("done: 1/1 in ")[1].split(" s")[0]
+        assert seconds == f"{app.store.run(run).time_s:.1f}"  # the run's time, as the analytics table has it
+        drive(app, clock, 5.0)  # it lasts (no 4 s toast)
+        await pilot.pause()
+        assert "done: 1/1 in" in panel()
+        await pilot.press("k")  # any key the session takes ends it
+        await pilot.pause()
+        assert "done:" not in panel()
+
+
+async def test_a_manual_samples_errors_are_those_the_panel_shows(tmp_path):
+    """No goal on screen (manual, nothing to resume): the samples' errors are 0, not a distance to a
+    waypoint nobody drives to. After an override: the interrupted goal, as the panel shows it."""
+    from arbiter_core.kinematics import distance_error
+    from arbiter_tui.widgets import RobotPanel
+
+    app, clock = sim_app(tmp_path)
+    async with app.run_test(size=SIZE) as pilot:
+
+        def panel() -> str:
+            app.publish_views(force=True)
+            return str(app.screen.query_one(RobotPanel).render())
+
+        for _ in range(5):
+            await pilot.press("i")
+            drive(app, clock, 0.2)
+        manual = [p for p in app.store.points() if p.algorithm == "manual"]
+        assert manual and all(p.distanceError == 0.0 and p.headingError == 0.0 for p in manual)
+        assert "Goal     none (manual)" in panel() and "Errors   —" in panel()
+        drive(app, clock, 2.0)
+        await pilot.press("a", "g")
+        drive(app, clock, 2.0)
+        await pilot.press("j")  # a movement key overrides: manual, the mission interrupted
+        drive(app, clock, 0.4)
+        assert app.loop.algorithm == "manual" and app.loop.interrupted is not None
+        last = app.store.points()[-1]
+        assert last.algorithm == "manual"
+        goal = app.loop.interrupted.goal
+        pose = app.link.telemetry.snapshot()[0]
+        assert last.distanceError == pytest.approx(distance_error(pose, goal), abs=0.05)
+        assert f"e_d {last.distanceError:.2f} m" in panel()
 
 
 async def test_the_palette_selects_algorithm_and_mission_and_goes(tmp_path):

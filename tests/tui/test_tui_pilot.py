@@ -1,6 +1,7 @@
 """Pilot tests: press the keys a user presses and check what reaches the link, the store and the files."""
 
 import json
+from pathlib import Path
 
 import pytest
 
@@ -127,15 +128,18 @@ async def test_screens_switch_and_keep_collected_data(tmp_path):
         assert isinstance(app.screen, AnalyticsScreen)
 
 
-async def test_export_chooser_writes_files_with_the_data(tmp_path):
-    app = still_app(tmp_path)
+async def test_export_chooser_writes_files_with_the_data(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    app = still_app(Path("."))  # a relative export directory, as the default "." is
     async with app.run_test(size=SIZE) as pilot:
         await pilot.press("2", "ctrl+s", "c")
         await pilot.press("ctrl+s", "j")
         await pilot.press("ctrl+s", "m")
         await pilot.pause()
         assert isinstance(app.screen, AnalyticsScreen)  # the chooser closed each time
-        assert any("wrote" in n.message for n in app._notifications)
+        written = [n.message for n in app._notifications if n.message.startswith("wrote")]
+        assert len(written) == 3
+        assert all(f"wrote {tmp_path.resolve()}/arbiter_analytics_" in m for m in written), written
     files = sorted(p.suffix for p in tmp_path.iterdir())
     assert files == [".csv", ".json", ".mcap"]
     csv_file = next(tmp_path.glob("arbiter_analytics_*.csv"))
