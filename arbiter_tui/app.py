@@ -377,6 +377,8 @@ class ArbiterApp(App[None]):
     def publish_views(self, force: bool = False) -> None:
         """Sample every source into snapshots; only what the current screen shows is computed, and
         the analytics at their own, lower rate unless ``force`` (a user action, a screen shown)."""
+        if not self._has_screen():
+            return  # the app is closing (its screens gone) while this interval's tick was due
         self._shown_command = (self.loop.command, self.teleop.speed, self.teleop.turn)
         state = self.link.state
         if self._link_state is not None and state != self._link_state:
@@ -449,6 +451,12 @@ class ArbiterApp(App[None]):
         if status.points != shown.points:
             self._count_at = now
         self.status = status
+
+    def _has_screen(self) -> bool:
+        try:
+            return bool(self.screen_stack)
+        except KeyError:  # the mode's stack is already gone
+            return False
 
     def dashboard_shown(self) -> bool:
         """The control screen is showing as the dashboard (a large terminal): it shows every view."""
