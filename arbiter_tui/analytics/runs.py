@@ -226,6 +226,13 @@ class RunLog:
         self._active = run
         return run.id
 
+    def set_path(self, path: np.ndarray) -> None:
+        """The active run's reference path, given after it began (an observed robot's plan, which comes
+        a moment after its goal)."""
+        if self._active is not None:
+            self._active.path = path
+            self._active._summary = None
+
     def end(self, outcome: str, t_ms: float, final_error_m: float | None = None) -> RunSummary | None:
         """End the active run; returns its summary (None when no run was active)."""
         if outcome not in OUTCOMES or outcome == RUNNING:

@@ -12,11 +12,13 @@ import numpy as np
 
 from arbiter_core.cliargs import OneLineParser
 
+from .bags import DEFAULT_TOPICS, BagTopics, is_bag, read_bag
 from .exports import Export, ExportFormatError
 from .files import load_export
 from .labels import format_stat
 from .model import STATS_FIELDS, AnalyticsStats, DataPoint, columns_of, grouped_stats, stats_of_points
-from .runs import MANUAL
+from .observe import ObserveConfig
+from .runs import MANUAL, RunSummary
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -25,7 +27,25 @@ def build_parser() -> argparse.ArgumentParser:
         description="Print the nine AnalyticsStats of an arbiter analytics export "
         "(CSV, JSON or MCAP, recognised by content).",
     )
-    p.add_argument("file", type=Path, help="an arbiter_analytics_*.csv, *.json or *.mcap export")
+    p.add_argument(
+        "file",
+        type=Path,
+        help="an arbiter_analytics_*.csv, *.json or *.mcap export, or a ros2 bag directory (metadata.yaml; "
+        "MCAP or SQLite 3) recorded on the robot: its runs from odometry, command, plan and goal topics",
+    )
+    bag = p.add_argument_group("ros2 bags ('Grade any controller' in the README)")
+    for flag, default, kind in (
+        ("--odom-topic", DEFAULT_TOPICS.odom, "nav_msgs/Odometry"),
+        ("--cmd-topic", DEFAULT_TOPICS.cmd, "geometry_msgs/Twist or TwistStamped"),
+        ("--plan-topic", DEFAULT_TOPICS.plan, "nav_msgs/Path"),
+    ):
+        bag.add_argument(flag, default=default, help=f"{kind} (default %(default)s)")
+    bag.add_argument(
+        "--goal-topic", default=DEFAULT_TOPICS.goal, help="geometry_msgs/PoseStamped (default %(default)s)"
+    )
+    bag.add_argument(
+        "--label", default="observed", help="what drove: the samples' algorithm (default %(default)s)"
+    )
     p.add_argument("--json", action="store_true", help="print one JSON object with the seed's camelCase keys")
     p.add_argument(
         "--by",
@@ -128,7 +148,11 @@ def _grouped(points: list[DataPoint], labels: list[str]) -> dict[str, AnalyticsS
 def run(argv: list[str]) -> int:
     args = build_parser().parse_args(argv)
     try:
-        export = load_export(args.file)
+        if is_bag(args.file):
+            topics = BagTopics(args.odom_topic, args.cmd_topic, args.plan_topic, args.goal_topic)
+            export = read_bag(args.file, topics, ObserveConfig(label=args.label))
+        else:
+            export = load_export(args.file)
     except FileNotFoundError:
         print(f"arbiter-tui stats: {args.file}: no such file", file=sys.stderr)
         return 1
@@ -139,6 +163,7 @@ def run(argv: list[str]) -> int:
         print(f"arbiter-tui stats: {args.file}: {exc}", file=sys.stderr)
         return 1
     labels: dict[str, RunLabel] = {}
+    runs = {f"run {r.id}": r for r in export.runs or ()}
     if args.by is None:
         groups: Groups = {"": (stats_of_points(export.points), None)}
     elif args.by == "run":
@@ -150,7 +175,10 @@ def run(argv: list[str]) -> int:
             body: dict[str, object] = groups[""][0].as_dict()
         else:
             body = {
-                k: v.as_dict() | _in_file(part) | (labels[k].as_dict() if k in labels else {})
+                k: v.as_dict()
+                | _in_file(part)
+                | (labels[k].as_dict() if k in labels else {})
+                | _outcome(runs.get(k), json_form=True)
                 for k, (v, part) in groups.items()
             }
         print(json.dumps(body, allow_nan=False))
@@ -162,4 +190,27 @@ def run(argv: list[str]) -> int:
             print(f"[{labels[group].title() if group in labels else group}]{note}")
         for name in STATS_FIELDS:
             print(f"{name:<{width}}  {format_stat(name, getattr(stats, name), decimals=6)}")
+        for name, value in _outcome(runs.get(group) if args.by == "run" else None).items():
+            print(f"{name:<{width}}  {value}")
     return 0
+
+
+def _outcome(run: RunSummary | None, json_form: bool = False) -> dict[str, object]:
+    """A run's outcome, time and path-tracking figures (where the file has them)."""
+    if run is None:
+        return {}
+    if json_form:
+        tracking = None if run.tracking is None else run.tracking.as_dict()
+        return {"outcome": run.outcome, "time_s": round(run.time_s, 3), "tracking": tracking}
+    out: dict[str, object] = {"outcome": run.outcome, "time": f"{run.time_s:.3f} s"}
+    if run.tracking is not None:
+        t = run.tracking
+        out |= {
+            "xteMean": f"{t.xte_mean_m:.6f} m",
+            "xteRms": f"{t.xte_rms_m:.6f} m",
+            "xteP95": f"{t.xte_p95_m:.6f} m",
+            "xteMax": f"{t.xte_max_m:.6f} m",
+            "pathRatio": "—" if t.path_ratio is None else f"{t.path_ratio:.6f}",
+            "meanAbsDwDt": f"{t.mean_abs_dw_dt:.6f} rad/s²",
+        }
+    return out

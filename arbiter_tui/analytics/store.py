@@ -165,6 +165,12 @@ class AnalyticsStore:
             self._version += 1
         return run_id
 
+    def set_run_path(self, path: np.ndarray) -> None:
+        """The active run's reference path, when it is known only after the run began."""
+        with self._lock:
+            self._runs.set_path(path)
+            self._version += 1
+
     def end_run(self, outcome: str, t_ms: float, final_error_m: float | None = None) -> RunSummary | None:
         with self._lock:
             summary = self._runs.end(outcome, t_ms, final_error_m)
