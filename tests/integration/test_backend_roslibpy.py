@@ -95,7 +95,12 @@ def test_stamped_commands_become_records_twists_and_motion():
                 "deploy_mode",
                 "seq",
                 "rx_seq",
+                "t_recv_ms",
+                "t_sent_ms",
             }
+            # NTP t1, t2: the tracker's receive and report times (epoch ms); t1 - stamp is the seed's figure
+            assert r["t_recv_ms"] <= r["t_sent_ms"] < r["t_recv_ms"] + 1000
+            assert abs(r["t_recv_ms"] - r["timestamp"] * 1000) < 0.001
             assert r["rx_seq"] == r["seq"] + 1  # the tracker's own receive counter
             assert (r["linear_x"], r["angular_z"], r["deploy_mode"]) == (v, w, "native")
             assert r["latency_ms"] == round(r["latency_ms"], 4)
