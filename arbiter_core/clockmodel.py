@@ -16,7 +16,9 @@ clock filter + frequency loop, in a form that can be reasoned about:
 
 1. **minimum-delay filter per time bucket** (``bucket_s``): queueing only ever adds delay, and adds it
    asymmetrically, so in each bucket the exchange with the least delay has the tightest bound and the
-   least bias; the others are dropped;
+   least bias; the others are dropped. A bucket whose best delay is still far above the window's best
+   (over ``max_delay_ratio`` times it plus ``delay_slack_ms``: every exchange of it queued, as in a
+   flood) is left out of the fit, as chrony's ``maxdelayratio`` does;
 2. **weighted least-squares line** through the buckets of the last ``window_s`` (weights
    ``1 / (delay/2)^2``: a tight sample counts more), refitted once without points whose residual is
    over three robust deviations (MAD): a bucket whose every exchange queued cannot bend the line. Its
@@ -43,7 +45,10 @@ from __future__ import annotations
 
 import math
 from collections import deque
+from collections.abc import Sequence
 from dataclasses import dataclass
+
+import numpy as np
 
 MAD_TO_SIGMA = 1.4826
 
@@ -60,16 +65,17 @@ class Exchange:
         return self.delay_ms / 2.0
 
 
-def ntp_exchange(t0_ms: float, t1_ms: float, t2_ms: float, rtt_ms: float, sent_at_s: float) -> Exchange:
-    """The exchange of a command stamped ``t0_ms`` (our wall clock), received at ``t1_ms`` and reported
-    at ``t2_ms`` (theirs), whose report came back ``rtt_ms`` after it left (our monotonic clock, sent at
-    ``sent_at_s``). ``t2 < t1`` (a report stamped before its command: their clock stepped) counts as
-    zero holding time."""
-    held = max(t2_ms - t1_ms, 0.0)
-    delay = max(rtt_ms - held, 0.0)
-    t3 = t0_ms + rtt_ms
-    offset = ((t1_ms - t0_ms) + (t2_ms - t3)) / 2.0
-    return Exchange(sent_at_s + rtt_ms / 2000.0, offset, delay)
+def ntp_exchange(up_ms: float, held_ms: float, rtt_ms: float, sent_at_s: float) -> Exchange:
+    """The exchange of a command whose ``t1 - t0`` was ``up_ms`` (their receive stamp minus our send
+    stamp: the seed's raw one-way figure), held ``held_ms = t2 - t1`` on their side, and whose report
+    came back ``rtt_ms`` after it left (our monotonic clock, sent at ``sent_at_s``). Differences, not
+    epoch stamps, so that no precision is lost (a float of epoch ms resolves only ~0.24 µs).
+
+    ``t3 = t0 + rtt``, so ``offset = ((t1 - t0) + (t2 - t3)) / 2 = up + (held - rtt) / 2`` and
+    ``delay = rtt - held``. A negative ``held`` (their clock stepped back in between) counts as zero.
+    """
+    held = min(max(held_ms, 0.0), max(rtt_ms, 0.0))
+    return Exchange(sent_at_s + rtt_ms / 2000.0, up_ms + (held - rtt_ms) / 2.0, max(rtt_ms - held, 0.0))
 
 
 @dataclass(frozen=True, slots=True)
@@ -124,7 +130,9 @@ class ClockModel:
         bucket_s: float = 2.0,
         window_s: float = 120.0,
         min_span_s: float = 6.0,
-        max_drift_ppm: float = 1000.0,
+        max_drift_ppm: float = 500.0,
+        max_delay_ratio: float = 3.0,
+        delay_slack_ms: float = 1.0,
         step_after: int = 3,
         tolerance_ms: float = 0.05,
     ) -> None:
@@ -133,7 +141,9 @@ class ClockModel:
         self.bucket_s = bucket_s
         self.window_s = window_s
         self.min_span_s = min_span_s
-        self.max_drift_ppm = max_drift_ppm
+        self.max_drift_ppm = max_drift_ppm  # NTP's limit on a clock's frequency error
+        self.max_delay_ratio = max_delay_ratio
+        self.delay_slack_ms = delay_slack_ms
         self.step_after = step_after
         self.tolerance_ms = tolerance_ms
         self._buckets: deque[tuple[int, Exchange]] = deque()  # (bucket index, its least-delay exchange)
@@ -141,6 +151,7 @@ class ClockModel:
         self._contradictions: list[Exchange] = []
         self._contra_sign = False
         self.epoch = 0
+        self.anchor_s = -math.inf  # where the current epoch starts (its first exchange)
         self.steps: list[tuple[float, float]] = []  # (at_s, size ms) of each re-anchor
         self.added = 0
 
@@ -161,30 +172,35 @@ class ClockModel:
                     return True
                 return False  # held back: a step, or one of a few bad exchanges
             self._contradictions = []
-        self._put(ex)
-        self._refit()
+        if self._put(ex):
+            self._refit()
         return False
 
     def _reanchor(self, at_s: float, miss: float) -> None:
         held, self._contradictions = self._contradictions, []
         self._buckets.clear()
+        self.anchor_s = min(ex.at_s for ex in held)
         self.epoch += 1
         self.steps.append((at_s, miss))
         for ex in held:
             self._put(ex)
         self._refit()
 
-    def _put(self, ex: Exchange) -> None:
+    def _put(self, ex: Exchange) -> bool:
+        """Into its bucket if it has the least delay there; True when the buckets changed."""
         idx = math.floor(ex.at_s / self.bucket_s)
+        changed = True
         if self._buckets and self._buckets[-1][0] == idx:
-            if ex.delay_ms < self._buckets[-1][1].delay_ms:
+            changed = ex.delay_ms < self._buckets[-1][1].delay_ms
+            if changed:
                 self._buckets[-1] = (idx, ex)
         elif not self._buckets or idx > self._buckets[-1][0]:
             self._buckets.append((idx, ex))
-        else:  # out of order (late report): find its bucket
+        else:  # out of order (a late report): find its bucket
             for i, (j, old) in enumerate(self._buckets):
                 if j == idx:
-                    if ex.delay_ms < old.delay_ms:
+                    changed = ex.delay_ms < old.delay_ms
+                    if changed:
                         self._buckets[i] = (idx, ex)
                     break
                 if j > idx:
@@ -193,10 +209,17 @@ class ClockModel:
         newest = self._buckets[-1][1].at_s
         while self._buckets[0][1].at_s < newest - self.window_s:
             self._buckets.popleft()
+            changed = True
+        return changed
 
     def _refit(self) -> None:
-        pts = [(ex.at_s, ex.offset_ms, ex.half_ms) for _i, ex in self._buckets]
-        self._fit = self._fit_line(pts) if pts else None
+        if not self._buckets:
+            self._fit = None
+            return
+        best = min(ex.delay_ms for _i, ex in self._buckets)
+        limit = best * self.max_delay_ratio + self.delay_slack_ms
+        pts = [(ex.at_s, ex.offset_ms, ex.half_ms) for _i, ex in self._buckets if ex.delay_ms <= limit]
+        self._fit = self._fit_line(pts)
 
     def _fit_line(self, pts: list[tuple[float, float, float]]) -> _Fit:
         allowance = self.max_drift_ppm / 1000.0
@@ -235,6 +258,17 @@ class ClockModel:
 
     def offset_at(self, at_s: float) -> float | None:
         return None if self._fit is None else self._fit.predict(at_s)
+
+    def offsets_and_bounds(self, xs: Sequence[float]) -> tuple[np.ndarray, np.ndarray] | None:
+        """The model's offset and its bound at each of ``xs`` (vectorised: the summary's hindsight)."""
+        fit = self._fit
+        if fit is None:
+            return None
+        x = np.asarray(xs, dtype=np.float64)
+        px = np.array([p[0] for p in fit.points])
+        slack = np.array([abs(r) + p[2] for p, r in zip(fit.points, fit.residuals, strict=True)])
+        bounds = (slack[:, None] + fit.b_err * np.abs(x[None, :] - px[:, None])).min(axis=0)
+        return fit.a + fit.b * (x - fit.x0), bounds
 
 
 def _median(values: list[float]) -> float:
