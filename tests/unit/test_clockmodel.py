@@ -77,8 +77,9 @@ def test_a_clock_step_re_anchors_within_five_seconds_instead_of_being_averaged_i
     m = ClockModel()
     drive(m, 20, offset_ms=3.0, drift_ppm=100.0, queue_ms=0.5)
     assert m.epoch == 0
-    drive(m, 5, offset_ms=3.0, drift_ppm=100.0, queue_ms=0.5, start_s=20.0, step_at=20.0, step_ms=40.0,
-          seed=2)
+    drive(
+        m, 5, offset_ms=3.0, drift_ppm=100.0, queue_ms=0.5, start_s=20.0, step_at=20.0, step_ms=40.0, seed=2
+    )
     assert m.epoch == 1 and m.steps[0][0] < 21.0 and m.steps[0][1] == pytest.approx(40.0, abs=1.0)
     est = m.estimate(25.0)
     true = truth(25.0, 3.0, 100.0, 20.0, 40.0)

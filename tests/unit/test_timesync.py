@@ -21,7 +21,9 @@ CHRONY_SYNCED = (
     "-12.345,-0.001,0.012,0.001200000,0.000300000,64.5,Normal\n"
 )
 CHRONY_UNSYNCED = "00000000,,0,0.000000000,0.000000000,0.000000000,0.000000000,0.000,0.000,0.000,1.000000000,1.000000000,0.0,Not synchronised\n"  # noqa: E501
-TIMEDATECTL = "Timezone=Etc/UTC\nLocalRTC=no\nCanNTP=yes\nNTP=yes\nNTPSynchronized=yes\nTimeUSec=Tue 2026-11-24\n"  # noqa: E501
+TIMEDATECTL = (
+    "Timezone=Etc/UTC\nLocalRTC=no\nCanNTP=yes\nNTP=yes\nNTPSynchronized=yes\nTimeUSec=Tue 2026-11-24\n"
+)
 # adjtimex(2) read on this project's CI container: TIME_ERROR, STA_UNSYNC, 16 s errors
 KERNEL_UNSYNCED = Adjtimex(state=5, status=0x40, maxerror_us=16_000_000, esterror_us=16_000_000)
 KERNEL_SYNCED = Adjtimex(state=0, status=0x2001, maxerror_us=12_500, esterror_us=350)
