@@ -87,6 +87,11 @@ class DelayProxy:
     async def _shutdown(self) -> None:
         self._server.close()
         self._close_all()
+        tasks = [t for t in asyncio.all_tasks() if t is not asyncio.current_task()]
+        if tasks:  # closed transports end their pipes (EOF); what still waits is cancelled
+            _done, pending = await asyncio.wait(tasks, timeout=2)
+            for t in pending:
+                t.cancel()
 
     def _close_all(self) -> None:
         for w in list(self._writers):
@@ -105,9 +110,10 @@ class DelayProxy:
             sock = w.get_extra_info("socket")
             if sock is not None:
                 sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-        await asyncio.gather(
-            self._pipe(reader, up_writer, 0), self._pipe(up_reader, writer, 1), return_exceptions=True
-        )
+        with contextlib.suppress(asyncio.CancelledError):
+            await asyncio.gather(
+                self._pipe(reader, up_writer, 0), self._pipe(up_reader, writer, 1), return_exceptions=True
+            )
         for w in (writer, up_writer):
             self._writers.discard(w)
             with contextlib.suppress(Exception):

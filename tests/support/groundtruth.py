@@ -15,6 +15,7 @@ whose wall clock is. ``FAKETIME_NO_CACHE=1`` makes it re-read its settings on ev
 from __future__ import annotations
 
 import os
+import tempfile
 import time
 from dataclasses import dataclass, field
 
@@ -32,16 +33,24 @@ def faketime_available() -> bool:
     return os.path.exists(FAKETIME_LIB)
 
 
-def faketime_env(offset_ms: float, drift_ppm: float = 0.0) -> dict[str, str]:
+def faketime_spec(offset_ms: float, drift_ppm: float = 0.0) -> str:
     spec = f"{offset_ms / 1000.0:+.6f}"
     if drift_ppm:
         spec += f" x{1.0 + drift_ppm * 1e-6:.7f}"
-    return {
-        "LD_PRELOAD": FAKETIME_LIB,
-        "FAKETIME": spec,
-        "FAKETIME_NO_CACHE": "1",
-        "FAKETIME_DONT_FAKE_MONOTONIC": "1",
-    }
+    return spec
+
+
+def faketime_env(offset_ms: float, drift_ppm: float = 0.0, spec_file: str | None = None) -> dict[str, str]:
+    """The environment that runs a process with its wall clock ``offset_ms`` off and ``drift_ppm`` fast;
+    with ``spec_file`` the setting is read from that file on every call (rewrite it to step the clock)."""
+    env = {"LD_PRELOAD": FAKETIME_LIB, "FAKETIME_NO_CACHE": "1", "FAKETIME_DONT_FAKE_MONOTONIC": "1"}
+    if spec_file is None:
+        env["FAKETIME"] = faketime_spec(offset_ms, drift_ppm)
+    else:
+        with open(spec_file, "w") as f:
+            f.write(faketime_spec(offset_ms, drift_ppm) + "\n")
+        env["FAKETIME_TIMESTAMP_FILE"] = spec_file
+    return env
 
 
 @dataclass(frozen=True)
@@ -54,6 +63,8 @@ class Case:
     jitter_ms: float = 0.0  # uniform [0, jitter] more on each chunk, each direction
     seconds: float = 10.0
     rate_hz: float = 20.0
+    step_ms: float = 0.0  # the backend's clock steps by this much...
+    step_at_s: float = 0.0  # ...this long into the measurement (libfaketime's timestamp file)
 
 
 @dataclass
@@ -105,7 +116,12 @@ def measure(case: Case, base_rtt_ms: float | None = None, backend_args: tuple[st
     from arbiter_tui.link.base import CONNECTED
     from arbiter_tui.link.rosbridge import RosLink
 
-    env = faketime_env(case.offset_ms, case.drift_ppm) if case.offset_ms or case.drift_ppm else {}
+    spec_file = None
+    if case.step_ms:
+        fd, spec_file = tempfile.mkstemp(prefix="faketime-", suffix=".rc")
+        os.close(fd)
+    faked = case.offset_ms or case.drift_ppm or case.step_ms
+    env = faketime_env(case.offset_ms, case.drift_ppm, spec_file) if faked else {}
     started_wall = time.time()
     backend: BackendProc = start_backend("--no-sim", *backend_args, env=env)
     proxy = DelayProxy(backend.bridge_port, Delays(case.forward_ms, case.back_ms, case.jitter_ms))
@@ -120,10 +136,15 @@ def measure(case: Case, base_rtt_ms: float | None = None, backend_args: tuple[st
         wait_for(lambda: link.telemetry.meter.matched >= 5, timeout=5)
         meter = link.telemetry.meter = LatencyMeter(history=100_000, offset_window_s=3600.0)
         n = int(case.seconds * case.rate_hz)
-        t = time.monotonic()
+        t = t_start = time.monotonic()
+        stepped_at = None
         for _ in range(n):
             t += 1.0 / case.rate_hz
             time.sleep(max(0.0, t - time.monotonic()))
+            if spec_file is not None and stepped_at is None and t - t_start >= case.step_at_s:
+                with open(spec_file, "w") as f:
+                    f.write(faketime_spec(case.offset_ms + case.step_ms, case.drift_ppm) + "\n")
+                stepped_at = time.monotonic()
             link.send(0.0, 0.0)
         wait_for(lambda: meter.matched >= n - 2, timeout=5 + (case.forward_ms + case.back_ms) / 100)
         s = meter.summary()
@@ -132,7 +153,7 @@ def measure(case: Case, base_rtt_ms: float | None = None, backend_args: tuple[st
         # the truth at the estimate's time (the newest exchange: monotonic -> our wall clock)
         last_at = max(x.at_s for x in meter.samples())
         wall = last_at + (time.time() - time.monotonic())
-        true_offset = case.offset_ms + case.drift_ppm * 1e-3 * (wall - started_wall)
+        true_offset = case.offset_ms + case.step_ms + case.drift_ppm * 1e-3 * (wall - started_wall)
         rtt = [x.rtt_ms for x in meter.samples()]
         rtt_p50 = stats.percentile(rtt, 0.5)
         return Measured(
@@ -150,9 +171,18 @@ def measure(case: Case, base_rtt_ms: float | None = None, backend_args: tuple[st
             jitter_ms=s.jitter_ms or 0.0,
             raw_p50_ms=s.raw_p50_ms or 0.0,
             matched=meter.matched,
-            extra={"steps": est.steps, "lost": meter.lost},
+            extra={
+                "steps": est.steps,
+                "lost": meter.lost,
+                # how long after the step the model re-anchored (s)
+                "reanchored_after_s": None
+                if stepped_at is None or not meter.clock.steps
+                else meter.clock.steps[-1][0] - stepped_at,
+            },
         )
     finally:
         link.close()
         proxy.close()
         backend.stop()
+        if spec_file is not None:
+            os.unlink(spec_file)
