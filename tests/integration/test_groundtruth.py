@@ -50,6 +50,10 @@ def test_the_proxy_delays_each_direction_and_stalls():
         assert 25.0 <= rtts[5] < 26.5
         proxy.stall(0.3)
         assert round_trip(sock) >= 290.0
+        proxy.blackhole(0.2)  # what arrives is dropped, then the connections close: a link that died
+        sock.sendall(b"x")
+        sock.settimeout(5)
+        assert sock.recv(10) == b""
         sock.close()
     srv.close()
 
