@@ -14,6 +14,7 @@ whose wall clock is. ``FAKETIME_NO_CACHE=1`` makes it re-read its settings on ev
 
 from __future__ import annotations
 
+import glob
 import os
 import tempfile
 import time
@@ -26,11 +27,12 @@ from .backend import BackendProc, start_backend
 from .delayproxy import DelayProxy, Delays
 from .waits import wait_for
 
-FAKETIME_LIB = "/usr/lib/x86_64-linux-gnu/faketime/libfaketime.so.1"
+# Debian's faketime package, on any architecture (x86_64-linux-gnu, aarch64-linux-gnu, ...)
+FAKETIME_LIB = next(iter(sorted(glob.glob("/usr/lib/*/faketime/libfaketime.so.1"))), "")
 
 
 def faketime_available() -> bool:
-    return os.path.exists(FAKETIME_LIB)
+    return bool(FAKETIME_LIB) and os.path.exists(FAKETIME_LIB)
 
 
 def faketime_spec(offset_ms: float, drift_ppm: float = 0.0) -> str:
