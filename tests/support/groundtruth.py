@@ -111,6 +111,25 @@ class Measured:
         return self.corrected_p50_lo_ms <= self.true_one_way_ms <= self.corrected_p50_hi_ms
 
 
+def before_issue_33(samples: list, window_s: float = 64.0) -> tuple[float, float, float]:
+    """What the meter on main showed from the same exchanges: the offset of the lowest-RTT sample of
+    the last 64 s (``raw - rtt / 2``: the tracker's own time inside), each sample corrected with the
+    estimate at its arrival. Returns (final offset, corrected one-way p50, jitter of corrected)."""
+    window: list[tuple[float, float, float]] = []  # (arrival, offset, rtt)
+    corrected = []
+    for x in samples:
+        arrival = x.at_s + x.rtt_ms / 2000.0
+        window = [w for w in window if w[0] >= arrival - window_s] + [
+            (arrival, x.raw_ms - x.rtt_ms / 2, x.rtt_ms)
+        ]
+        best = min(window, key=lambda w: w[2])
+        corrected.append(x.raw_ms - best[1])
+    n = len(corrected)
+    mean = sum(corrected) / n
+    jitter = (sum((c - mean) ** 2 for c in corrected) / n) ** 0.5
+    return best[1], stats.percentile(corrected, 0.5), jitter
+
+
 def measure(case: Case, base_rtt_ms: float | None = None, backend_args: tuple[str, ...] = ()) -> Measured:
     """Run ``case``: a faked backend, the proxy, the console's link sending ``rate_hz`` commands for
     ``seconds``; the figures its meter gives against the injected truth. ``base_rtt_ms`` None: this is
@@ -174,6 +193,7 @@ def measure(case: Case, base_rtt_ms: float | None = None, backend_args: tuple[st
             raw_p50_ms=s.raw_p50_ms or 0.0,
             matched=meter.matched,
             extra={
+                "before": before_issue_33(meter.samples()),
                 "steps": est.steps,
                 "lost": meter.lost,
                 # how long after the step the model re-anchored (s)
