@@ -107,6 +107,14 @@ def make_app(
     middlewares = [json_errors] if token is None else [json_errors, bearer_required(token)]
     app = web.Application(middlewares=middlewares)
     app.router.add_get("/api/latency", latency)
+    async def probe_early(app: web.Application) -> None:
+        # the first probe can take up to a second or two (a chronyc with no daemon to talk to): start
+        # it with the server, so that the first /api/health seldom waits for it
+        pending.append(asyncio.get_running_loop().run_in_executor(None, clock.read))
+
+    pending: list[asyncio.Future] = []
+
+    app.on_startup.append(probe_early)
     app.router.add_get("/api/health", health)
     app.router.add_get("/api/topics", topic_figures)
     return app
