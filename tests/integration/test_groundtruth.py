@@ -80,5 +80,7 @@ def test_a_drifting_clock_is_modelled_and_the_corrected_one_way_stays_right(base
     assert m.offset_bound_holds, (m.offset_ms, m.true_offset_ms, m.offset_bound_ms)
     assert abs(m.corrected_p50_ms - m.true_one_way_ms) < 1.0, (m.corrected_p50_ms, m.true_one_way_ms)
     assert m.one_way_in_interval
-    assert m.jitter_ms < 1.0  # 15 ms of drift over the run, none of it in the jitter
+    # 15 ms of drift over the run: as jitter it would be its stddev, 15/sqrt(12) = 4.3 ms; what is left
+    # is the path's own (well under a ms on an idle machine, more when the cores are shared)
+    assert m.jitter_ms < 2.0
     assert m.extra["steps"] == 0
