@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import asyncio
 import json
 from typing import Any, Protocol
 
@@ -9,6 +10,7 @@ from aiohttp import web
 
 from arbiter_core import auth
 
+from .hostclock import HostClock
 from .tracker import DEFAULT_LIMIT, LatencyTracker
 
 
@@ -61,8 +63,13 @@ def bearer_required(token: str) -> Any:
 
 
 def make_app(
-    tracker: LatencyTracker, token: str | None = None, topics: TopicSource | None = None
+    tracker: LatencyTracker,
+    token: str | None = None,
+    topics: TopicSource | None = None,
+    host_clock: HostClock | None = None,
 ) -> web.Application:
+    clock = HostClock() if host_clock is None else host_clock
+
     def _int(request: web.Request, name: str, lo: int, hi: int) -> int | None:
         raw = request.query.get(name)
         if raw is None:
@@ -87,7 +94,10 @@ def make_app(
         return web.Response(text=text, content_type="application/json")
 
     async def health(request: web.Request) -> web.Response:
-        return _json(tracker.health())
+        body = tracker.health()
+        # additive: is this host's clock synchronised, and to what error (probed off the loop, cached)
+        body["time_sync"] = (await asyncio.to_thread(clock.read)).to_dict()
+        return _json(body)
 
     async def topic_figures(request: web.Request) -> web.Response:
         if topics is None:
@@ -97,6 +107,14 @@ def make_app(
     middlewares = [json_errors] if token is None else [json_errors, bearer_required(token)]
     app = web.Application(middlewares=middlewares)
     app.router.add_get("/api/latency", latency)
+    async def probe_early(app: web.Application) -> None:
+        # the first probe can take up to a second or two (a chronyc with no daemon to talk to): start
+        # it with the server, so that the first /api/health seldom waits for it
+        pending.append(asyncio.get_running_loop().run_in_executor(None, clock.read))
+
+    pending: list[asyncio.Future] = []
+
+    app.on_startup.append(probe_early)
     app.router.add_get("/api/health", health)
     app.router.add_get("/api/topics", topic_figures)
     return app

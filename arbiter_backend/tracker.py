@@ -118,7 +118,10 @@ class LatencyTracker:
         now = self._monotonic()
         with self._lock:
             self.total_seen += 1
-            record = build_record(cmd, recv_ns, self.deploy_mode, stale=stale, rx_seq=self.total_seen)
+            sent_ns = self._clock_ns()  # NTP t2: the report leaves now (the tracker's own time excluded)
+            record = build_record(
+                cmd, recv_ns, self.deploy_mode, stale=stale, rx_seq=self.total_seen, sent_ns=sent_ns
+            )
             if latency < 0:
                 self.negative += 1  # kept as measured: a clock offset, never clipped
             text = record.to_json()

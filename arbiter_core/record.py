@@ -42,6 +42,12 @@ class LatencyRecord:
     envelope carried one), ``stale`` (dropped as too old, never forwarded) and ``rx_seq`` (the
     tracker's receive counter, 1-based, across all senders: what ``GET /api/latency?since=`` pages by).
 
+    ``t_recv_ms`` and ``t_sent_ms`` are NTP's t1 and t2: the tracker's wall clock (epoch **milliseconds**,
+    whole microseconds) when the command arrived and when this report was handed to the transport. With
+    the sender's t0 (its stamp) and t3 (report arrival) they give the round trip *minus the time spent
+    inside the tracker*, and the clock offset without it (``arbiter_core.clockmodel``). Additive: a
+    client reading the seed's five fields never sees them; a seed tracker's records do not have them.
+
     Built once by the tracker, serialised once (:meth:`to_json`) for the API and ``/latency_report``,
     parsed by the console (:meth:`from_obj`). The JSON is the seed's, extras only when set.
     """
@@ -54,6 +60,8 @@ class LatencyRecord:
     seq: int | None = None
     stale: bool = False
     rx_seq: int | None = None
+    t_recv_ms: float | None = None  # NTP t1: tracker receive wall time, epoch ms (µs resolution)
+    t_sent_ms: float | None = None  # NTP t2: tracker wall time the report was handed to the transport
 
     def to_dict(self) -> dict[str, Any]:
         out: dict[str, Any] = {
@@ -69,6 +77,10 @@ class LatencyRecord:
             out["stale"] = True
         if self.rx_seq is not None:
             out["rx_seq"] = self.rx_seq
+        if self.t_recv_ms is not None:
+            out["t_recv_ms"] = self.t_recv_ms
+        if self.t_sent_ms is not None:
+            out["t_sent_ms"] = self.t_sent_ms
         return out
 
     def to_json(self) -> str:
@@ -94,6 +106,8 @@ class LatencyRecord:
             seq=_optional_count(obj, "seq"),
             stale=stale,
             rx_seq=_optional_count(obj, "rx_seq"),
+            t_recv_ms=_optional_number(obj, "t_recv_ms"),
+            t_sent_ms=_optional_number(obj, "t_sent_ms"),
         )
 
     @classmethod
@@ -112,6 +126,15 @@ def _number(obj: dict[str, Any], key: str) -> float:
     return float(value)
 
 
+def _optional_number(obj: dict[str, Any], key: str) -> float | None:
+    return None if obj.get(key) is None else _number(obj, key)
+
+
+def epoch_ms(ns: int) -> float:
+    """Wall time in ns as epoch ms with whole microseconds (what a float of ms can hold exactly enough)."""
+    return (ns // 1000) / 1000.0
+
+
 def _optional_count(obj: dict[str, Any], key: str) -> int | None:
     value = obj.get(key)
     if value is None:
@@ -122,9 +145,16 @@ def _optional_count(obj: dict[str, Any], key: str) -> int | None:
 
 
 def build_record(
-    cmd: StampedCommand, recv_ns: int, deploy_mode: str, *, stale: bool = False, rx_seq: int | None = None
+    cmd: StampedCommand,
+    recv_ns: int,
+    deploy_mode: str,
+    *,
+    stale: bool = False,
+    rx_seq: int | None = None,
+    sent_ns: int | None = None,
 ) -> LatencyRecord:
-    """The tracker's record of ``cmd`` received at ``recv_ns`` (wall clock, ns)."""
+    """The tracker's record of ``cmd`` received at ``recv_ns`` (wall clock, ns); with ``sent_ns`` (the
+    wall time its report goes out) it carries both NTP tracker stamps, t1 and t2."""
     return LatencyRecord(
         latency_ms=latency_ms(cmd, recv_ns),
         linear_x=cmd.linear_x,
@@ -134,6 +164,8 @@ def build_record(
         seq=cmd.seq,
         stale=stale,
         rx_seq=rx_seq,
+        t_recv_ms=None if sent_ns is None else epoch_ms(recv_ns),
+        t_sent_ms=None if sent_ns is None else epoch_ms(sent_ns),
     )
 
 

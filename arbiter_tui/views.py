@@ -19,6 +19,7 @@ from arbiter_core import stats as S
 from arbiter_core.kinematics import distance_error, heading_error
 from arbiter_core.record import LatencyRecord
 from arbiter_core.stats import Summary
+from arbiter_core.timesync import TimeSync, one_way_bound_ms
 
 from .analytics.runs import MANUAL, AlgorithmSummary, RunSummary
 from .analytics.store import EMPTY_STATS, AnalyticsStats, AnalyticsStore
@@ -259,6 +260,10 @@ class LatencySnapshot:
     link_down: bool = False
     meter: MeterSummary = field(default_factory=MeterSummary)  # this console's round trips, offset, loss
     offset_warn_ms: float = 10.0
+    local_sync: TimeSync | None = None  # this host's clock sync
+    robot_sync: TimeSync | None = None  # the tracker host's (its /api/health)
+    host_bound_ms: float | None = None  # both synchronised: their clocks are within this of each other
+    sync_contradicted: bool = False  # ...but the measured offset says otherwise: the claim is not used
 
 
 # -- builders ----------------------------------------------------------------------------------
@@ -456,6 +461,11 @@ def latency_snapshot(
     state = link.state
     if simulated or view is None:
         return LatencySnapshot(simulated=True, link_state=state, offset_warn_ms=offset_warn_ms)
+    # both hosts say they are synchronised: their clocks are within the sum of their errors, a bound on
+    # the one-way figures, unless the round trips measure an offset beyond it (a claim not to trust)
+    host = one_way_bound_ms(view.local_sync, view.robot_sync)
+    est = link.telemetry.meter.offset()
+    contradicted = host is not None and est is not None and abs(est.offset_ms) - est.uncertainty_ms > host
     return LatencySnapshot(
         url=url,
         polled=view.version,
@@ -475,6 +485,10 @@ def latency_snapshot(
         records=tuple(reversed(view.records))[:30],
         link_state=state,
         link_down=state in (DISCONNECTED, RECONNECTING),
-        meter=link.telemetry.meter.summary().shown(),
+        meter=link.telemetry.meter.summary(host_error_ms=None if contradicted else host).shown(),
         offset_warn_ms=offset_warn_ms,
+        local_sync=view.local_sync,
+        robot_sync=view.robot_sync,
+        host_bound_ms=host,
+        sync_contradicted=contradicted,
     )

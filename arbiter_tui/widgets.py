@@ -13,9 +13,12 @@ from rich.text import Text
 from textual.reactive import reactive
 from textual.widget import Widget
 
+from arbiter_core.timesync import TimeSync
+
 from .analytics.labels import STAT_LABELS, format_stat
 from .analytics.store import STATS_FIELDS
 from .control.teleop import legend_compact
+from .latency.clocksync import OffsetEstimate
 from .views import AnalyticsView, LatencySnapshot, RobotView, StatusView
 
 LINK_DOWN = (  # two lines of the 36 columns inside the panel: the rows below stay in view
@@ -132,6 +135,40 @@ def fmt_signed(value: float | None) -> str:
     return "N/A" if value is None else f"{value:+.3f} ms"
 
 
+WARN_AHEAD_S = 600.0  # the drift forecast warns this far ahead of the offset crossing --offset-warn-ms
+
+
+def fmt_interval(lo: float | None, hi: float | None) -> str:
+    """Where the truth lies: ``[0.000, 0.612]`` (ms)."""
+    return "" if lo is None or hi is None else f"[{lo:.3f}, {hi:.3f}]"
+
+
+def fmt_duration(seconds: float) -> str:
+    return f"~{seconds:.0f} s" if seconds < 90 else f"~{seconds / 60:.0f} min"
+
+
+def fmt_clock(off: OffsetEstimate | None) -> str:
+    """``clock +250.3 ms ± 0.4 ms, drifting +498 ppm (30 ms/min)``."""
+    if off is None:
+        return "clock offset N/A"
+    text = f"clock {off.offset_ms:+.1f} ms ± {off.uncertainty_ms:.1f} ms"
+    if off.drift_ppm is None or off.drift_bound_ppm is None:
+        text += ", drift not known yet"
+    elif abs(off.drift_ppm) <= off.drift_bound_ppm:
+        text += f", drift within ±{off.drift_bound_ppm:.0f} ppm"
+    else:
+        per_min = off.drift_ppm * 60 / 1000
+        rate = f"{per_min:.0f}" if abs(per_min) >= 1 else f"{per_min:.2f}"
+        text += f", drifting {off.drift_ppm:+.0f} ppm ({rate} ms/min)"
+    if off.steps:
+        text += f", {off.steps} step{'s' if off.steps > 1 else ''}"
+    return text
+
+
+def fmt_sync(t: TimeSync | None) -> str:
+    return "not said" if t is None else t.short()
+
+
 CARDS = (("count", "count"), ("mean_ms", "mean"), ("min_ms", "min"), ("max_ms", "max"), ("p95_ms", "p95"),
          ("stddev_ms", "stddev"))  # fmt: skip
 
@@ -210,17 +247,35 @@ class ClientLine(Bound):
             out.append(f" · no round trips yet · sent {s.sent} · lost {s.lost}")
             return out
         out.append(f" · rtt p50 {fmt_ms(s.rtt_p50_ms)} p95 {fmt_ms(s.rtt_p95_ms)}")
-        out.append(f" · one-way corrected p50 {fmt_ms(s.corrected_p50_ms)} (raw {fmt_ms(s.raw_p50_ms)})\n")
+        out.append(f" · jitter {fmt_ms(s.jitter_ms)} · raw one-way p50 {fmt_ms(s.raw_p50_ms)}\n")
+        out.append("one-way corrected", "bold")
+        p50 = fmt_interval(s.corrected_p50_lo_ms, s.corrected_p50_hi_ms)
+        p95 = fmt_interval(s.corrected_p95_lo_ms, s.corrected_p95_hi_ms)
+        out.append(f" p50 {fmt_ms(s.corrected_p50_ms)} {p50} p95 {fmt_ms(s.corrected_p95_ms)} {p95}")
+        if s.host_bound_used:
+            out.append(" (bounded by both hosts' clock sync)")
+        out.append("\n")
         off = s.offset
-        out.append(f"clock offset {fmt_signed(None if off is None else off.offset_ms)}")
-        out.append(f" ± {fmt_ms(None if off is None else off.uncertainty_ms)}")
+        out.append(fmt_clock(off))
         out.append(f" · negative {s.negative} · lost {s.lost_in_window} in 10 s ({s.lost} total)")
         if s.late:
             out.append(f" · late {s.late} (queued, not lost)")
+        if v.local_sync is not None or v.robot_sync is not None:
+            here, there = fmt_sync(v.local_sync), fmt_sync(v.robot_sync)
+            out.append(f"\ntime sync: this host {here}, robot host {there}")
+            if v.sync_contradicted:
+                out.append(" · CONTRADICTED by the measured offset: not used", "bold yellow")
+            elif v.host_bound_ms is not None:
+                out.append(f" · clocks within ±{v.host_bound_ms:.2f} ms", "green")
         warn = v.offset_warn_ms
         if off is not None and off.significant(warn):
             out.append(
                 f"\nCLOCK OFFSET {off.offset_ms:+.1f} ms exceeds {warn:g} ms: raw one-way figures include it",
                 "bold red",
             )
+        elif off is not None:
+            until = off.seconds_until(warn)
+            if until is not None and until <= WARN_AHEAD_S:
+                crossing = f"\nCLOCK DRIFT: offset crosses {warn:g} ms in {fmt_duration(until)}"
+                out.append(crossing, "bold yellow")
         return out

@@ -16,6 +16,9 @@ from typing import TYPE_CHECKING, Any
 from arbiter_core.failures import connect_failure, http_failure
 from arbiter_core.record import LatencyRecord, RecordError, parse_latency_stats
 from arbiter_core.stats import Summary
+from arbiter_core.timesync import TimeSync
+
+from .hostclock import HostClock
 
 if TYPE_CHECKING:
     import httpx
@@ -23,6 +26,7 @@ if TYPE_CHECKING:
 WINDOW = 600  # latencies kept for the plot and the histogram
 PAGE = 120  # records asked for per poll (a tracker started with a small --max-records refuses more)
 RECENT = 50  # records kept for the table
+SYNC_EVERY = 20  # polls between reads of both hosts' time sync (/api/health's time_sync, our own)
 
 
 @dataclass
@@ -46,6 +50,8 @@ class LatencyView:
     last_rx_seq: int | None = None  # the newest rx_seq taken in; None: start from the newest records
     pages_by_rx_seq: bool = False  # the tracker answers ``since`` (ours does, the seed's does not)
     version: int = 0  # bumped whenever records or the window change
+    robot_sync: TimeSync | None = None  # the tracker host's clock sync (/api/health); None: not said
+    local_sync: TimeSync | None = None  # this console's host
     _last_timestamp: float | None = None  # without rx_seq: the newest record taken in
 
     def params(self, limit: int) -> dict[str, int]:
@@ -152,6 +158,7 @@ class TrackerClient:
         # https:// is verified against the system's CAs, or against --ca-file (a private CA)
         verify: Any = True if ca_file is None else ssl.create_default_context(cafile=str(ca_file))
         self._client: httpx.AsyncClient = httpx.AsyncClient(timeout=timeout, headers=headers, verify=verify)
+        self.host_clock = HostClock()
 
     async def poll(self) -> LatencyView:
         import httpx
@@ -169,7 +176,27 @@ class TrackerClient:
             self.view.fail(connect_failure(type(exc).__name__, _chain(exc)))
         except ValueError as exc:
             self.view.fail(f"bad response: {exc}")
+        if self.view.reachable and self.view.polls % SYNC_EVERY == 1:
+            await self.poll_time_sync()
         return self.view
+
+    async def poll_time_sync(self) -> None:
+        """Both hosts' clock sync: the tracker's from ``/api/health`` (an older backend says nothing),
+        ours from the same probes, off the event loop."""
+        import asyncio
+
+        import httpx
+
+        try:
+            resp = await self._client.get(f"{self.base_url}/api/health")
+            body = resp.json() if resp.status_code == 200 else None
+            robot = TimeSync.from_obj(body.get("time_sync")) if isinstance(body, dict) else None
+        except (httpx.HTTPError, ValueError):
+            robot = self.view.robot_sync
+        local = await asyncio.to_thread(self.host_clock.read)
+        if (robot, local) != (self.view.robot_sync, self.view.local_sync):
+            self.view.robot_sync, self.view.local_sync = robot, local
+            self.view.version += 1
 
     async def get(self, path: str) -> httpx.Response:
         """Another endpoint of the same API (``/api/topics``), with the same client, token and TLS."""

@@ -289,7 +289,8 @@ class RosLink:
         proto = self.ros.factory._proto
         if proto is None or not self.ros.is_connected:
             return  # dropped while queued: counted lost by nobody, never stamped
-        est = self.telemetry.meter.offset()  # lets the tracker judge the command's age across clocks
+        # lets the tracker judge the command's age across clocks: the clock model's offset now
+        est = self.telemetry.meter.offset(time.monotonic())
         mono = time.monotonic()
         now_ns = time.time_ns()
         offset = None if est is None else est.offset_ms

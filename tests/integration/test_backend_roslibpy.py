@@ -95,7 +95,12 @@ def test_stamped_commands_become_records_twists_and_motion():
                 "deploy_mode",
                 "seq",
                 "rx_seq",
+                "t_recv_ms",
+                "t_sent_ms",
             }
+            # NTP t1, t2: the tracker's receive and report times (epoch ms); t1 - stamp is the seed's figure
+            assert r["t_recv_ms"] <= r["t_sent_ms"] < r["t_recv_ms"] + 1000
+            assert abs(r["t_recv_ms"] - r["timestamp"] * 1000) < 0.002  # a float of epoch s: ~0.24 µs
             assert r["rx_seq"] == r["seq"] + 1  # the tracker's own receive counter
             assert (r["linear_x"], r["angular_z"], r["deploy_mode"]) == (v, w, "native")
             assert r["latency_ms"] == round(r["latency_ms"], 4)
@@ -206,6 +211,9 @@ def test_api_shapes_limits_and_errors(backend):
     health = get_json(f"{base}/api/health")
     assert health["status"] == "ok" and health["node"] == "latency_tracker"
     assert health["records_count"] == 0 and health["uptime_s"] >= 0
+    # additive: this host's time sync (whatever this machine has; never an error)
+    assert health["time_sync"]["source"] in ("chrony", "timesyncd", "adjtimex", "unknown")
+    assert health["time_sync"]["synchronised"] in (True, False, None)
     for path, status in (("/api/latency?limit=abc", 400), ("/api/latency?limit=-1", 400), ("/nope", 404)):
         r = httpx.get(base + path)
         assert r.status_code == status and r.headers["content-type"].startswith("application/json")

@@ -72,3 +72,22 @@ async def test_stale_and_rejected_commands_are_shown_on_the_latency_screen():
         await tracker.aclose()
     finally:
         b.stop()
+
+
+async def test_both_hosts_time_sync_is_read_with_the_first_poll():
+    """The robot's from /api/health's time_sync, ours from the same probes; never an error."""
+    b = start_backend()
+    client = TrackerClient(b.api)
+    try:
+        view = await client.poll()
+        assert view.reachable
+        assert view.robot_sync is not None and view.local_sync is not None
+        assert view.robot_sync.source in ("chrony", "timesyncd", "adjtimex", "unknown")
+        # same host, same kernel: the two say the same
+        assert (view.robot_sync.source, view.robot_sync.synchronised) == (
+            view.local_sync.source,
+            view.local_sync.synchronised,
+        )
+    finally:
+        await client.aclose()
+        b.stop()

@@ -14,15 +14,26 @@ T0 = 1_800_000_000_000_000_000
 
 
 def test_the_tracker_report_is_the_seed_json_and_parses_back_to_the_same_record():
-    tracker = LatencyTracker(clock_ns=lambda: T0)
+    tracker = LatencyTracker(clock_ns=lambda: T0 + 37_123)  # the report leaves 37.123 µs after arrival
     accepted = tracker.on_stamped(envelope.build(0.3, -0.2, seq=7, clock_ns=lambda: T0 - 1_500_000), T0)
     obj = json.loads(accepted.text)
-    assert list(obj) == ["latency_ms", "linear_x", "angular_z", "timestamp", "deploy_mode", "seq", "rx_seq"]
+    assert list(obj) == ["latency_ms", "linear_x", "angular_z", "timestamp", "deploy_mode", "seq", "rx_seq",
+                         "t_recv_ms", "t_sent_ms"]  # fmt: skip
     assert obj == {"latency_ms": 1.5, "linear_x": 0.3, "angular_z": -0.2, "timestamp": T0 / 1e9,
-                   "deploy_mode": "native", "seq": 7, "rx_seq": 1}  # fmt: skip
+                   "deploy_mode": "native", "seq": 7, "rx_seq": 1,
+                   "t_recv_ms": T0 / 1e6, "t_sent_ms": T0 / 1e6 + 0.037}  # fmt: skip
     assert LatencyRecord.from_json(accepted.text) == accepted.record
     # the API serves the same text it published
     assert tracker.latency_response()["records"] == [obj]
+
+
+def test_the_ntp_stamps_are_optional_and_checked():
+    seed = {"latency_ms": 2, "linear_x": 0, "angular_z": 0.5, "timestamp": 1.0, "deploy_mode": "pi"}
+    assert LatencyRecord.from_obj(seed).t_recv_ms is None
+    full = LatencyRecord.from_obj({**seed, "t_recv_ms": 1000.0, "t_sent_ms": 1000.25})
+    assert (full.t_recv_ms, full.t_sent_ms) == (1000.0, 1000.25)
+    with pytest.raises(RecordError, match="t_sent_ms"):
+        LatencyRecord.from_obj({**seed, "t_recv_ms": 1000.0, "t_sent_ms": "x"})
 
 
 def test_a_stale_record_says_so_and_a_seed_record_has_only_the_five_fields():
