@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from typing import Any, Protocol
 
 from aiohttp import web
@@ -61,8 +62,14 @@ def bearer_required(token: str) -> Any:
 
 
 def make_app(
-    tracker: LatencyTracker, token: str | None = None, topics: TopicSource | None = None
+    tracker: LatencyTracker,
+    token: str | None = None,
+    topics: TopicSource | None = None,
+    bridge: Callable[[], dict[str, Any]] | None = None,
 ) -> web.Application:
+    """``bridge``: the rosbridge endpoint's figures (clients, frames dropped per topic), added to
+    ``/api/health`` as its ``bridge`` key."""
+
     def _int(request: web.Request, name: str, lo: int, hi: int) -> int | None:
         raw = request.query.get(name)
         if raw is None:
@@ -87,7 +94,10 @@ def make_app(
         return web.Response(text=text, content_type="application/json")
 
     async def health(request: web.Request) -> web.Response:
-        return _json(tracker.health())
+        body = tracker.health()
+        if bridge is not None:
+            body = {**body, "bridge": bridge()}
+        return _json(body)
 
     async def topic_figures(request: web.Request) -> web.Response:
         if topics is None:

@@ -10,9 +10,15 @@ A client that goes silent is pinged after ``HEARTBEAT_S`` and dropped when no
 pong comes back within half that, so a dead link frees its subscriptions and
 advertisements within about three seconds.
 
-Each client has a bounded outgoing queue drained by its own writer task: a
-slow client loses its oldest frames (counted), never blocks the bus or the
-other clients. Per-client state is dropped when the socket closes.
+Outgoing frames wait in one bounded queue per (client, topic) (``Outbox``), plus one for the
+client's replies (status, service_response), which go first. Each client's writer task takes
+the topics with something to send in turn (round-robin; a turn sends up to ``TURN_BYTES``, at
+least one message), and awaits aiohttp's drain after each write, so a client takes frames as
+fast as its socket drains and no faster. A big topic (camera frames) therefore never starves a
+small one: a small message waits for at most the one big frame being written. A full queue
+drops its oldest frame (counted per topic, logged, and in ``/api/health``); a slow client loses
+old frames of the topic that overflows, never another topic's messages or their order, and never
+blocks the bus or the other clients. Per-client state is dropped when the socket closes.
 """
 
 from __future__ import annotations
@@ -41,7 +47,10 @@ log = logging.getLogger(__name__)
 
 MAX_FRAME_BYTES = 1024 * 1024  # answered with a status error above this
 TRANSPORT_MAX_FRAME = 16 * 1024 * 1024  # aiohttp closes the socket (1009) above this
-CLIENT_QUEUE = 1000
+CLIENT_QUEUE = 1000  # a client's replies (status, service_response) waiting to be sent
+TOPIC_QUEUE = 1000  # frames of one topic waiting for one client, when the subscription gives no queue_length
+TOPIC_QUEUE_BYTES = 8 * 1024 * 1024  # ...and at most this many bytes of them (at least the newest frame)
+TURN_BYTES = 64 * 1024  # what one topic may send in its turn before the next topic's turn
 HEARTBEAT_S = 2.0  # ping a silent client after this long; no pong within half of it drops the client
 LEVELS = ("info", "warning", "error", "none")
 TOPIC_NAME = re.compile(r"(?:/[A-Za-z_][A-Za-z0-9_]*)+", re.ASCII)  # a fully qualified ROS 2 name
@@ -72,7 +81,7 @@ class _Sub:
     requests: dict[Any, tuple[int, int]] = field(default_factory=dict)  # id -> (throttle_ms, queue_length)
     unsubscribe: Callable[[], None] | None = None
     last_sent: float = -1e18
-    pending: deque[str] = field(default_factory=deque)
+    pending: deque[Payload] = field(default_factory=deque)
     timer: asyncio.TimerHandle | None = None
 
     @property
@@ -83,16 +92,64 @@ class _Sub:
     def queue_length(self) -> int:
         return min(q for _, q in self.requests.values())
 
+    @property
+    def outbox_limit(self) -> int:
+        """The client's outgoing queue for the topic: ``queue_length`` frames (1: only the latest);
+        without one, ``TOPIC_QUEUE``."""
+        return self.queue_length or TOPIC_QUEUE
+
+
+Payload = str | bytes  # a text (JSON) or binary (CBOR) WebSocket frame
+
+
+class Outbox:
+    """The frames of one topic waiting for one client: bounded by count and bytes, oldest dropped."""
+
+    def __init__(self, topic: str, limit: int = TOPIC_QUEUE, max_bytes: int = TOPIC_QUEUE_BYTES) -> None:
+        self.topic = topic
+        self.limit = limit
+        self.max_bytes = max_bytes
+        self.frames: deque[Payload] = deque()
+        self.bytes = 0
+        self.dropped = 0
+        self.sent = 0
+        self.in_ring = False  # in its client's round-robin of topics with something to send
+
+    def put(self, frame: Payload) -> int:
+        """Queue ``frame``; returns how many older frames were dropped to make room."""
+        self.frames.append(frame)
+        self.bytes += len(frame)
+        dropped = 0
+        while len(self.frames) > self.limit or (self.bytes > self.max_bytes and len(self.frames) > 1):
+            self.bytes -= len(self.frames.popleft())
+            dropped += 1
+        self.dropped += dropped
+        return dropped
+
+    def take(self) -> Payload:
+        frame = self.frames.popleft()
+        self.bytes -= len(frame)
+        self.sent += 1
+        return frame
+
+    def clear(self) -> None:
+        self.frames.clear()
+        self.bytes = 0
+
 
 class Client:
     _ids = itertools.count(1)
 
-    def __init__(self, ws: web.WebSocketResponse, queue_size: int) -> None:
+    def __init__(self, ws: web.WebSocketResponse, queue_size: int, remote: str | None = None) -> None:
         self.id = next(self._ids)
         self.ws = ws
-        self.out: deque[str] = deque(maxlen=queue_size)
+        self.remote = remote
+        self.out: deque[Payload] = deque(maxlen=queue_size)  # replies: sent before any topic's frames
+        self.boxes: dict[str, Outbox] = {}
+        self.ring: deque[Outbox] = deque()  # the outboxes with something to send, in turn
         self.wakeup = asyncio.Event()
-        self.dropped = 0
+        self.replies_dropped = 0
+        self.dropped_by_topic: dict[str, int] = {}  # kept after an unsubscribe, for the final log line
         self.advertised: dict[str, str] = {}
         self.subs: dict[str, _Sub] = {}
         self.level = "error"
@@ -100,13 +157,90 @@ class Client:
         self.authenticated = True
         self.kick: tuple[int, str] | None = None  # close with (code, reason) once the queue is sent
 
-    def send(self, frame: str) -> None:
+    @property
+    def dropped(self) -> int:
+        return self.replies_dropped + sum(self.dropped_by_topic.values())
+
+    def send(self, frame: Payload) -> None:
+        """A reply (status, service_response): ahead of every topic's frames."""
         if self.closed:
             return
         if len(self.out) == self.out.maxlen:
-            self.dropped += 1
+            self.replies_dropped += 1
         self.out.append(frame)
         self.wakeup.set()
+
+    def outbox(self, topic: str, limit: int = TOPIC_QUEUE) -> Outbox:
+        box = self.boxes.get(topic)
+        if box is None:
+            box = self.boxes[topic] = Outbox(topic, limit)
+        else:
+            box.limit = limit
+        return box
+
+    def drop_outbox(self, topic: str) -> None:
+        box = self.boxes.pop(topic, None)
+        if box is not None:
+            box.clear()
+            if box.in_ring:
+                self.ring.remove(box)
+                box.in_ring = False
+
+    def enqueue(self, topic: str, frame: Payload) -> None:
+        """A message of ``topic``: into that topic's outbox, its oldest frame dropped when full."""
+        if self.closed:
+            return
+        box = self.boxes.get(topic) or self.outbox(topic)
+        dropped = box.put(frame)
+        if dropped:
+            before = self.dropped_by_topic.get(topic, 0)
+            self.dropped_by_topic[topic] = before + dropped
+            if before == 0:
+                log.info(
+                    "client %d reads %s slower than it comes: dropping its oldest frames (queue of %d)",
+                    self.id,
+                    topic,
+                    box.limit,
+                )
+        if not box.in_ring:
+            box.in_ring = True
+            self.ring.append(box)
+        self.wakeup.set()
+
+    def next_turn(self) -> list[Payload]:
+        """What to write next: the oldest reply, or the next topic's turn (up to ``TURN_BYTES``)."""
+        if self.out:
+            return [self.out.popleft()]
+        if not self.ring:
+            return []
+        box = self.ring.popleft()
+        frames: list[Payload] = []
+        size = 0
+        while box.frames and (not frames or size + len(box.frames[0]) <= TURN_BYTES):
+            frame = box.take()
+            frames.append(frame)
+            size += len(frame)
+        if box.frames:
+            self.ring.append(box)
+        else:
+            box.in_ring = False
+        return frames
+
+    def stats(self) -> dict[str, Any]:
+        return {
+            "id": self.id,
+            "remote": self.remote,
+            "replies_dropped": self.replies_dropped,
+            "topics": {
+                topic: {
+                    "queued": box.frames.__len__(),
+                    "queue_length": box.limit,
+                    "sent": box.sent,
+                    "dropped": self.dropped_by_topic.get(topic, 0),
+                }
+                for topic, box in self.boxes.items()
+            },
+        }
 
     def status(self, level: str, msg: str, req_id: Any = None) -> None:
         if self.level == "none" or LEVELS.index(level) < LEVELS.index(self.level):
@@ -135,6 +269,7 @@ class RosbridgeEndpoint:
         self.client_queue = client_queue
         self.clients: set[Client] = set()
         self.errors = 0
+        self._encoded: dict[str, tuple[Any, Payload]] = {}  # topic -> (the last message, its frame)
         self.services: dict[str, Callable[[Any], dict[str, Any]]] = {
             "/rosapi/topics": self._svc_topics,
             "/rosapi/topic_type": self._svc_topic_type,
@@ -167,7 +302,7 @@ class RosbridgeEndpoint:
                 authenticated = True
         ws = web.WebSocketResponse(max_msg_size=TRANSPORT_MAX_FRAME, heartbeat=self.heartbeat)
         await ws.prepare(request)
-        client = Client(ws, self.client_queue)
+        client = Client(ws, self.client_queue, request.remote)
         client.authenticated = authenticated
         self.clients.add(client)
         loop = asyncio.get_running_loop()
@@ -203,7 +338,12 @@ class RosbridgeEndpoint:
             writer.cancel()
             with contextlib.suppress(asyncio.CancelledError):
                 await writer
-            log.info("client %d disconnected (dropped %d outgoing frames)", client.id, client.dropped)
+            log.info(
+                "client %d disconnected (dropped %d outgoing frames%s)",
+                client.id,
+                client.dropped,
+                "".join(f", {n} of {t}" for t, n in sorted(client.dropped_by_topic.items())),
+            )
         return ws
 
     async def _writer(self, client: Client) -> None:
@@ -212,9 +352,14 @@ class RosbridgeEndpoint:
             while True:
                 await client.wakeup.wait()
                 client.wakeup.clear()
-                while client.out:
-                    frame = client.out.popleft()
-                    await ws.send_str(frame)
+                while frames := client.next_turn():
+                    for frame in frames:
+                        # each awaits the socket's drain past aiohttp's writer limit: a client gets
+                        # frames as fast as it reads them, and the other clients never wait for it
+                        if isinstance(frame, str):
+                            await ws.send_str(frame)
+                        else:
+                            await ws.send_bytes(frame)
                 if client.kick is not None:
                     code, reason = client.kick
                     await ws.close(code=code, message=reason.encode("utf-8")[:120])
@@ -259,10 +404,25 @@ class RosbridgeEndpoint:
             if sub.timer:
                 sub.timer.cancel()
         client.subs.clear()
+        for topic in list(client.boxes):
+            client.drop_outbox(topic)
         for topic in client.advertised:
             self.bus.unadvertise(topic)
         client.advertised.clear()
         self.clients.discard(client)
+
+    def stats(self) -> dict[str, Any]:
+        """The endpoint's clients and their outgoing queues (``/api/health``'s ``bridge``)."""
+        dropped: dict[str, int] = {}
+        for client in self.clients:
+            for topic, n in client.dropped_by_topic.items():
+                dropped[topic] = dropped.get(topic, 0) + n
+        return {
+            "clients": len(self.clients),
+            "errors": self.errors,
+            "dropped": dropped,  # frames dropped for slow clients, by topic (the clients connected now)
+            "per_client": [c.stats() for c in sorted(self.clients, key=lambda c: c.id)],
+        }
 
     async def close_all(self) -> None:
         for client in list(self.clients):
@@ -380,6 +540,7 @@ class RosbridgeEndpoint:
             client.subs[topic] = sub
             sub.unsubscribe = self.bus.subscribe(topic, lambda m, c=client, s=sub: self._deliver(c, s, m))
         sub.requests[frame.get("id", f"_anon{len(sub.requests)}")] = (throttle, queue_length)
+        client.outbox(topic, sub.outbox_limit)
 
     def _unsubscribe(self, client: Client, frame: dict[str, Any]) -> None:
         topic = self._topic(frame)
@@ -397,17 +558,29 @@ class RosbridgeEndpoint:
             if sub.timer:
                 sub.timer.cancel()
             del client.subs[topic]
+            client.drop_outbox(topic)
+        else:
+            client.outbox(topic, sub.outbox_limit)
+
+    def _encode(self, topic: str, msg: dict[str, Any]) -> Payload:
+        """The ``publish`` frame of ``msg``, made once per message for all the clients that get it."""
+        cached = self._encoded.get(topic)
+        if cached is not None and cached[0] is msg:
+            return cached[1]
+        frame = _dumps({"op": "publish", "topic": topic, "msg": msg})
+        self._encoded[topic] = (msg, frame)
+        return frame
 
     def _deliver(self, client: Client, sub: _Sub, msg: dict[str, Any]) -> None:
-        frame = _dumps({"op": "publish", "topic": sub.topic, "msg": msg})
+        frame = self._encode(sub.topic, msg)
         throttle = sub.throttle_s
         if throttle <= 0:
-            client.send(frame)
+            client.enqueue(sub.topic, frame)
             return
         now = time.monotonic()
         if now - sub.last_sent >= throttle and not sub.pending:
             sub.last_sent = now
-            client.send(frame)
+            client.enqueue(sub.topic, frame)
             return
         qlen = sub.queue_length
         if qlen <= 0:
@@ -424,7 +597,7 @@ class RosbridgeEndpoint:
         if client.closed or not sub.pending:
             return
         sub.last_sent = time.monotonic()
-        client.send(sub.pending.popleft())
+        client.enqueue(sub.topic, sub.pending.popleft())
         if sub.pending:
             sub.timer = asyncio.get_running_loop().call_later(sub.throttle_s, self._flush, client, sub)
 

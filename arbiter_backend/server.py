@@ -112,7 +112,9 @@ class Servers:
         try:
             if endpoint is not None:
                 self.bridge_port = await self._serve(bridge.make_app(endpoint), self.config.bridge_port)
-            api_app = api.make_app(tracker, self.config.token, topics)
+            api_app = api.make_app(
+                tracker, self.config.token, topics, endpoint.stats if endpoint is not None else None
+            )
             self.api_port = await self._serve(api_app, self.config.api_port)
         except BaseException:
             await self.stop_servers(endpoint)
