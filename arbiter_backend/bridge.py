@@ -6,9 +6,12 @@ unsubscribe, call_service for the rosapi basics (/rosapi/topics,
 server, every bad frame is answered with a ``status`` frame naming the problem
 (and the request's ``id``), and the connection stays open.
 
-A client that goes silent is pinged after ``HEARTBEAT_S`` and dropped when no
-pong comes back within half that, so a dead link frees its subscriptions and
-advertisements within about three seconds.
+Liveness (``--ws-ping``): a client that has sent nothing for ``WS_PING_S`` is pinged (again
+every ``WS_PING_S`` while it stays silent), and dropped when nothing at all, pong or frame, has
+come from it for ``DEAD_AFTER`` pings' time (20 s by default), which frees its subscriptions and
+advertisements. A client busy elsewhere that does not read its socket for 10 s is kept: its pong
+waits behind the frames queued for it, and it answers once it reads again (the stock server does
+not ping at all). The console finds a dead link on its side with its own pings (1 s, 2 s timeout).
 
 Outgoing frames wait in one bounded queue per (client, topic) (``Outbox``), plus one for the
 client's replies (status, service_response), which go first. Each client's writer task takes
@@ -51,7 +54,8 @@ CLIENT_QUEUE = 1000  # a client's replies (status, service_response) waiting to 
 TOPIC_QUEUE = 1000  # frames of one topic waiting for one client, when the subscription gives no queue_length
 TOPIC_QUEUE_BYTES = 8 * 1024 * 1024  # ...and at most this many bytes of them (at least the newest frame)
 TURN_BYTES = 64 * 1024  # what one topic may send in its turn before the next topic's turn
-HEARTBEAT_S = 2.0  # ping a silent client after this long; no pong within half of it drops the client
+WS_PING_S = 5.0  # ping a client silent this long (0/None: never), and again as often while it stays silent
+DEAD_AFTER = 4  # ...and drop it once nothing has come from it for this many ping intervals
 LEVELS = ("info", "warning", "error", "none")
 TOPIC_NAME = re.compile(r"(?:/[A-Za-z_][A-Za-z0-9_]*)+", re.ASCII)  # a fully qualified ROS 2 name
 MAX_THROTTLE_MS = 3_600_000
@@ -156,6 +160,7 @@ class Client:
         self.closed = False
         self.authenticated = True
         self.kick: tuple[int, str] | None = None  # close with (code, reason) once the queue is sent
+        self.last_rx = 0.0  # loop time of the last frame (pong included) received from the client
 
     @property
     def dropped(self) -> int:
@@ -258,11 +263,11 @@ class RosbridgeEndpoint:
         max_frame: int = MAX_FRAME_BYTES,
         client_queue: int = CLIENT_QUEUE,
         services: dict[str, Callable[[Any], dict[str, Any]]] | None = None,
-        heartbeat: float | None = HEARTBEAT_S,
+        heartbeat: float | None = WS_PING_S,
         token: str | None = None,
     ) -> None:
         self.bus = bus
-        self.heartbeat = heartbeat
+        self.heartbeat = heartbeat or None  # seconds between pings to a silent client; None: no pings
         self.token = token
         self.refused = 0  # connections refused for a missing or wrong token
         self.max_frame = max_frame
@@ -300,13 +305,19 @@ class RosbridgeEndpoint:
                     log.warning("refused a WebSocket client from %s: wrong token", request.remote)
                     return web.json_response({"error": "wrong token", "status": 401}, status=401)
                 authenticated = True
-        ws = web.WebSocketResponse(max_msg_size=TRANSPORT_MAX_FRAME, heartbeat=self.heartbeat)
+        # pings are answered and sent here (_liveness), not by aiohttp: its heartbeat allows a pong half
+        # the interval, which drops a client that stops reading for a second behind a camera stream
+        ws = web.WebSocketResponse(max_msg_size=TRANSPORT_MAX_FRAME, autoping=False)
         await ws.prepare(request)
         client = Client(ws, self.client_queue, request.remote)
         client.authenticated = authenticated
         self.clients.add(client)
         loop = asyncio.get_running_loop()
         writer = loop.create_task(self._writer(client))
+        client.last_rx = loop.time()
+        liveness = None
+        if self.heartbeat is not None and request.transport is not None:
+            liveness = loop.create_task(self._liveness(client, request.transport, self.heartbeat))
         deadline = None
         if not authenticated:
             deadline = loop.call_later(auth.AUTH_DEADLINE_S, self._auth_timeout, client)
@@ -314,6 +325,12 @@ class RosbridgeEndpoint:
         sock = request.transport.get_extra_info("socket") if request.transport is not None else None
         try:
             async for msg in ws:
+                client.last_rx = loop.time()
+                if msg.type == WSMsgType.PING:
+                    await ws.pong(msg.data)
+                    continue
+                if msg.type == WSMsgType.PONG:
+                    continue
                 if client.kick is not None:
                     pass  # being closed: nothing more is read into the robot
                 elif msg.type == WSMsgType.TEXT:
@@ -335,6 +352,8 @@ class RosbridgeEndpoint:
             if deadline is not None:
                 deadline.cancel()
             self._drop_client(client)
+            if liveness is not None:
+                liveness.cancel()
             writer.cancel()
             with contextlib.suppress(asyncio.CancelledError):
                 await writer
@@ -368,6 +387,34 @@ class RosbridgeEndpoint:
             pass
         except Exception:
             log.exception("writer for client %d failed", client.id)
+
+    async def _liveness(self, client: Client, transport: asyncio.BaseTransport, interval: float) -> None:
+        """Ping ``client`` while it is silent; cut the connection once it has been silent too long."""
+        loop = asyncio.get_running_loop()
+        pings: set[asyncio.Task[None]] = set()
+        try:
+            while not client.closed:
+                idle = loop.time() - client.last_rx
+                if idle >= interval * DEAD_AFTER:
+                    log.info("client %d: nothing received for %.1f s; dropping it", client.id, idle)
+                    transport.abort()  # no close handshake: the link is presumed dead
+                    return
+                if idle >= interval:
+                    # a task: the ping may wait for the socket to drain; this loop must not
+                    ping = loop.create_task(self._ping(client.ws))
+                    pings.add(ping)
+                    ping.add_done_callback(pings.discard)
+                await asyncio.sleep(
+                    min(interval, interval * DEAD_AFTER - idle) if idle >= interval else interval - idle
+                )
+        finally:
+            for ping in pings:
+                ping.cancel()
+
+    @staticmethod
+    async def _ping(ws: web.WebSocketResponse) -> None:
+        with contextlib.suppress(ConnectionResetError, RuntimeError):
+            await ws.ping()
 
     def _refuse(self, client: Client, reason: str) -> None:
         """Answer with an error, then close (1008, policy violation) once the answer is sent."""
