@@ -44,6 +44,7 @@ from aiohttp import WSMsgType, web
 from arbiter_core import auth
 from arbiter_core.msgtypes import MessageError, normalize_type
 
+from . import cborenc
 from .bus import Bus
 
 log = logging.getLogger(__name__)
@@ -60,6 +61,11 @@ LEVELS = ("info", "warning", "error", "none")
 TOPIC_NAME = re.compile(r"(?:/[A-Za-z_][A-Za-z0-9_]*)+", re.ASCII)  # a fully qualified ROS 2 name
 MAX_THROTTLE_MS = 3_600_000
 MAX_QUEUE_LENGTH = 1_000_000
+COMPRESSIONS = (
+    "none",
+    "cbor",
+    "cbor-raw",
+)  # weakest first; png is not offered (the stock ROS 2 server's fails)
 
 
 class BadFrame(ValueError):
@@ -82,7 +88,9 @@ class _Sub:
     """One client's subscription to one topic (requests with several ids are merged, as rosbridge does)."""
 
     topic: str
-    requests: dict[Any, tuple[int, int]] = field(default_factory=dict)  # id -> (throttle_ms, queue_length)
+    # id -> (throttle_ms, queue_length, compression)
+    requests: dict[Any, tuple[int, int, str]] = field(default_factory=dict)
+    type_name: str | None = None
     unsubscribe: Callable[[], None] | None = None
     last_sent: float = -1e18
     pending: deque[Payload] = field(default_factory=deque)
@@ -90,11 +98,16 @@ class _Sub:
 
     @property
     def throttle_s(self) -> float:
-        return min(t for t, _ in self.requests.values()) / 1000.0
+        return min(t for t, _, _ in self.requests.values()) / 1000.0
 
     @property
     def queue_length(self) -> int:
-        return min(q for _, q in self.requests.values())
+        return min(q for _, q, _ in self.requests.values())
+
+    @property
+    def compression(self) -> str:
+        """The strongest of the requests' (cbor-raw over cbor over none), for all of them, as rosbridge."""
+        return max((c for _, _, c in self.requests.values()), key=COMPRESSIONS.index)
 
     @property
     def outbox_limit(self) -> int:
@@ -274,7 +287,8 @@ class RosbridgeEndpoint:
         self.client_queue = client_queue
         self.clients: set[Client] = set()
         self.errors = 0
-        self._encoded: dict[str, tuple[Any, Payload]] = {}  # topic -> (the last message, its frame)
+        # (topic, encoding) -> (the last message, its frame)
+        self._encoded: dict[tuple[str, str], tuple[Any, Payload]] = {}
         self.services: dict[str, Callable[[Any], dict[str, Any]]] = {
             "/rosapi/topics": self._svc_topics,
             "/rosapi/topic_type": self._svc_topic_type,
@@ -336,10 +350,13 @@ class RosbridgeEndpoint:
                 elif msg.type == WSMsgType.TEXT:
                     self.handle_frame(client, msg.data)
                 elif msg.type == WSMsgType.BINARY:
+                    if cborenc.is_cbor(msg.data):
+                        self.handle_cbor(client, msg.data)
+                        continue
                     try:
                         text = msg.data.decode("utf-8")
                     except UnicodeDecodeError:
-                        self._error(client, "binary frame is not UTF-8 JSON text")
+                        self._error(client, "binary frame is neither UTF-8 JSON text nor a CBOR map")
                     else:
                         self.handle_frame(client, text)
                 elif msg.type == WSMsgType.ERROR:
@@ -433,6 +450,9 @@ class RosbridgeEndpoint:
             frame = _DECODER.decode(text) if len(text) <= 4096 else None
         except (ValueError, RecursionError):
             frame = None
+        self._authenticate_frame(client, frame)
+
+    def _authenticate_frame(self, client: Client, frame: Any) -> None:
         if not isinstance(frame, dict) or frame.get("op") != "auth":
             self._refuse(client, 'authentication required: send {"op": "auth", "mac": TOKEN} first')
             return
@@ -450,9 +470,12 @@ class RosbridgeEndpoint:
                 sub.unsubscribe()
             if sub.timer:
                 sub.timer.cancel()
+        topics = list(client.subs)
         client.subs.clear()
         for topic in list(client.boxes):
             client.drop_outbox(topic)
+        for topic in topics:
+            self._forget_frames(topic)
         for topic in client.advertised:
             self.bus.unadvertise(topic)
         client.advertised.clear()
@@ -499,6 +522,24 @@ class RosbridgeEndpoint:
         if not isinstance(frame, dict):
             self._error(client, f"a frame must be a JSON object, got {type(frame).__name__}")
             return
+        self._dispatch(client, frame)
+
+    def handle_cbor(self, client: Client, data: bytes) -> None:
+        """A binary frame holding a CBOR map: the same request as its JSON form (``cborenc.decode``)."""
+        if len(data) > self.max_frame:
+            self._error(client, f"frame of {len(data)} bytes exceeds the {self.max_frame}-byte limit")
+            return
+        try:
+            frame = cborenc.decode(data)
+        except cborenc.CborError as exc:
+            self._error(client, str(exc), exc.req_id)
+            return
+        if not client.authenticated:
+            self._authenticate_frame(client, frame)
+            return
+        self._dispatch(client, frame)
+
+    def _dispatch(self, client: Client, frame: dict[str, Any]) -> None:
         req_id = frame.get("id")
         if isinstance(req_id, (dict, list)):
             req_id = None
@@ -577,6 +618,13 @@ class RosbridgeEndpoint:
         if not 0 <= queue_length <= MAX_QUEUE_LENGTH:
             raise BadFrame(f"queue_length must be 0..{MAX_QUEUE_LENGTH}")
         queue_length = min(queue_length, self.client_queue)
+        compression = self._field(frame, "compression", str, required=False) or "none"
+        if compression not in COMPRESSIONS:
+            raise BadFrame(f"compression must be one of {', '.join(COMPRESSIONS)}, got {compression[:20]!r}")
+        if compression == "cbor-raw" and not hasattr(self.bus, "cdr"):
+            raise BadFrame(
+                "compression cbor-raw needs a transport that serialises messages (--transport ros)"
+            )
         if type_name is not None:
             self.bus.declare(topic, type_name)
         elif self.bus.type_of(topic) is None:
@@ -586,7 +634,8 @@ class RosbridgeEndpoint:
             sub = _Sub(topic)
             client.subs[topic] = sub
             sub.unsubscribe = self.bus.subscribe(topic, lambda m, c=client, s=sub: self._deliver(c, s, m))
-        sub.requests[frame.get("id", f"_anon{len(sub.requests)}")] = (throttle, queue_length)
+        sub.requests[frame.get("id", f"_anon{len(sub.requests)}")] = (throttle, queue_length, compression)
+        sub.type_name = self.bus.type_of(topic)
         client.outbox(topic, sub.outbox_limit)
 
     def _unsubscribe(self, client: Client, frame: dict[str, Any]) -> None:
@@ -606,20 +655,40 @@ class RosbridgeEndpoint:
                 sub.timer.cancel()
             del client.subs[topic]
             client.drop_outbox(topic)
+            self._forget_frames(topic)
         else:
             client.outbox(topic, sub.outbox_limit)
 
-    def _encode(self, topic: str, msg: dict[str, Any]) -> Payload:
-        """The ``publish`` frame of ``msg``, made once per message for all the clients that get it."""
-        cached = self._encoded.get(topic)
+    def _encode(self, sub: _Sub, msg: dict[str, Any]) -> Payload:
+        """The ``publish`` frame of ``msg`` in the subscription's encoding, made once per message and
+        encoding for all the clients that get it: JSON text, or a binary CBOR frame (``cborenc``)."""
+        key = (sub.topic, sub.compression)
+        cached = self._encoded.get(key)
         if cached is not None and cached[0] is msg:
             return cached[1]
-        frame = _dumps({"op": "publish", "topic": topic, "msg": msg})
-        self._encoded[topic] = (msg, frame)
+        frame: Payload
+        if key[1] == "none":
+            frame = _dumps({"op": "publish", "topic": sub.topic, "msg": msg})
+        elif key[1] == "cbor":
+            convert = getattr(self.bus, "cbor_values", None) or cborenc.values_of
+            frame = cborenc.encode({"op": "publish", "topic": sub.topic, "msg": convert(sub.type_name, msg)})
+        else:  # cbor-raw: the CDR bytes and the time received (subscribe checked the bus has ``cdr``)
+            raw, received_ns = self.bus.cdr(sub.type_name, msg)  # type: ignore[attr-defined]
+            secs, nsecs = divmod(received_ns, 1_000_000_000)
+            frame = cborenc.encode(
+                {"op": "publish", "topic": sub.topic, "msg": {"secs": secs, "nsecs": nsecs, "bytes": raw}}
+            )
+        self._encoded[key] = (msg, frame)
         return frame
 
+    def _forget_frames(self, topic: str) -> None:
+        """No client subscribes to ``topic`` any more: its last frames (a camera's: megabytes) go."""
+        if not any(topic in c.subs for c in self.clients if not c.closed):
+            for key in [k for k in self._encoded if k[0] == topic]:
+                del self._encoded[key]
+
     def _deliver(self, client: Client, sub: _Sub, msg: dict[str, Any]) -> None:
-        frame = self._encode(sub.topic, msg)
+        frame = self._encode(sub, msg)
         throttle = sub.throttle_s
         if throttle <= 0:
             client.enqueue(sub.topic, frame)

@@ -26,13 +26,14 @@ from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.node import Node
 from rclpy.publisher import Publisher
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.serialization import serialize_message
 from rclpy.subscription import Subscription
 
 from arbiter_core.msgtypes import MessageError, normalize_type
 from arbiter_core.topics import QOS_DEPTH, is_command
 
 from ..bus import Callback, TypeClash
-from .convert import message_class, to_json, to_ros
+from .convert import message_class, to_cbor, to_json, to_ros
 from .local import HandledLocally
 
 log = logging.getLogger(__name__)
@@ -131,6 +132,18 @@ def lifespan_s(profile: QoSProfile) -> float | None:
     largest duration)."""
     ns = profile.lifespan.nanoseconds
     return ns / 1e9 if 0 < ns < 2**63 - 1 else None
+
+
+class RosMessage(dict):  # type: ignore[type-arg]
+    """A message as the endpoint gets it: rosbridge's JSON form, with the ROS message it came from
+    and when it was received (wall clock, ns), for the CBOR encodings."""
+
+    __slots__ = ("received_ns", "ros")
+
+    def __init__(self, data: dict[str, Any], ros: Any, received_ns: int) -> None:
+        super().__init__(data)
+        self.ros = ros
+        self.received_ns = received_ns
 
 
 class RosBus:
@@ -324,6 +337,22 @@ class RosBus:
 
         return unsubscribe
 
+    def _ros_of(self, type_name: str | None, msg: dict[str, Any]) -> Any:
+        ros = getattr(msg, "ros", None)
+        if ros is not None:
+            return ros
+        if type_name is None:
+            raise MessageError("message type unknown")
+        return to_ros(message_class(type_name), msg)  # one handed over in-process (deliver_local)
+
+    def cbor_values(self, type_name: str | None, msg: dict[str, Any]) -> dict[str, Any]:
+        """rosbridge's CBOR form of a message this bus delivered (typed arrays, byte strings)."""
+        return to_cbor(self._ros_of(type_name, msg))
+
+    def cdr(self, type_name: str | None, msg: dict[str, Any]) -> tuple[bytes, int]:
+        """The CDR serialisation of a message this bus delivered (``cbor-raw``) and when it came (ns)."""
+        return serialize_message(self._ros_of(type_name, msg)), getattr(msg, "received_ns", time.time_ns())
+
     def subscriber_count(self, topic: str) -> int:
         sub = self._subs.get(topic)
         return len(sub.callbacks) if sub else 0
@@ -345,7 +374,7 @@ class RosBus:
         if sub is None:
             return
         try:
-            data = to_json(msg)
+            data = RosMessage(to_json(msg), msg, time.time_ns())
         except Exception:
             log.exception("cannot convert a message on %s", topic)
             return
