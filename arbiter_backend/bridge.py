@@ -337,6 +337,7 @@ class RosbridgeEndpoint:
             deadline = loop.call_later(auth.AUTH_DEADLINE_S, self._auth_timeout, client)
         log.info("client %d connected from %s", client.id, request.remote)
         sock = request.transport.get_extra_info("socket") if request.transport is not None else None
+        limit_unsent(sock)
         try:
             async for msg in ws:
                 client.last_rx = loop.time()
@@ -773,6 +774,19 @@ def quick_ack(sock: socket.socket | None) -> None:
 
 
 QUICKACK = getattr(socket, "TCP_QUICKACK", None)
+NOTSENT_LOWAT = getattr(socket, "TCP_NOTSENT_LOWAT", None)
+UNSENT_BYTES = 128 * 1024
+
+
+def limit_unsent(sock: socket.socket | None) -> None:
+    """Keep at most ``UNSENT_BYTES`` not yet sent in the kernel's send buffer (TCP_NOTSENT_LOWAT, Linux
+    and macOS): the rest of a big frame waits in the transport, where aiohttp's drain sees it, so what a
+    slow client has not read is in its per-topic queues (dropped oldest first), not megabytes of socket
+    buffer that a small message would wait behind."""
+    if sock is None or NOTSENT_LOWAT is None:
+        return
+    with contextlib.suppress(OSError):
+        sock.setsockopt(socket.IPPROTO_TCP, NOTSENT_LOWAT, UNSENT_BYTES)
 
 
 def make_app(endpoint: RosbridgeEndpoint) -> web.Application:

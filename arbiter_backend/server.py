@@ -26,7 +26,7 @@ from arbiter_core.simulator import RATE_HZ, DiffDriveSimulator
 from arbiter_core.topicstats import WINDOW_S
 
 from . import api, bridge
-from .bridge import WS_PING_S
+from .bridge import MAX_FRAME_BYTES, WS_PING_S
 from .bus import Bus, TopicBus
 from .topicwatch import EmbeddedTopics, TopicFilter, TopicWatch
 from .tracker import DEFAULT_MAX_COMMAND_AGE_MS, LatencyTracker
@@ -58,10 +58,13 @@ class BackendConfig:
     topics_exclude: str | None = None
     topics_window: float = WINDOW_S
     ws_ping: float = WS_PING_S  # the endpoint's liveness pings (seconds; 0: none)
+    max_frame: int = MAX_FRAME_BYTES  # a client's frames above this are answered with a status error
 
     def make_endpoint(self, bus: Bus) -> bridge.RosbridgeEndpoint:
         """The rosbridge endpoint of either transport (the embedded bus or the DDS relay)."""
-        return bridge.RosbridgeEndpoint(bus, token=self.token, heartbeat=self.ws_ping or None)
+        return bridge.RosbridgeEndpoint(
+            bus, token=self.token, heartbeat=self.ws_ping or None, max_frame=self.max_frame
+        )
 
     def make_topic_watch(self) -> TopicWatch:
         return TopicWatch(TopicFilter.parse(self.topics_include, self.topics_exclude), self.topics_window)
