@@ -61,6 +61,7 @@ LEVELS = ("info", "warning", "error", "none")
 TOPIC_NAME = re.compile(r"(?:/[A-Za-z_][A-Za-z0-9_]*)+", re.ASCII)  # a fully qualified ROS 2 name
 MAX_THROTTLE_MS = 3_600_000
 MAX_QUEUE_LENGTH = 1_000_000
+MIN_FRAGMENT = 64  # the smallest fragment_size taken (smaller would be a frame per few characters)
 COMPRESSIONS = (
     "none",
     "cbor",
@@ -88,26 +89,32 @@ class _Sub:
     """One client's subscription to one topic (requests with several ids are merged, as rosbridge does)."""
 
     topic: str
-    # id -> (throttle_ms, queue_length, compression)
-    requests: dict[Any, tuple[int, int, str]] = field(default_factory=dict)
+    # id -> (throttle_ms, queue_length, compression, fragment_size or 0)
+    requests: dict[Any, tuple[int, int, str, int]] = field(default_factory=dict)
     type_name: str | None = None
     unsubscribe: Callable[[], None] | None = None
     last_sent: float = -1e18
-    pending: deque[Payload] = field(default_factory=deque)
+    pending: deque[Payload | Fragments] = field(default_factory=deque)
     timer: asyncio.TimerHandle | None = None
 
     @property
     def throttle_s(self) -> float:
-        return min(t for t, _, _ in self.requests.values()) / 1000.0
+        return min(r[0] for r in self.requests.values()) / 1000.0
 
     @property
     def queue_length(self) -> int:
-        return min(q for _, q, _ in self.requests.values())
+        return min(r[1] for r in self.requests.values())
 
     @property
     def compression(self) -> str:
         """The strongest of the requests' (cbor-raw over cbor over none), for all of them, as rosbridge."""
-        return max((c for _, _, c in self.requests.values()), key=COMPRESSIONS.index)
+        return max((r[2] for r in self.requests.values()), key=COMPRESSIONS.index)
+
+    @property
+    def fragment_size(self) -> int:
+        """The smallest of the requests' (0: none); JSON frames longer than it go out in fragments."""
+        sizes = [r[3] for r in self.requests.values() if r[3]]
+        return min(sizes) if sizes else 0
 
     @property
     def outbox_limit(self) -> int:
@@ -119,39 +126,77 @@ class _Sub:
 Payload = str | bytes  # a text (JSON) or binary (CBOR) WebSocket frame
 
 
+class Fragments:
+    """One message going out as rosbridge ``fragment`` frames (``fragment_size``), one frame at a time,
+    so other topics' frames go between them. The parts are shared by every client that gets them."""
+
+    __slots__ = ("next", "parts", "remaining")
+
+    def __init__(self, parts: list[str]) -> None:
+        self.parts = parts
+        self.next = 0
+        self.remaining = sum(len(p) for p in parts)
+
+    def __len__(self) -> int:
+        return self.remaining
+
+
 class Outbox:
-    """The frames of one topic waiting for one client: bounded by count and bytes, oldest dropped."""
+    """The messages of one topic waiting for one client: bounded by count and bytes, oldest dropped
+    (never the newest, nor a message whose first fragments are out already)."""
 
     def __init__(self, topic: str, limit: int = TOPIC_QUEUE, max_bytes: int = TOPIC_QUEUE_BYTES) -> None:
         self.topic = topic
         self.limit = limit
         self.max_bytes = max_bytes
-        self.frames: deque[Payload] = deque()
+        self.frames: deque[Payload | Fragments] = deque()
         self.bytes = 0
         self.dropped = 0
         self.sent = 0
         self.in_ring = False  # in its client's round-robin of topics with something to send
 
-    def put(self, frame: Payload) -> int:
-        """Queue ``frame``; returns how many older frames were dropped to make room."""
+    def put(self, frame: Payload | Fragments) -> int:
+        """Queue ``frame``; returns how many older messages were dropped to make room."""
         self.frames.append(frame)
         self.bytes += len(frame)
         dropped = 0
-        while len(self.frames) > self.limit or (self.bytes > self.max_bytes and len(self.frames) > 1):
-            self.bytes -= len(self.frames.popleft())
+        while True:
+            head = self.frames[0]
+            start = 1 if isinstance(head, Fragments) and head.next > 0 else 0  # under way: it stays
+            waiting = len(self.frames) - start
+            if waiting <= 1 or (waiting <= self.limit and self.bytes <= self.max_bytes):
+                break
+            victim = self.frames[start]
+            del self.frames[start]
+            self.bytes -= len(victim)
             dropped += 1
         self.dropped += dropped
         return dropped
 
     def take(self) -> Payload:
-        frame = self.frames.popleft()
-        self.bytes -= len(frame)
+        """The next frame to write: a whole message, or the next fragment of one."""
+        head = self.frames[0]
+        if isinstance(head, Fragments):
+            part = head.parts[head.next]
+            head.next += 1
+            head.remaining -= len(part)
+            self.bytes -= len(part)
+            if head.next == len(head.parts):
+                self.frames.popleft()
+                self.sent += 1
+            return part
+        self.frames.popleft()
+        self.bytes -= len(head)
         self.sent += 1
-        return frame
+        return head
 
     def clear(self) -> None:
         self.frames.clear()
         self.bytes = 0
+
+
+def _next_size(item: Payload | Fragments) -> int:
+    return len(item.parts[item.next]) if isinstance(item, Fragments) else len(item)
 
 
 class Client:
@@ -204,7 +249,7 @@ class Client:
                 self.ring.remove(box)
                 box.in_ring = False
 
-    def enqueue(self, topic: str, frame: Payload) -> None:
+    def enqueue(self, topic: str, frame: Payload | Fragments) -> None:
         """A message of ``topic``: into that topic's outbox, its oldest frame dropped when full."""
         if self.closed:
             return
@@ -234,7 +279,7 @@ class Client:
         box = self.ring.popleft()
         frames: list[Payload] = []
         size = 0
-        while box.frames and (not frames or size + len(box.frames[0]) <= TURN_BYTES):
+        while box.frames and (not frames or size + _next_size(box.frames[0]) <= TURN_BYTES):
             frame = box.take()
             frames.append(frame)
             size += len(frame)
@@ -289,6 +334,7 @@ class RosbridgeEndpoint:
         self.errors = 0
         # (topic, encoding) -> (the last message, its frame)
         self._encoded: dict[tuple[str, str], tuple[Any, Payload]] = {}
+        self._fragment_ids = itertools.count(1)
         self.services: dict[str, Callable[[Any], dict[str, Any]]] = {
             "/rosapi/topics": self._svc_topics,
             "/rosapi/topic_type": self._svc_topic_type,
@@ -622,6 +668,9 @@ class RosbridgeEndpoint:
         compression = self._field(frame, "compression", str, required=False) or "none"
         if compression not in COMPRESSIONS:
             raise BadFrame(f"compression must be one of {', '.join(COMPRESSIONS)}, got {compression[:20]!r}")
+        fragment_size = self._field(frame, "fragment_size", int, required=False) or 0
+        if fragment_size and not MIN_FRAGMENT <= fragment_size <= TRANSPORT_MAX_FRAME:
+            raise BadFrame(f"fragment_size must be {MIN_FRAGMENT}..{TRANSPORT_MAX_FRAME} characters")
         if compression == "cbor-raw" and not hasattr(self.bus, "cdr"):
             raise BadFrame(
                 "compression cbor-raw needs a transport that serialises messages (--transport ros)"
@@ -635,7 +684,12 @@ class RosbridgeEndpoint:
             sub = _Sub(topic)
             client.subs[topic] = sub
             sub.unsubscribe = self.bus.subscribe(topic, lambda m, c=client, s=sub: self._deliver(c, s, m))
-        sub.requests[frame.get("id", f"_anon{len(sub.requests)}")] = (throttle, queue_length, compression)
+        sub.requests[frame.get("id", f"_anon{len(sub.requests)}")] = (
+            throttle,
+            queue_length,
+            compression,
+            fragment_size,
+        )
         sub.type_name = self.bus.type_of(topic)
         client.outbox(topic, sub.outbox_limit)
 
@@ -688,8 +742,35 @@ class RosbridgeEndpoint:
             for key in [k for k in self._encoded if k[0] == topic]:
                 del self._encoded[key]
 
+    def _fragments(self, sub: _Sub, msg: dict[str, Any], frame: str) -> Fragments:
+        """``frame`` as rosbridge ``fragment`` frames of ``fragment_size`` characters of its text, under
+        an id of its own (made once per message and size for all the clients that get it)."""
+        size = sub.fragment_size
+        key = (sub.topic, f"fragments:{size}")
+        cached = self._encoded.get(key)
+        if cached is not None and cached[0] is msg:
+            return Fragments(cached[1])  # type: ignore[arg-type]
+        frag_id = f"{sub.topic}#{next(self._fragment_ids)}"
+        total = -(-len(frame) // size)
+        parts = [
+            _dumps(
+                {
+                    "op": "fragment",
+                    "id": frag_id,
+                    "data": frame[i * size : (i + 1) * size],
+                    "num": i,
+                    "total": total,
+                }
+            )
+            for i in range(total)
+        ]
+        self._encoded[key] = (msg, parts)  # type: ignore[assignment]
+        return Fragments(parts)
+
     def _deliver(self, client: Client, sub: _Sub, msg: dict[str, Any]) -> None:
-        frame = self._encode(sub, msg)
+        frame: Payload | Fragments = self._encode(sub, msg)
+        if sub.fragment_size and isinstance(frame, str) and len(frame) > sub.fragment_size:
+            frame = self._fragments(sub, msg, frame)
         throttle = sub.throttle_s
         if throttle <= 0:
             client.enqueue(sub.topic, frame)
@@ -775,7 +856,7 @@ def quick_ack(sock: socket.socket | None) -> None:
 
 QUICKACK = getattr(socket, "TCP_QUICKACK", None)
 NOTSENT_LOWAT = getattr(socket, "TCP_NOTSENT_LOWAT", None)
-UNSENT_BYTES = 128 * 1024
+UNSENT_BYTES = 64 * 1024
 
 
 def limit_unsent(sock: socket.socket | None) -> None:

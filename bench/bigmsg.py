@@ -8,7 +8,9 @@ and reads continuously for ``--seconds`` (after a warm-up). Printed per row: ima
 the small topic's latency (receive minus publish time, same host clock) p50/p95/max, the server's CPU
 (user+system of the backend process over the window, % of one core), and what the server dropped.
 
-The slow client reads its socket at most ``--slow`` image frames' worth of bytes a second (a link or
+``json-frag`` rows ask for ``fragment_size`` 64 KiB on the camera (rosbridge ``fragment`` frames,
+between which the small topic's messages go). The slow client reads its socket at most ``--slow``
+image frames' worth of bytes a second (a link or
 a client that cannot take the camera's rate; its receive buffer is ``SLOW_RCVBUF``), and asks for
 ``queue_length: 1`` on the camera, as a viewer of the latest frame would. Every row runs ``--repeat``
 times; the table shows medians. The stock rosbridge_server is not installed here, so it is not
@@ -44,16 +46,19 @@ SMALL = "/bench/small"
 IMAGE = "/bench/image"
 WARMUP_S = 2.0
 SLOW_RCVBUF = 128 * 1024
+FRAGMENT = 64 * 1024  # fragment_size of the json-frag rows
 TICK = os.sysconf("SC_CLK_TCK")
 
 
 # -- a WebSocket reader on a plain socket (so that the slow client can pace its reads) ---------------
 class Reader(threading.Thread):
-    def __init__(self, port: int, subscribe: list[dict], rate_bytes: float | None = None) -> None:
+    def __init__(
+        self, port: int, subscribe: list[dict], rate_bytes: float | None = None, rcvbuf: int = SLOW_RCVBUF
+    ) -> None:
         super().__init__(daemon=True)
         self.sock = socket.socket()
         if rate_bytes is not None:
-            self.sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, SLOW_RCVBUF)
+            self.sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, rcvbuf)
         self.sock.connect(("127.0.0.1", port))
         self.sock.sendall(
             b"GET / HTTP/1.1\r\nHost: 127.0.0.1\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
@@ -135,7 +140,12 @@ class Reader(threading.Thread):
                     frame = json.loads(payload) if opcode == 1 else cbor2.loads(payload)
                     self.small.append((int(frame["msg"]["data"]), now))
                 elif IMAGE.encode() in head:
-                    self.images.append(now)
+                    if b'"op":"fragment"' in head:  # fragment_size: a frame is whole at its last fragment
+                        frag = json.loads(bytes(buf[i : i + n]))
+                        if frag["num"] == frag["total"] - 1:
+                            self.images.append(now)
+                    else:
+                        self.images.append(now)
             elif opcode == 9:
                 self.send(bytes(buf[i : i + n]), opcode=10)
             elif opcode == 8:
@@ -224,7 +234,13 @@ def start_backend(transport: str, env: dict) -> tuple[subprocess.Popen, int, int
 
 
 def run_row(
-    transport: str, width: int, height: int, encoding: str, seconds: float, slow: float | None
+    transport: str,
+    width: int,
+    height: int,
+    encoding: str,
+    seconds: float,
+    slow: float | None,
+    rcvbuf: int = SLOW_RCVBUF,
 ) -> dict:
     env = {
         **os.environ,
@@ -245,16 +261,19 @@ def run_row(
     ]
     pub = subprocess.Popen(me, env=env)
     try:
-        extra = {} if encoding == "json" else {"compression": "cbor"}
+        extra = {"compression": "cbor"} if encoding == "cbor" else {}
         cam = {"op": "subscribe", "topic": IMAGE, "type": "sensor_msgs/Image", **extra}
         if slow is not None:
             cam["queue_length"] = 1
+        if encoding == "json-frag":
+            cam["fragment_size"] = FRAGMENT
         reader = Reader(
             port,
             [cam, {"op": "subscribe", "topic": SMALL, "type": "std_msgs/String", **extra}],
             rate_bytes=None
             if slow is None
-            else slow * width * height * 3 * (4 / 3 if encoding == "json" else 1),
+            else slow * width * height * 3 * (1 if encoding == "cbor" else 4 / 3),
+            rcvbuf=rcvbuf,
         )
         reader.start()
         deadline = time.monotonic() + 30
@@ -280,7 +299,7 @@ def run_row(
             "transport": transport,
             "size": f"{width}x{height}",
             "encoding": encoding,
-            "client": "normal" if slow is None else f"slow ({slow:g} frames/s)",
+            "client": "normal" if slow is None else f"slow ({slow:g}/s, {rcvbuf // 1024}K)",
             "frames_per_s": round(len(images) / ((t1 - t0) / 1e9), 2),
             "small_p50_ms": pct(lat, 0.5),
             "small_p95_ms": pct(lat, 0.95),
@@ -319,6 +338,12 @@ def main() -> None:
     p.add_argument(
         "--slow", type=float, default=5.0, help="the slow client's image frames/s (0: no such row)"
     )
+    p.add_argument(
+        "--slow-rcvbuf",
+        type=int,
+        default=SLOW_RCVBUF,
+        help="the slow client's SO_RCVBUF (Linux doubles it): bytes a small message may wait behind there",
+    )
     p.add_argument("--publisher", help=argparse.SUPPRESS)
     p.add_argument("--size", help=argparse.SUPPRESS)
     p.add_argument("--port", type=int, help=argparse.SUPPRESS)
@@ -332,15 +357,18 @@ def main() -> None:
     encodings = args.encodings.split(",")
     cases = [(t, w, h, e, None) for t in transports for (w, h) in sizes for e in encodings]
     if args.slow:
-        cases += [(t, *sizes[0], e, args.slow) for t in transports for e in encodings]
+        slow_encodings = [*encodings, "json-frag"] if "json" in encodings else encodings
+        cases += [(t, *sizes[0], e, args.slow) for t in transports for e in slow_encodings]
     rows = []
-    head = f"{'transport':9} {'size':9} {'enc':4} {'client':18} {'frames/s':>8} {'p50 ms':>8} {'p95 ms':>8}"
+    head = f"{'transport':9} {'size':9} {'enc':9} {'client':18} {'frames/s':>8} {'p50 ms':>8} {'p95 ms':>8}"
     print(head + f" {'max ms':>8} {'small':>9} {'cpu %':>6}  dropped", flush=True)
     for t, w, h, e, slow in cases:
-        row = median_row([run_row(t, w, h, e, args.seconds, slow) for _ in range(args.repeat)])
+        row = median_row(
+            [run_row(t, w, h, e, args.seconds, slow, args.slow_rcvbuf) for _ in range(args.repeat)]
+        )
         rows.append(row)
         print(
-            f"{row['transport']:9} {row['size']:9} {row['encoding']:4} {row['client']:18} "
+            f"{row['transport']:9} {row['size']:9} {row['encoding']:9} {row['client']:18} "
             f"{row['frames_per_s']:8.2f} {row['small_p50_ms']:8.2f} {row['small_p95_ms']:8.2f} "
             f"{row['small_max_ms']:8.2f} {row['small_received']:4}/{row['small_expected']:<4} "
             f"{row['server_cpu_pct']:6.1f}  {row['dropped']}",

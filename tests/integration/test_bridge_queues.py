@@ -129,3 +129,60 @@ async def test_bad_queue_length_is_an_error_naming_the_id_and_the_connection_sta
     assert await async_until(lambda: server.bus.subscriber_count("/chat") == 1)
     (client,) = server.endpoint.clients
     assert client.boxes["/chat"].limit == 1
+
+
+def test_fragments_go_one_a_turn_and_a_message_under_way_is_never_dropped():
+    from arbiter_backend.bridge import Fragments
+
+    pad = "x" * 40_000  # two fragments are more than one turn (TURN_BYTES)
+
+    def frags(name, n):
+        return Fragments([f"{name}{i}{pad}" for i in range(n)])
+
+    c = Client(NeverSends(), queue_size=3)
+    c.outbox("/cam", 1)
+    c.enqueue("/cam", frags("a", 3))
+    c.enqueue("/chat", "hi")
+
+    def turn():
+        return [f.rstrip("x") for f in c.next_turn()]
+
+    assert turn() == ["a0"]  # the first fragment: this message is under way
+    c.enqueue("/cam", frags("b", 2))  # queue_length 1: the newest waits, a is not dropped
+    c.enqueue("/cam", frags("c", 2))  # b never started: dropped for c
+    assert c.dropped_by_topic == {"/cam": 1}
+    turns = []
+    while frames := turn():
+        turns.append(frames)
+    assert turns == [["hi"], ["a1"], ["a2"], ["c0"], ["c1"]]  # another topic goes between fragments
+    assert c.boxes["/cam"].bytes == 0 and c.boxes["/cam"].sent == 2
+
+
+async def test_fragment_size_splits_big_frames_and_small_topics_go_between(server, session):
+    url = f"ws://127.0.0.1:{server.bridge_port}/"
+    sub = await session.ws_connect(url)
+    pub = await session.ws_connect(url)
+    await _subscribe(sub, "/cam", "sensor_msgs/Image", fragment_size=70_000)
+    await _subscribe(sub, "/chat", "std_msgs/String")
+    await sub.send_str(
+        '{"op": "subscribe", "id": "f1", "topic": "/x", "type": "std_msgs/String", "fragment_size": 9}'
+    )
+    bad = json.loads((await sub.receive(timeout=5)).data)
+    assert bad["op"] == "status" and bad["id"] == "f1" and "fragment_size" in bad["msg"]
+    assert await async_until(lambda: server.bus.subscriber_count("/chat") == 1)
+    await pub.send_str('{"op": "advertise", "topic": "/cam", "type": "sensor_msgs/Image"}')
+    await pub.send_str('{"op": "advertise", "topic": "/chat", "type": "std_msgs/String"}')
+    pixels = "B" * 700_000
+    await pub.send_str(json.dumps({"op": "publish", "topic": "/cam", "msg": {"height": 1, "data": pixels}}))
+    await pub.send_str(json.dumps({"op": "publish", "topic": "/chat", "msg": {"data": "between"}}))
+    frames = []
+    while not any(f["op"] == "fragment" and f["num"] == f["total"] - 1 for f in frames):
+        frames.append(json.loads((await sub.receive(timeout=10)).data))
+    fragments = [f for f in frames if f["op"] == "fragment"]
+    assert len(fragments) == fragments[0]["total"] == 11 and [f["num"] for f in fragments] == list(range(11))
+    assert len({f["id"] for f in fragments}) == 1
+    whole = json.loads("".join(f["data"] for f in fragments))
+    assert whole == {"op": "publish", "topic": "/cam", "msg": {"height": 1, "data": pixels}}
+    # the small message did not wait for the whole camera frame
+    chat = next(i for i, f in enumerate(frames) if f["op"] == "publish")
+    assert frames[chat]["msg"] == {"data": "between"} and chat < len(frames) - 1
