@@ -61,6 +61,8 @@ LEVELS = ("info", "warning", "error", "none")
 TOPIC_NAME = re.compile(r"(?:/[A-Za-z_][A-Za-z0-9_]*)+", re.ASCII)  # a fully qualified ROS 2 name
 MAX_THROTTLE_MS = 3_600_000
 MAX_QUEUE_LENGTH = 1_000_000
+SERVICE_TIMEOUT_S = 10.0  # a call_service to a ROS service without a "timeout" field
+MAX_SERVICE_TIMEOUT_S = 600.0
 MIN_FRAGMENT = 64  # the smallest fragment_size taken (smaller would be a frame per few characters)
 COMPRESSIONS = (
     "none",
@@ -218,6 +220,7 @@ class Client:
         self.closed = False
         self.authenticated = True
         self.kick: tuple[int, str] | None = None  # close with (code, reason) once the queue is sent
+        self.calls: set[asyncio.Task[None]] = set()  # service calls under way (ROS mode)
         self.last_rx = 0.0  # loop time of the last frame (pong included) received from the client
 
     @property
@@ -296,7 +299,7 @@ class Client:
             "replies_dropped": self.replies_dropped,
             "topics": {
                 topic: {
-                    "queued": box.frames.__len__(),
+                    "queued": len(box.frames),
                     "queue_length": box.limit,
                     "sent": box.sent,
                     "dropped": self.dropped_by_topic.get(topic, 0),
@@ -447,8 +450,8 @@ class RosbridgeEndpoint:
                     code, reason = client.kick
                     await ws.close(code=code, message=reason.encode("utf-8")[:120])
                     return
-        except (ConnectionResetError, RuntimeError, asyncio.CancelledError):
-            pass
+        except (ConnectionError, RuntimeError, asyncio.CancelledError):
+            pass  # the socket went away (ConnectionError: lost while waiting for it to drain)
         except Exception:
             log.exception("writer for client %d failed", client.id)
 
@@ -512,6 +515,8 @@ class RosbridgeEndpoint:
 
     def _drop_client(self, client: Client) -> None:
         client.closed = True
+        for call in list(client.calls):
+            call.cancel()
         for sub in client.subs.values():
             if sub.unsubscribe:
                 sub.unsubscribe()
@@ -806,6 +811,18 @@ class RosbridgeEndpoint:
         if req_id is not None:
             reply["id"] = req_id
         handler = self.services.get(service)
+        remote = getattr(self.bus, "call_service", None)
+        if handler is None and remote is not None:  # ROS mode: any service on the graph
+            timeout = self._field(frame, "timeout", (int, float), required=False)
+            timeout = SERVICE_TIMEOUT_S if timeout is None else float(timeout)
+            if not 0 < timeout <= MAX_SERVICE_TIMEOUT_S:
+                raise BadFrame(f"timeout must be more than 0 and at most {MAX_SERVICE_TIMEOUT_S:g} s")
+            call = asyncio.get_running_loop().create_task(
+                self._call_remote(client, remote, service, frame.get("args"), timeout, reply)
+            )
+            client.calls.add(call)
+            call.add_done_callback(client.calls.discard)
+            return
         if handler is None:
             reply.update(result=False, values=f"Service {service} does not exist")
         else:
@@ -813,6 +830,32 @@ class RosbridgeEndpoint:
                 reply.update(result=True, values=handler(frame.get("args")))
             except (BadFrame, MessageError, ValueError) as exc:
                 reply.update(result=False, values=f"{service}: {exc}")
+        client.send(_dumps(reply))
+
+    async def _call_remote(
+        self,
+        client: Client,
+        remote: Callable[[str, Any], Any],
+        service: str,
+        args: Any,
+        timeout: float,
+        reply: dict[str, Any],
+    ) -> None:
+        """A call to a ROS service; the answer, or ``result: false`` with why, within ``timeout``. The
+        client's other frames are not held meanwhile (the stock server blocks them by default)."""
+        try:
+            values = await asyncio.wait_for(remote(service, args), timeout)
+        except (TimeoutError, asyncio.TimeoutError):  # distinct before Python 3.11 (a Pi with Humble)
+            reply.update(result=False, values=f"{service}: no response within {timeout:g} s")
+        except (BadFrame, MessageError, ValueError) as exc:
+            reply.update(
+                result=False, values=str(exc) if str(exc).startswith("Service") else f"{service}: {exc}"
+            )
+        except Exception as exc:
+            log.exception("call to %s failed", service)
+            reply.update(result=False, values=f"{service}: {type(exc).__name__}")
+        else:
+            reply.update(result=True, values=values)
         client.send(_dumps(reply))
 
     def _set_level(self, client: Client, frame: dict[str, Any]) -> None:

@@ -57,6 +57,25 @@ def message_class(type_name: str) -> type:
     return cls
 
 
+@lru_cache(maxsize=128)
+def service_class(type_name: str) -> type:
+    """The generated class for ``pkg/srv/Name`` (or ``pkg/Name``); MessageError if it is not installed."""
+    parts = type_name.split("/")
+    if len(parts) == 3 and parts[1] == "srv":
+        pkg, name = parts[0], parts[2]
+    elif len(parts) == 2:
+        pkg, name = parts
+    else:
+        raise MessageError(f"invalid service type name {type_name[:80]!r}")
+    try:
+        cls = getattr(importlib.import_module(f"{pkg}.srv"), name)
+    except (ImportError, AttributeError, ValueError):
+        raise MessageError(f"service type {pkg}/srv/{name} is not installed here") from None
+    if not hasattr(cls, "Request"):
+        raise MessageError(f"{pkg}/srv/{name} is not a service type")
+    return cls
+
+
 def type_name_of(cls: type) -> str:
     """``geometry_msgs.msg.Twist`` -> ``geometry_msgs/msg/Twist``."""
     pkg = cls.__module__.split(".")[0]
