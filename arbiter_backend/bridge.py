@@ -773,6 +773,8 @@ class RosbridgeEndpoint:
         return Fragments(parts)
 
     def _deliver(self, client: Client, sub: _Sub, msg: dict[str, Any]) -> None:
+        if client.subs.get(sub.topic) is not sub:
+            return  # unsubscribed while the bus was fanning this message out: no outbox to refill
         frame: Payload | Fragments = self._encode(sub, msg)
         if sub.fragment_size and isinstance(frame, str) and len(frame) > sub.fragment_size:
             frame = self._fragments(sub, msg, frame)

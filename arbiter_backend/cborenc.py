@@ -24,6 +24,7 @@ travels in JSON), typed arrays become lists of numbers; anything JSON cannot hol
 from __future__ import annotations
 
 import base64
+import io
 import math
 from typing import Any
 
@@ -108,10 +109,13 @@ def is_cbor(data: bytes) -> bool:
 
 def decode(data: bytes) -> dict[str, Any]:
     """A client's CBOR request in rosbridge JSON form; CborError naming what does not fit."""
+    fp = io.BytesIO(data)
     try:
-        obj = cbor2.loads(data, max_depth=MAX_DEPTH)
+        obj = cbor2.CBORDecoder(fp, max_depth=MAX_DEPTH).decode()
     except (cbor2.CBORError, ValueError, RecursionError, MemoryError, OverflowError) as exc:
         raise CborError(f"invalid CBOR: {str(exc)[:200]}") from None
+    if fp.tell() != len(data):
+        raise CborError(f"invalid CBOR: {len(data) - fp.tell()} bytes after the first item")
     if not isinstance(obj, dict):
         raise CborError(f"a frame must be a CBOR map, got {type(obj).__name__}")
     req_id = obj.get("id")

@@ -122,6 +122,7 @@ BAD = [
     (cbor2.dumps({"op": "publish", "msg": {"when": cbor2.CBORTag(1, 5)}}), None),
     (cbor2.dumps({1: 2}), None),
     (b"\xa2\x62op", None),  # truncated
+    (b"\xa0garbage", None),  # more after the map
 ]
 WORDS = [
     "compression must be",
@@ -133,6 +134,7 @@ WORDS = [
     "no rosbridge JSON form",
     "keys must be text",
     "invalid CBOR",
+    "7 bytes after the first item",
 ]
 
 
