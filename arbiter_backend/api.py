@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+from collections.abc import Callable
 from typing import Any, Protocol
 
 from aiohttp import web
@@ -67,7 +68,10 @@ def make_app(
     token: str | None = None,
     topics: TopicSource | None = None,
     host_clock: HostClock | None = None,
+    bridge: Callable[[], dict[str, Any]] | None = None,
 ) -> web.Application:
+    """``bridge``: the rosbridge endpoint's figures (clients, frames dropped per topic), added to
+    ``/api/health`` as its ``bridge`` key."""
     clock = HostClock() if host_clock is None else host_clock
 
     def _int(request: web.Request, name: str, lo: int, hi: int) -> int | None:
@@ -97,6 +101,8 @@ def make_app(
         body = tracker.health()
         # additive: is this host's clock synchronised, and to what error (probed off the loop, cached)
         body["time_sync"] = (await asyncio.to_thread(clock.read)).to_dict()
+        if bridge is not None:
+            body = {**body, "bridge": bridge()}
         return _json(body)
 
     async def topic_figures(request: web.Request) -> web.Response:

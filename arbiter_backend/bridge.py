@@ -6,13 +6,22 @@ unsubscribe, call_service for the rosapi basics (/rosapi/topics,
 server, every bad frame is answered with a ``status`` frame naming the problem
 (and the request's ``id``), and the connection stays open.
 
-A client that goes silent is pinged after ``HEARTBEAT_S`` and dropped when no
-pong comes back within half that, so a dead link frees its subscriptions and
-advertisements within about three seconds.
+Liveness (``--ws-ping``): a client that has sent nothing for ``WS_PING_S`` is pinged (again
+every ``WS_PING_S`` while it stays silent), and dropped when nothing at all, pong or frame, has
+come from it for ``DEAD_AFTER`` pings' time (20 s by default), which frees its subscriptions and
+advertisements. A client busy elsewhere that does not read its socket for 10 s is kept: its pong
+waits behind the frames queued for it, and it answers once it reads again (the stock server does
+not ping at all). The console finds a dead link on its side with its own pings (1 s, 2 s timeout).
 
-Each client has a bounded outgoing queue drained by its own writer task: a
-slow client loses its oldest frames (counted), never blocks the bus or the
-other clients. Per-client state is dropped when the socket closes.
+Outgoing frames wait in one bounded queue per (client, topic) (``Outbox``), plus one for the
+client's replies (status, service_response), which go first. Each client's writer task takes
+the topics with something to send in turn (round-robin; a turn sends up to ``TURN_BYTES``, at
+least one message), and awaits aiohttp's drain after each write, so a client takes frames as
+fast as its socket drains and no faster. A big topic (camera frames) therefore never starves a
+small one: a small message waits for at most the one big frame being written. A full queue
+drops its oldest frame (counted per topic, logged, and in ``/api/health``); a slow client loses
+old frames of the topic that overflows, never another topic's messages or their order, and never
+blocks the bus or the other clients. Per-client state is dropped when the socket closes.
 """
 
 from __future__ import annotations
@@ -35,18 +44,31 @@ from aiohttp import WSMsgType, web
 from arbiter_core import auth
 from arbiter_core.msgtypes import MessageError, normalize_type
 
+from . import cborenc
 from .bus import Bus
 
 log = logging.getLogger(__name__)
 
 MAX_FRAME_BYTES = 1024 * 1024  # answered with a status error above this
 TRANSPORT_MAX_FRAME = 16 * 1024 * 1024  # aiohttp closes the socket (1009) above this
-CLIENT_QUEUE = 1000
-HEARTBEAT_S = 2.0  # ping a silent client after this long; no pong within half of it drops the client
+CLIENT_QUEUE = 1000  # a client's replies (status, service_response) waiting to be sent
+TOPIC_QUEUE = 1000  # frames of one topic waiting for one client, when the subscription gives no queue_length
+TOPIC_QUEUE_BYTES = 8 * 1024 * 1024  # ...and at most this many bytes of them (at least the newest frame)
+TURN_BYTES = 64 * 1024  # what one topic may send in its turn before the next topic's turn
+WS_PING_S = 5.0  # ping a client silent this long (0/None: never), and again as often while it stays silent
+DEAD_AFTER = 4  # ...and drop it once nothing has come from it for this many ping intervals
 LEVELS = ("info", "warning", "error", "none")
 TOPIC_NAME = re.compile(r"(?:/[A-Za-z_][A-Za-z0-9_]*)+", re.ASCII)  # a fully qualified ROS 2 name
 MAX_THROTTLE_MS = 3_600_000
 MAX_QUEUE_LENGTH = 1_000_000
+SERVICE_TIMEOUT_S = 10.0  # a call_service to a ROS service without a "timeout" field
+MAX_SERVICE_TIMEOUT_S = 600.0
+MIN_FRAGMENT = 64  # the smallest fragment_size taken (smaller would be a frame per few characters)
+COMPRESSIONS = (
+    "none",
+    "cbor",
+    "cbor-raw",
+)  # weakest first; png is not offered (the stock ROS 2 server's fails)
 
 
 class BadFrame(ValueError):
@@ -69,44 +91,222 @@ class _Sub:
     """One client's subscription to one topic (requests with several ids are merged, as rosbridge does)."""
 
     topic: str
-    requests: dict[Any, tuple[int, int]] = field(default_factory=dict)  # id -> (throttle_ms, queue_length)
+    # id -> (throttle_ms, queue_length, compression, fragment_size or 0)
+    requests: dict[Any, tuple[int, int, str, int]] = field(default_factory=dict)
+    type_name: str | None = None
     unsubscribe: Callable[[], None] | None = None
     last_sent: float = -1e18
-    pending: deque[str] = field(default_factory=deque)
+    pending: deque[Payload | Fragments] = field(default_factory=deque)
     timer: asyncio.TimerHandle | None = None
 
     @property
     def throttle_s(self) -> float:
-        return min(t for t, _ in self.requests.values()) / 1000.0
+        return min(r[0] for r in self.requests.values()) / 1000.0
 
     @property
     def queue_length(self) -> int:
-        return min(q for _, q in self.requests.values())
+        return min(r[1] for r in self.requests.values())
+
+    @property
+    def compression(self) -> str:
+        """The strongest of the requests' (cbor-raw over cbor over none), for all of them, as rosbridge."""
+        return max((r[2] for r in self.requests.values()), key=COMPRESSIONS.index)
+
+    @property
+    def fragment_size(self) -> int:
+        """The smallest of the requests' (0: none); JSON frames longer than it go out in fragments."""
+        sizes = [r[3] for r in self.requests.values() if r[3]]
+        return min(sizes) if sizes else 0
+
+    @property
+    def outbox_limit(self) -> int:
+        """The client's outgoing queue for the topic: ``queue_length`` frames (1: only the latest);
+        without one, ``TOPIC_QUEUE``."""
+        return self.queue_length or TOPIC_QUEUE
+
+
+Payload = str | bytes  # a text (JSON) or binary (CBOR) WebSocket frame
+
+
+class Fragments:
+    """One message going out as rosbridge ``fragment`` frames (``fragment_size``), one frame at a time,
+    so other topics' frames go between them. The parts are shared by every client that gets them."""
+
+    __slots__ = ("next", "parts", "remaining")
+
+    def __init__(self, parts: list[str]) -> None:
+        self.parts = parts
+        self.next = 0
+        self.remaining = sum(len(p) for p in parts)
+
+    def __len__(self) -> int:
+        return self.remaining
+
+
+class Outbox:
+    """The messages of one topic waiting for one client: bounded by count and bytes, oldest dropped
+    (never the newest, nor a message whose first fragments are out already)."""
+
+    def __init__(self, topic: str, limit: int = TOPIC_QUEUE, max_bytes: int = TOPIC_QUEUE_BYTES) -> None:
+        self.topic = topic
+        self.limit = limit
+        self.max_bytes = max_bytes
+        self.frames: deque[Payload | Fragments] = deque()
+        self.bytes = 0
+        self.dropped = 0
+        self.sent = 0
+        self.in_ring = False  # in its client's round-robin of topics with something to send
+
+    def put(self, frame: Payload | Fragments) -> int:
+        """Queue ``frame``; returns how many older messages were dropped to make room."""
+        self.frames.append(frame)
+        self.bytes += len(frame)
+        dropped = 0
+        while True:
+            head = self.frames[0]
+            start = 1 if isinstance(head, Fragments) and head.next > 0 else 0  # under way: it stays
+            waiting = len(self.frames) - start
+            if waiting <= 1 or (waiting <= self.limit and self.bytes <= self.max_bytes):
+                break
+            victim = self.frames[start]
+            del self.frames[start]
+            self.bytes -= len(victim)
+            dropped += 1
+        self.dropped += dropped
+        return dropped
+
+    def take(self) -> Payload:
+        """The next frame to write: a whole message, or the next fragment of one."""
+        head = self.frames[0]
+        if isinstance(head, Fragments):
+            part = head.parts[head.next]
+            head.next += 1
+            head.remaining -= len(part)
+            self.bytes -= len(part)
+            if head.next == len(head.parts):
+                self.frames.popleft()
+                self.sent += 1
+            return part
+        self.frames.popleft()
+        self.bytes -= len(head)
+        self.sent += 1
+        return head
+
+    def clear(self) -> None:
+        self.frames.clear()
+        self.bytes = 0
+
+
+def _next_size(item: Payload | Fragments) -> int:
+    return len(item.parts[item.next]) if isinstance(item, Fragments) else len(item)
 
 
 class Client:
     _ids = itertools.count(1)
 
-    def __init__(self, ws: web.WebSocketResponse, queue_size: int) -> None:
+    def __init__(self, ws: web.WebSocketResponse, queue_size: int, remote: str | None = None) -> None:
         self.id = next(self._ids)
         self.ws = ws
-        self.out: deque[str] = deque(maxlen=queue_size)
+        self.remote = remote
+        self.out: deque[Payload] = deque(maxlen=queue_size)  # replies: sent before any topic's frames
+        self.boxes: dict[str, Outbox] = {}
+        self.ring: deque[Outbox] = deque()  # the outboxes with something to send, in turn
         self.wakeup = asyncio.Event()
-        self.dropped = 0
+        self.replies_dropped = 0
+        self.dropped_by_topic: dict[str, int] = {}  # kept after an unsubscribe, for the final log line
         self.advertised: dict[str, str] = {}
         self.subs: dict[str, _Sub] = {}
         self.level = "error"
         self.closed = False
         self.authenticated = True
         self.kick: tuple[int, str] | None = None  # close with (code, reason) once the queue is sent
+        self.calls: set[asyncio.Task[None]] = set()  # service calls under way (ROS mode)
+        self.last_rx = 0.0  # loop time of the last frame (pong included) received from the client
 
-    def send(self, frame: str) -> None:
+    @property
+    def dropped(self) -> int:
+        return self.replies_dropped + sum(self.dropped_by_topic.values())
+
+    def send(self, frame: Payload) -> None:
+        """A reply (status, service_response): ahead of every topic's frames."""
         if self.closed:
             return
         if len(self.out) == self.out.maxlen:
-            self.dropped += 1
+            self.replies_dropped += 1
         self.out.append(frame)
         self.wakeup.set()
+
+    def outbox(self, topic: str, limit: int = TOPIC_QUEUE) -> Outbox:
+        box = self.boxes.get(topic)
+        if box is None:
+            box = self.boxes[topic] = Outbox(topic, limit)
+        else:
+            box.limit = limit
+        return box
+
+    def drop_outbox(self, topic: str) -> None:
+        box = self.boxes.pop(topic, None)
+        if box is not None:
+            box.clear()
+            if box.in_ring:
+                self.ring.remove(box)
+                box.in_ring = False
+
+    def enqueue(self, topic: str, frame: Payload | Fragments) -> None:
+        """A message of ``topic``: into that topic's outbox, its oldest frame dropped when full."""
+        if self.closed:
+            return
+        box = self.boxes.get(topic) or self.outbox(topic)
+        dropped = box.put(frame)
+        if dropped:
+            before = self.dropped_by_topic.get(topic, 0)
+            self.dropped_by_topic[topic] = before + dropped
+            if before == 0:
+                log.info(
+                    "client %d reads %s slower than it comes: dropping its oldest frames (queue of %d)",
+                    self.id,
+                    topic,
+                    box.limit,
+                )
+        if not box.in_ring:
+            box.in_ring = True
+            self.ring.append(box)
+        self.wakeup.set()
+
+    def next_turn(self) -> list[Payload]:
+        """What to write next: the oldest reply, or the next topic's turn (up to ``TURN_BYTES``)."""
+        if self.out:
+            return [self.out.popleft()]
+        if not self.ring:
+            return []
+        box = self.ring.popleft()
+        frames: list[Payload] = []
+        size = 0
+        while box.frames and (not frames or size + _next_size(box.frames[0]) <= TURN_BYTES):
+            frame = box.take()
+            frames.append(frame)
+            size += len(frame)
+        if box.frames:
+            self.ring.append(box)
+        else:
+            box.in_ring = False
+        return frames
+
+    def stats(self) -> dict[str, Any]:
+        return {
+            "id": self.id,
+            "remote": self.remote,
+            "replies_dropped": self.replies_dropped,
+            "topics": {
+                topic: {
+                    "queued": len(box.frames),
+                    "queue_length": box.limit,
+                    "sent": box.sent,
+                    "dropped": self.dropped_by_topic.get(topic, 0),
+                }
+                for topic, box in self.boxes.items()
+            },
+        }
 
     def status(self, level: str, msg: str, req_id: Any = None) -> None:
         if self.level == "none" or LEVELS.index(level) < LEVELS.index(self.level):
@@ -124,17 +324,20 @@ class RosbridgeEndpoint:
         max_frame: int = MAX_FRAME_BYTES,
         client_queue: int = CLIENT_QUEUE,
         services: dict[str, Callable[[Any], dict[str, Any]]] | None = None,
-        heartbeat: float | None = HEARTBEAT_S,
+        heartbeat: float | None = WS_PING_S,
         token: str | None = None,
     ) -> None:
         self.bus = bus
-        self.heartbeat = heartbeat
+        self.heartbeat = heartbeat or None  # seconds between pings to a silent client; None: no pings
         self.token = token
         self.refused = 0  # connections refused for a missing or wrong token
         self.max_frame = max_frame
         self.client_queue = client_queue
         self.clients: set[Client] = set()
         self.errors = 0
+        # (topic, encoding) -> (the last message, its frame)
+        self._encoded: dict[tuple[str, str], tuple[Any, Payload]] = {}
+        self._fragment_ids = itertools.count(1)
         self.services: dict[str, Callable[[Any], dict[str, Any]]] = {
             "/rosapi/topics": self._svc_topics,
             "/rosapi/topic_type": self._svc_topic_type,
@@ -165,29 +368,45 @@ class RosbridgeEndpoint:
                     log.warning("refused a WebSocket client from %s: wrong token", request.remote)
                     return web.json_response({"error": "wrong token", "status": 401}, status=401)
                 authenticated = True
-        ws = web.WebSocketResponse(max_msg_size=TRANSPORT_MAX_FRAME, heartbeat=self.heartbeat)
+        # pings are answered and sent here (_liveness), not by aiohttp: its heartbeat allows a pong half
+        # the interval, which drops a client that stops reading for a second behind a camera stream
+        ws = web.WebSocketResponse(max_msg_size=TRANSPORT_MAX_FRAME, autoping=False)
         await ws.prepare(request)
-        client = Client(ws, self.client_queue)
+        client = Client(ws, self.client_queue, request.remote)
         client.authenticated = authenticated
         self.clients.add(client)
         loop = asyncio.get_running_loop()
         writer = loop.create_task(self._writer(client))
+        client.last_rx = loop.time()
+        liveness = None
+        if self.heartbeat is not None and request.transport is not None:
+            liveness = loop.create_task(self._liveness(client, request.transport, self.heartbeat))
         deadline = None
         if not authenticated:
             deadline = loop.call_later(auth.AUTH_DEADLINE_S, self._auth_timeout, client)
         log.info("client %d connected from %s", client.id, request.remote)
         sock = request.transport.get_extra_info("socket") if request.transport is not None else None
+        limit_unsent(sock)
         try:
             async for msg in ws:
+                client.last_rx = loop.time()
+                if msg.type == WSMsgType.PING:
+                    await ws.pong(msg.data)
+                    continue
+                if msg.type == WSMsgType.PONG:
+                    continue
                 if client.kick is not None:
                     pass  # being closed: nothing more is read into the robot
                 elif msg.type == WSMsgType.TEXT:
                     self.handle_frame(client, msg.data)
                 elif msg.type == WSMsgType.BINARY:
+                    if cborenc.is_cbor(msg.data):
+                        self.handle_cbor(client, msg.data)
+                        continue
                     try:
                         text = msg.data.decode("utf-8")
                     except UnicodeDecodeError:
-                        self._error(client, "binary frame is not UTF-8 JSON text")
+                        self._error(client, "binary frame is neither UTF-8 JSON text nor a CBOR map")
                     else:
                         self.handle_frame(client, text)
                 elif msg.type == WSMsgType.ERROR:
@@ -200,10 +419,17 @@ class RosbridgeEndpoint:
             if deadline is not None:
                 deadline.cancel()
             self._drop_client(client)
+            if liveness is not None:
+                liveness.cancel()
             writer.cancel()
             with contextlib.suppress(asyncio.CancelledError):
                 await writer
-            log.info("client %d disconnected (dropped %d outgoing frames)", client.id, client.dropped)
+            log.info(
+                "client %d disconnected (dropped %d outgoing frames%s)",
+                client.id,
+                client.dropped,
+                "".join(f", {n} of {t}" for t, n in sorted(client.dropped_by_topic.items())),
+            )
         return ws
 
     async def _writer(self, client: Client) -> None:
@@ -212,17 +438,50 @@ class RosbridgeEndpoint:
             while True:
                 await client.wakeup.wait()
                 client.wakeup.clear()
-                while client.out:
-                    frame = client.out.popleft()
-                    await ws.send_str(frame)
+                while frames := client.next_turn():
+                    for frame in frames:
+                        # each awaits the socket's drain past aiohttp's writer limit: a client gets
+                        # frames as fast as it reads them, and the other clients never wait for it
+                        if isinstance(frame, str):
+                            await ws.send_str(frame)
+                        else:
+                            await ws.send_bytes(frame)
                 if client.kick is not None:
                     code, reason = client.kick
                     await ws.close(code=code, message=reason.encode("utf-8")[:120])
                     return
-        except (ConnectionResetError, RuntimeError, asyncio.CancelledError):
-            pass
+        except (ConnectionError, RuntimeError, asyncio.CancelledError):
+            pass  # the socket went away (ConnectionError: lost while waiting for it to drain)
         except Exception:
             log.exception("writer for client %d failed", client.id)
+
+    async def _liveness(self, client: Client, transport: asyncio.BaseTransport, interval: float) -> None:
+        """Ping ``client`` while it is silent; cut the connection once it has been silent too long."""
+        loop = asyncio.get_running_loop()
+        pings: set[asyncio.Task[None]] = set()
+        try:
+            while not client.closed:
+                idle = loop.time() - client.last_rx
+                if idle >= interval * DEAD_AFTER:
+                    log.info("client %d: nothing received for %.1f s; dropping it", client.id, idle)
+                    transport.abort()  # no close handshake: the link is presumed dead
+                    return
+                if idle >= interval:
+                    # a task: the ping may wait for the socket to drain; this loop must not
+                    ping = loop.create_task(self._ping(client.ws))
+                    pings.add(ping)
+                    ping.add_done_callback(pings.discard)
+                await asyncio.sleep(
+                    min(interval, interval * DEAD_AFTER - idle) if idle >= interval else interval - idle
+                )
+        finally:
+            for ping in pings:
+                ping.cancel()
+
+    @staticmethod
+    async def _ping(ws: web.WebSocketResponse) -> None:
+        with contextlib.suppress(ConnectionResetError, RuntimeError):
+            await ws.ping()
 
     def _refuse(self, client: Client, reason: str) -> None:
         """Answer with an error, then close (1008, policy violation) once the answer is sent."""
@@ -241,6 +500,9 @@ class RosbridgeEndpoint:
             frame = _DECODER.decode(text) if len(text) <= 4096 else None
         except (ValueError, RecursionError):
             frame = None
+        self._authenticate_frame(client, frame)
+
+    def _authenticate_frame(self, client: Client, frame: Any) -> None:
         if not isinstance(frame, dict) or frame.get("op") != "auth":
             self._refuse(client, 'authentication required: send {"op": "auth", "mac": TOKEN} first')
             return
@@ -253,16 +515,36 @@ class RosbridgeEndpoint:
 
     def _drop_client(self, client: Client) -> None:
         client.closed = True
+        for call in list(client.calls):
+            call.cancel()
         for sub in client.subs.values():
             if sub.unsubscribe:
                 sub.unsubscribe()
             if sub.timer:
                 sub.timer.cancel()
+        topics = list(client.subs)
         client.subs.clear()
+        for topic in list(client.boxes):
+            client.drop_outbox(topic)
+        for topic in topics:
+            self._forget_frames(topic)
         for topic in client.advertised:
             self.bus.unadvertise(topic)
         client.advertised.clear()
         self.clients.discard(client)
+
+    def stats(self) -> dict[str, Any]:
+        """The endpoint's clients and their outgoing queues (``/api/health``'s ``bridge``)."""
+        dropped: dict[str, int] = {}
+        for client in self.clients:
+            for topic, n in client.dropped_by_topic.items():
+                dropped[topic] = dropped.get(topic, 0) + n
+        return {
+            "clients": len(self.clients),
+            "errors": self.errors,
+            "dropped": dropped,  # frames dropped for slow clients, by topic (the clients connected now)
+            "per_client": [c.stats() for c in sorted(self.clients, key=lambda c: c.id)],
+        }
 
     async def close_all(self) -> None:
         for client in list(self.clients):
@@ -292,6 +574,24 @@ class RosbridgeEndpoint:
         if not isinstance(frame, dict):
             self._error(client, f"a frame must be a JSON object, got {type(frame).__name__}")
             return
+        self._dispatch(client, frame)
+
+    def handle_cbor(self, client: Client, data: bytes) -> None:
+        """A binary frame holding a CBOR map: the same request as its JSON form (``cborenc.decode``)."""
+        if len(data) > self.max_frame:
+            self._error(client, f"frame of {len(data)} bytes exceeds the {self.max_frame}-byte limit")
+            return
+        try:
+            frame = cborenc.decode(data)
+        except cborenc.CborError as exc:
+            self._error(client, str(exc), exc.req_id)
+            return
+        if not client.authenticated:
+            self._authenticate_frame(client, frame)
+            return
+        self._dispatch(client, frame)
+
+    def _dispatch(self, client: Client, frame: dict[str, Any]) -> None:
         req_id = frame.get("id")
         if isinstance(req_id, (dict, list)):
             req_id = None
@@ -370,6 +670,16 @@ class RosbridgeEndpoint:
         if not 0 <= queue_length <= MAX_QUEUE_LENGTH:
             raise BadFrame(f"queue_length must be 0..{MAX_QUEUE_LENGTH}")
         queue_length = min(queue_length, self.client_queue)
+        compression = self._field(frame, "compression", str, required=False) or "none"
+        if compression not in COMPRESSIONS:
+            raise BadFrame(f"compression must be one of {', '.join(COMPRESSIONS)}, got {compression[:20]!r}")
+        fragment_size = self._field(frame, "fragment_size", int, required=False) or 0
+        if fragment_size and not MIN_FRAGMENT <= fragment_size <= TRANSPORT_MAX_FRAME:
+            raise BadFrame(f"fragment_size must be {MIN_FRAGMENT}..{TRANSPORT_MAX_FRAME} characters")
+        if compression == "cbor-raw" and not hasattr(self.bus, "cdr"):
+            raise BadFrame(
+                "compression cbor-raw needs a transport that serialises messages (--transport ros)"
+            )
         if type_name is not None:
             self.bus.declare(topic, type_name)
         elif self.bus.type_of(topic) is None:
@@ -379,7 +689,14 @@ class RosbridgeEndpoint:
             sub = _Sub(topic)
             client.subs[topic] = sub
             sub.unsubscribe = self.bus.subscribe(topic, lambda m, c=client, s=sub: self._deliver(c, s, m))
-        sub.requests[frame.get("id", f"_anon{len(sub.requests)}")] = (throttle, queue_length)
+        sub.requests[frame.get("id", f"_anon{len(sub.requests)}")] = (
+            throttle,
+            queue_length,
+            compression,
+            fragment_size,
+        )
+        sub.type_name = self.bus.type_of(topic)
+        client.outbox(topic, sub.outbox_limit)
 
     def _unsubscribe(self, client: Client, frame: dict[str, Any]) -> None:
         topic = self._topic(frame)
@@ -397,17 +714,78 @@ class RosbridgeEndpoint:
             if sub.timer:
                 sub.timer.cancel()
             del client.subs[topic]
+            client.drop_outbox(topic)
+            self._forget_frames(topic)
+        else:
+            client.outbox(topic, sub.outbox_limit)
+
+    def _encode(self, sub: _Sub, msg: dict[str, Any]) -> Payload:
+        """The ``publish`` frame of ``msg`` in the subscription's encoding, made once per message and
+        encoding for all the clients that get it: JSON text, or a binary CBOR frame (``cborenc``)."""
+        key = (sub.topic, sub.compression)
+        cached = self._encoded.get(key)
+        if cached is not None and cached[0] is msg:
+            return cached[1]
+        frame: Payload
+        if key[1] == "none":
+            frame = _dumps({"op": "publish", "topic": sub.topic, "msg": msg})
+        elif key[1] == "cbor":
+            convert = getattr(self.bus, "cbor_values", None) or cborenc.values_of
+            frame = cborenc.encode({"op": "publish", "topic": sub.topic, "msg": convert(sub.type_name, msg)})
+        else:  # cbor-raw: the CDR bytes and the time received (subscribe checked the bus has ``cdr``)
+            raw, received_ns = self.bus.cdr(sub.type_name, msg)  # type: ignore[attr-defined]
+            secs, nsecs = divmod(received_ns, 1_000_000_000)
+            frame = cborenc.encode(
+                {"op": "publish", "topic": sub.topic, "msg": {"secs": secs, "nsecs": nsecs, "bytes": raw}}
+            )
+        self._encoded[key] = (msg, frame)
+        return frame
+
+    def _forget_frames(self, topic: str) -> None:
+        """No client subscribes to ``topic`` any more: its last frames (a camera's: megabytes) go."""
+        if not any(topic in c.subs for c in self.clients if not c.closed):
+            for key in [k for k in self._encoded if k[0] == topic]:
+                del self._encoded[key]
+
+    def _fragments(self, sub: _Sub, msg: dict[str, Any], frame: str) -> Fragments:
+        """``frame`` as rosbridge ``fragment`` frames of ``fragment_size`` characters of its text, under
+        an id of its own (made once per message and size for all the clients that get it)."""
+        size = sub.fragment_size
+        key = (sub.topic, f"fragments:{size}")
+        cached = self._encoded.get(key)
+        if cached is not None and cached[0] is msg:
+            return Fragments(cached[1])  # type: ignore[arg-type]
+        frag_id = f"{sub.topic}#{next(self._fragment_ids)}"
+        total = -(-len(frame) // size)
+        parts = [
+            _dumps(
+                {
+                    "op": "fragment",
+                    "id": frag_id,
+                    "data": frame[i * size : (i + 1) * size],
+                    "num": i,
+                    "total": total,
+                }
+            )
+            for i in range(total)
+        ]
+        self._encoded[key] = (msg, parts)  # type: ignore[assignment]
+        return Fragments(parts)
 
     def _deliver(self, client: Client, sub: _Sub, msg: dict[str, Any]) -> None:
-        frame = _dumps({"op": "publish", "topic": sub.topic, "msg": msg})
+        if client.subs.get(sub.topic) is not sub:
+            return  # unsubscribed while the bus was fanning this message out: no outbox to refill
+        frame: Payload | Fragments = self._encode(sub, msg)
+        if sub.fragment_size and isinstance(frame, str) and len(frame) > sub.fragment_size:
+            frame = self._fragments(sub, msg, frame)
         throttle = sub.throttle_s
         if throttle <= 0:
-            client.send(frame)
+            client.enqueue(sub.topic, frame)
             return
         now = time.monotonic()
         if now - sub.last_sent >= throttle and not sub.pending:
             sub.last_sent = now
-            client.send(frame)
+            client.enqueue(sub.topic, frame)
             return
         qlen = sub.queue_length
         if qlen <= 0:
@@ -424,7 +802,7 @@ class RosbridgeEndpoint:
         if client.closed or not sub.pending:
             return
         sub.last_sent = time.monotonic()
-        client.send(sub.pending.popleft())
+        client.enqueue(sub.topic, sub.pending.popleft())
         if sub.pending:
             sub.timer = asyncio.get_running_loop().call_later(sub.throttle_s, self._flush, client, sub)
 
@@ -435,6 +813,18 @@ class RosbridgeEndpoint:
         if req_id is not None:
             reply["id"] = req_id
         handler = self.services.get(service)
+        remote = getattr(self.bus, "call_service", None)
+        if handler is None and remote is not None:  # ROS mode: any service on the graph
+            timeout = self._field(frame, "timeout", (int, float), required=False)
+            timeout = SERVICE_TIMEOUT_S if timeout is None else float(timeout)
+            if not 0 < timeout <= MAX_SERVICE_TIMEOUT_S:
+                raise BadFrame(f"timeout must be more than 0 and at most {MAX_SERVICE_TIMEOUT_S:g} s")
+            call = asyncio.get_running_loop().create_task(
+                self._call_remote(client, remote, service, frame.get("args"), timeout, reply)
+            )
+            client.calls.add(call)
+            call.add_done_callback(client.calls.discard)
+            return
         if handler is None:
             reply.update(result=False, values=f"Service {service} does not exist")
         else:
@@ -442,6 +832,32 @@ class RosbridgeEndpoint:
                 reply.update(result=True, values=handler(frame.get("args")))
             except (BadFrame, MessageError, ValueError) as exc:
                 reply.update(result=False, values=f"{service}: {exc}")
+        client.send(_dumps(reply))
+
+    async def _call_remote(
+        self,
+        client: Client,
+        remote: Callable[[str, Any], Any],
+        service: str,
+        args: Any,
+        timeout: float,
+        reply: dict[str, Any],
+    ) -> None:
+        """A call to a ROS service; the answer, or ``result: false`` with why, within ``timeout``. The
+        client's other frames are not held meanwhile (the stock server blocks them by default)."""
+        try:
+            values = await asyncio.wait_for(remote(service, args), timeout)
+        except (TimeoutError, asyncio.TimeoutError):  # distinct before Python 3.11 (a Pi with Humble)
+            reply.update(result=False, values=f"{service}: no response within {timeout:g} s")
+        except (BadFrame, MessageError, ValueError) as exc:
+            reply.update(
+                result=False, values=str(exc) if str(exc).startswith("Service") else f"{service}: {exc}"
+            )
+        except Exception as exc:
+            log.exception("call to %s failed", service)
+            reply.update(result=False, values=f"{service}: {type(exc).__name__}")
+        else:
+            reply.update(result=True, values=values)
         client.send(_dumps(reply))
 
     def _set_level(self, client: Client, frame: dict[str, Any]) -> None:
@@ -484,6 +900,19 @@ def quick_ack(sock: socket.socket | None) -> None:
 
 
 QUICKACK = getattr(socket, "TCP_QUICKACK", None)
+NOTSENT_LOWAT = getattr(socket, "TCP_NOTSENT_LOWAT", None)
+UNSENT_BYTES = 64 * 1024
+
+
+def limit_unsent(sock: socket.socket | None) -> None:
+    """Keep at most ``UNSENT_BYTES`` not yet sent in the kernel's send buffer (TCP_NOTSENT_LOWAT, Linux
+    and macOS): the rest of a big frame waits in the transport, where aiohttp's drain sees it, so what a
+    slow client has not read is in its per-topic queues (dropped oldest first), not megabytes of socket
+    buffer that a small message would wait behind."""
+    if sock is None or NOTSENT_LOWAT is None:
+        return
+    with contextlib.suppress(OSError):
+        sock.setsockopt(socket.IPPROTO_TCP, NOTSENT_LOWAT, UNSENT_BYTES)
 
 
 def make_app(endpoint: RosbridgeEndpoint) -> web.Application:

@@ -27,6 +27,7 @@ from arbiter_core.logs import log_to_file
 from arbiter_core.topics import MEASURED_TYPES
 from arbiter_core.topicstats import WINDOW_S
 
+from .bridge import DEAD_AFTER, MAX_FRAME_BYTES, TRANSPORT_MAX_FRAME, WS_PING_S
 from .server import Backend, BackendConfig
 
 if TYPE_CHECKING:
@@ -141,6 +142,24 @@ def build_parser() -> argparse.ArgumentParser:
         default=WINDOW_S,
         metavar="S",
         help=f"the sliding window of /api/topics' rates, bandwidths and delays (default: {WINDOW_S:g} s)",
+    )
+    p.add_argument(
+        "--ws-ping",
+        type=non_negative_float,
+        default=WS_PING_S,
+        metavar="SECONDS",
+        help="ping a WebSocket client silent this long, and drop it after "
+        f"{DEAD_AFTER} times as long without a word (0: never; default: {WS_PING_S:g}, "
+        "so a client that stops reading for 10 s is kept)",
+    )
+    p.add_argument(
+        "--max-frame",
+        type=lambda text: count(text, TRANSPORT_MAX_FRAME),
+        default=MAX_FRAME_BYTES,
+        metavar="BYTES",
+        help="largest frame a client may send (a camera frame published over the bridge: 640x480 rgb8 is "
+        f"1.2 MB as JSON); larger ones get a status error (default: {MAX_FRAME_BYTES}, "
+        f"at most {TRANSPORT_MAX_FRAME})",
     )
     p.add_argument("--log-file", help="write logs to this file, rotated at 1 MB, 3 kept (default: stderr)")
     add_log_level(p)
@@ -288,6 +307,8 @@ def main(argv: list[str] | None = None) -> int:
         topics_include=args.topics,
         topics_exclude=args.topics_exclude,
         topics_window=args.topics_window,
+        ws_ping=args.ws_ping,
+        max_frame=args.max_frame,
     )
     try:
         config.ssl_context()

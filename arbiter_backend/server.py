@@ -26,7 +26,8 @@ from arbiter_core.simulator import RATE_HZ, DiffDriveSimulator
 from arbiter_core.topicstats import WINDOW_S
 
 from . import api, bridge
-from .bus import TopicBus
+from .bridge import MAX_FRAME_BYTES, WS_PING_S
+from .bus import Bus, TopicBus
 from .topicwatch import EmbeddedTopics, TopicFilter, TopicWatch
 from .tracker import DEFAULT_MAX_COMMAND_AGE_MS, LatencyTracker
 
@@ -56,6 +57,14 @@ class BackendConfig:
     topics_include: str | None = None  # comma-separated globs of the topics /api/topics watches (None: all)
     topics_exclude: str | None = None
     topics_window: float = WINDOW_S
+    ws_ping: float = WS_PING_S  # the endpoint's liveness pings (seconds; 0: none)
+    max_frame: int = MAX_FRAME_BYTES  # a client's frames above this are answered with a status error
+
+    def make_endpoint(self, bus: Bus) -> bridge.RosbridgeEndpoint:
+        """The rosbridge endpoint of either transport (the embedded bus or the DDS relay)."""
+        return bridge.RosbridgeEndpoint(
+            bus, token=self.token, heartbeat=self.ws_ping or None, max_frame=self.max_frame
+        )
 
     def make_topic_watch(self) -> TopicWatch:
         return TopicWatch(TopicFilter.parse(self.topics_include, self.topics_exclude), self.topics_window)
@@ -112,7 +121,9 @@ class Servers:
         try:
             if endpoint is not None:
                 self.bridge_port = await self._serve(bridge.make_app(endpoint), self.config.bridge_port)
-            api_app = api.make_app(tracker, self.config.token, topics)
+            api_app = api.make_app(
+                tracker, self.config.token, topics, bridge=endpoint.stats if endpoint is not None else None
+            )
             self.api_port = await self._serve(api_app, self.config.api_port)
         except BaseException:
             await self.stop_servers(endpoint)
@@ -148,7 +159,7 @@ class Backend(Servers):
         self.tracker = config.make_tracker()
         self.simulator = config.make_simulator() if config.sim else None
         self.sim_enabled = self.simulator is not None
-        self.endpoint = bridge.RosbridgeEndpoint(self.bus, token=config.token)
+        self.endpoint = config.make_endpoint(self.bus)
         self._tasks: list[asyncio.Task[None]] = []
         # relative names under the namespace, as the ROS transport's nodes resolve them
         ns = config.namespace

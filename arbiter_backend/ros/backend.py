@@ -91,7 +91,7 @@ class RosBackend(Servers):
             self.tracker_node.local_report = self.bus.deliver_local
             stamped = self.tracker_node.stamped_sub.topic_name
             self.bus.local_handlers[stamped] = self.tracker_node.on_local_command
-            self.endpoint = bridge.RosbridgeEndpoint(self.bus, token=self.config.token)
+            self.endpoint = self.config.make_endpoint(self.bus)
             self._watch = asyncio.create_task(self.bus.watch_publishers())  # QoS follows the publishers
         await self.start_servers(self.endpoint, self.tracker, self.topics)
         if self.bridge_node is not None:

@@ -26,13 +26,14 @@ from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.node import Node
 from rclpy.publisher import Publisher
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.serialization import serialize_message
 from rclpy.subscription import Subscription
 
 from arbiter_core.msgtypes import MessageError, normalize_type
 from arbiter_core.topics import QOS_DEPTH, is_command
 
 from ..bus import Callback, TypeClash
-from .convert import message_class, to_json, to_ros
+from .convert import message_class, service_class, to_cbor, to_json, to_ros
 from .local import HandledLocally
 
 log = logging.getLogger(__name__)
@@ -133,6 +134,18 @@ def lifespan_s(profile: QoSProfile) -> float | None:
     return ns / 1e9 if 0 < ns < 2**63 - 1 else None
 
 
+class RosMessage(dict):  # type: ignore[type-arg]
+    """A message as the endpoint gets it: rosbridge's JSON form, with the ROS message it came from
+    and when it was received (wall clock, ns), for the CBOR encodings."""
+
+    __slots__ = ("received_ns", "ros")
+
+    def __init__(self, data: dict[str, Any], ros: Any, received_ns: int) -> None:
+        super().__init__(data)
+        self.ros = ros
+        self.received_ns = received_ns
+
+
 class RosBus:
     def __init__(self, node: Node, loop: asyncio.AbstractEventLoop) -> None:
         self.node = node
@@ -144,7 +157,10 @@ class RosBus:
         # texts handed over in-process (deliver_local), so that their DDS copy is not fanned out twice
         self._local: dict[str, HandledLocally] = {}
         self.local_delivered = 0
-        self.local_handlers: dict[str, Callable[[str], None]] = {}  # topic -> a node's in-process handler
+        self.local_handlers: dict[str, Callable[[str], None]] = {}
+        self._clients: dict[
+            str, tuple[type, Any]
+        ] = {}  # service -> (its type's class, the rclpy client)  # topic -> a node's in-process handler
 
     # -- types ------------------------------------------------------------------------------
     def _graph(self) -> dict[str, list[str]]:
@@ -324,6 +340,71 @@ class RosBus:
 
         return unsubscribe
 
+    def _ros_of(self, type_name: str | None, msg: dict[str, Any]) -> Any:
+        ros = getattr(msg, "ros", None)
+        if ros is not None:
+            return ros
+        if type_name is None:
+            raise MessageError("message type unknown")
+        return to_ros(message_class(type_name), msg)  # one handed over in-process (deliver_local)
+
+    def cbor_values(self, type_name: str | None, msg: dict[str, Any]) -> dict[str, Any]:
+        """rosbridge's CBOR form of a message this bus delivered (typed arrays, byte strings)."""
+        return to_cbor(self._ros_of(type_name, msg))
+
+    def cdr(self, type_name: str | None, msg: dict[str, Any]) -> tuple[bytes, int]:
+        """The CDR serialisation of a message this bus delivered (``cbor-raw``) and when it came (ns)."""
+        return serialize_message(self._ros_of(type_name, msg)), getattr(msg, "received_ns", time.time_ns())
+
+    # -- services ------------------------------------------------------------------------------
+    async def call_service(self, service: str, args: Any) -> dict[str, Any]:  # asyncio loop
+        """Call ``service`` (any on the graph; its type from the graph) with rosbridge ``args`` (an object
+        keyed by field, or a list in field order; anything else: the default request); the response in
+        JSON form. MessageError when there is no such service or the args do not fit. The caller
+        bounds the wait; a cancelled call is withdrawn from the client."""
+        types = dict(self.node.get_service_names_and_types()).get(service)
+        if not types:
+            raise MessageError(f"Service {service} does not exist")
+        srv = service_class(types[0])
+        if isinstance(args, list):
+            args = dict(zip(srv.Request.get_fields_and_field_types(), args, strict=False))
+        request = to_ros(srv.Request, args if isinstance(args, dict) else {}, path="args")
+        cached = self._clients.get(service)
+        if cached is None or cached[0] is not srv:
+            if cached is not None:
+                self.node.destroy_client(cached[1])
+            cached = self._clients[service] = (srv, self.node.create_client(srv, service))
+        client = cached[1]
+        for _ in range(20):  # up to 1 s for the server side to be matched, as rosbridge waits
+            if client.service_is_ready():
+                break
+            await asyncio.sleep(0.05)
+        else:
+            raise MessageError(f"Service {service} is not available")
+        future = client.call_async(request)
+        answer: asyncio.Future[Any] = self.loop.create_future()
+
+        def settle(done: Any) -> None:  # executor thread (or here, when already done)
+            def on_loop() -> None:
+                if answer.done():
+                    return
+                if done.exception() is not None:
+                    answer.set_exception(done.exception())
+                else:
+                    answer.set_result(done.result())
+
+            with contextlib.suppress(RuntimeError):
+                self.loop.call_soon_threadsafe(on_loop)
+
+        future.add_done_callback(settle)
+        try:
+            response = await answer
+        except asyncio.CancelledError:
+            with contextlib.suppress(Exception):
+                client.remove_pending_request(future)
+            raise
+        return to_json(response)
+
     def subscriber_count(self, topic: str) -> int:
         sub = self._subs.get(topic)
         return len(sub.callbacks) if sub else 0
@@ -345,7 +426,7 @@ class RosBus:
         if sub is None:
             return
         try:
-            data = to_json(msg)
+            data = RosMessage(to_json(msg), msg, time.time_ns())
         except Exception:
             log.exception("cannot convert a message on %s", topic)
             return
@@ -397,5 +478,8 @@ class RosBus:
                 self.node.destroy_subscription(sub.retiring)
         for pub in self._pubs.values():
             self.node.destroy_publisher(pub.publisher)
+        for _, client in self._clients.values():
+            self.node.destroy_client(client)
+        self._clients.clear()
         self._subs.clear()
         self._pubs.clear()

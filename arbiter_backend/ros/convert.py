@@ -7,6 +7,7 @@ there is no table per type. The conventions are rosbridge's: missing fields keep
 their defaults, unknown fields are errors, ints are accepted for floats,
 ``uint8[]``/``char[]``/``byte[]`` travel as base64 strings (lists of ints are
 accepted on the way in), non-finite floats leave as ``null`` (JSON has no NaN).
+``to_cbor`` gives rosbridge's CBOR form (``cborenc``).
 """
 
 from __future__ import annotations
@@ -21,6 +22,8 @@ from typing import Any
 from rosidl_parser import definition as rd
 
 from arbiter_core.msgtypes import MessageError, normalize_type
+
+from .. import cborenc
 
 _FLOATS = {"float", "double", "long double"}
 _BYTES = {"octet", "uint8", "char"}
@@ -51,6 +54,25 @@ def message_class(type_name: str) -> type:
         raise MessageError(f"message type {pkg}/msg/{name} is not installed") from None
     if not hasattr(cls, "get_fields_and_field_types"):
         raise MessageError(f"{pkg}/msg/{name} is not a message type")
+    return cls
+
+
+@lru_cache(maxsize=128)
+def service_class(type_name: str) -> type:
+    """The generated class for ``pkg/srv/Name`` (or ``pkg/Name``); MessageError if it is not installed."""
+    parts = type_name.split("/")
+    if len(parts) == 3 and parts[1] == "srv":
+        pkg, name = parts[0], parts[2]
+    elif len(parts) == 2:
+        pkg, name = parts
+    else:
+        raise MessageError(f"invalid service type name {type_name[:80]!r}")
+    try:
+        cls = getattr(importlib.import_module(f"{pkg}.srv"), name)
+    except (ImportError, AttributeError, ValueError):
+        raise MessageError(f"service type {pkg}/srv/{name} is not installed here") from None
+    if not hasattr(cls, "Request"):
+        raise MessageError(f"{pkg}/srv/{name} is not a service type")
     return cls
 
 
@@ -178,6 +200,40 @@ def _basic_json(typename: str, value: Any) -> Any:
     if typename == "octet" and isinstance(value, bytes):
         return value[0] if value else 0
     return int(value)
+
+
+# -- ROS -> CBOR (rosbridge's "cbor" compression) -------------------------------------------------
+_TYPED = {"float": "float32", "double": "float64", **{t: t for t in cborenc.TYPED_ARRAY_TAGS}}
+
+
+def to_cbor(msg: Any) -> dict[str, Any]:
+    """The CBOR form of a message instance (``cborenc``): byte arrays as bytes, numeric arrays as
+    little-endian typed arrays, fixed-size ones included (rosbridge fails on those)."""
+    return {name: _to_cbor_value(t, getattr(msg, name)) for name, t in _fields(type(msg))}
+
+
+def _to_cbor_value(t: Any, value: Any) -> Any:
+    if isinstance(t, rd.NamespacedType):
+        return to_cbor(value)
+    if isinstance(t, rd.AbstractNestedType):
+        elem = t.value_type
+        if isinstance(elem, rd.BasicType):
+            if elem.typename in _BYTES:
+                return b"".join(value) if elem.typename == "octet" else bytes(bytearray(value))
+            typed = _TYPED.get(elem.typename)
+            if typed is not None:
+                return cborenc.typed_array(typed, value)
+            return [_basic_cbor(elem.typename, v) for v in value]
+        return [_to_cbor_value(elem, v) for v in value]
+    if isinstance(t, rd.BasicType):
+        return _basic_cbor(t.typename, value)
+    return value  # strings
+
+
+def _basic_cbor(typename: str, value: Any) -> Any:
+    if typename in _FLOATS:
+        return float(value)  # CBOR holds NaN and infinities as they are
+    return _basic_json(typename, value)
 
 
 def _kind(value: Any) -> str:

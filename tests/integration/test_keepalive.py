@@ -1,14 +1,17 @@
-"""Dead links are found by WebSocket pings, from both ends, within a few seconds."""
+"""Dead links are found by WebSocket pings, from both ends; a busy client that stops reading is kept."""
 
 import asyncio
+import json
 import time
 
 import aiohttp
+import pytest
 
+from arbiter_backend.bridge import DEAD_AFTER, WS_PING_S
 from arbiter_tui.link.base import CONNECTED
 from arbiter_tui.link.rosbridge import PING_INTERVAL_S, PING_TIMEOUT_S, RosLink
 
-from ..support.backend import wait_for
+from ..support.backend import start_backend, wait_for
 from ..support.netfault import FaultProxy
 
 
@@ -33,10 +36,17 @@ def test_console_notices_a_silent_link_and_reconnects_when_it_returns(backend):
         proxy.close()
 
 
-async def test_server_drops_a_client_that_stops_answering_pings(backend):
+@pytest.fixture
+def quick_pings():
+    b = start_backend("--ws-ping", "0.5", "--no-sim")
+    yield b
+    b.stop()
+
+
+async def test_server_drops_a_client_that_stops_answering_pings(quick_pings):
     async with aiohttp.ClientSession() as session:
         # autoping off: this client never answers the server's pings
-        ws = await session.ws_connect(f"ws://127.0.0.1:{backend.bridge_port}/", autoping=False)
+        ws = await session.ws_connect(f"ws://127.0.0.1:{quick_pings.bridge_port}/", autoping=False)
         started = time.monotonic()
         pings = 0
         async for msg in ws:
@@ -45,9 +55,41 @@ async def test_server_drops_a_client_that_stops_answering_pings(backend):
             elif msg.type in (aiohttp.WSMsgType.CLOSE, aiohttp.WSMsgType.CLOSED, aiohttp.WSMsgType.ERROR):
                 break
         elapsed = time.monotonic() - started
-        assert pings >= 1
-        assert elapsed < 4.0, elapsed  # 2 s of silence, then 1 s for the pong
+        assert pings >= 2  # pinged every 0.5 s while silent
+        assert 0.5 * DEAD_AFTER - 0.1 <= elapsed < 0.5 * DEAD_AFTER + 1.5, elapsed
         assert ws.closed or ws.close_code is not None
+
+
+async def test_pings_off_never_drops_a_silent_client():
+    b = start_backend("--ws-ping", "0", "--no-sim")
+    try:
+        async with aiohttp.ClientSession() as session:
+            ws = await session.ws_connect(f"ws://127.0.0.1:{b.bridge_port}/", autoping=False)
+            with pytest.raises(asyncio.TimeoutError):
+                msg = await ws.receive(timeout=2.5)  # nothing at all: no ping, no close
+                raise AssertionError(msg)
+            await ws.send_str('{"op":"call_service","service":"/nope","id":"q"}')
+            assert json.loads((await ws.receive(timeout=5)).data)["id"] == "q"
+    finally:
+        b.stop()
+
+
+@pytest.mark.slow
+async def test_a_busy_client_that_does_not_read_for_ten_seconds_is_kept(backend):
+    """The issue's case, with the default --ws-ping: the stock server keeps such a client; so do we."""
+    assert WS_PING_S * (DEAD_AFTER - 1) > 10
+    async with aiohttp.ClientSession() as session:
+        ws = await session.ws_connect(f"ws://127.0.0.1:{backend.bridge_port}/")
+        await ws.send_str('{"op":"subscribe","topic":"/odom"}')  # 50 Hz from the simulator
+        started = time.monotonic()
+        await asyncio.sleep(11)  # busy elsewhere: not a byte read, no pong sent
+        assert time.monotonic() - started >= 11
+        frame = json.loads((await ws.receive(timeout=5)).data)
+        assert frame["op"] == "publish" and frame["topic"] == "/odom"
+        await ws.send_str('{"op":"call_service","service":"/nope","id":"after"}')
+        while (reply := json.loads((await ws.receive(timeout=5)).data))["op"] != "service_response":
+            pass
+        assert reply["id"] == "after" and not ws.closed
 
 
 async def test_server_keeps_a_quiet_client_that_answers_pings(backend):

@@ -1,0 +1,382 @@
+#!/usr/bin/env python
+"""Big messages beside small ones through the rosbridge endpoint: does a camera starve a small topic?
+
+A publisher (ROS mode: an rclpy node in its own process; embedded: a WebSocket client publishing
+JSON) sends a WxH rgb8 ``sensor_msgs/Image`` at 30 Hz and a small ``std_msgs/String`` at 20 Hz holding
+its publish time (ns). One WebSocket client subscribes to both, in JSON or ``compression: "cbor"``,
+and reads continuously for ``--seconds`` (after a warm-up). Printed per row: image frames/s delivered,
+the small topic's latency (receive minus publish time, same host clock) p50/p95/max, the server's CPU
+(user+system of the backend process over the window, % of one core), and what the server dropped.
+
+``json-frag`` rows ask for ``fragment_size`` 64 KiB on the camera (rosbridge ``fragment`` frames,
+between which the small topic's messages go). The slow client reads its socket at most ``--slow``
+image frames' worth of bytes a second (a link or
+a client that cannot take the camera's rate; its receive buffer is ``SLOW_RCVBUF``), and asks for
+``queue_length: 1`` on the camera, as a viewer of the latest frame would. Every row runs ``--repeat``
+times; the table shows medians. The stock rosbridge_server is not installed here, so it is not
+measured (the issue's figures for it: cbor 30 frames/s, small p95 1.13 ms).
+
+    python bench/bigmsg.py --transport both --seconds 15 --repeat 3
+
+Last line: one JSON object with every row.
+"""
+
+from __future__ import annotations
+
+import argparse
+import base64
+import json
+import os
+import random
+import socket
+import statistics
+import struct
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import cbor2
+from _common import emit, pct
+
+from arbiter_core.listening import parse_listening
+
+SMALL = "/bench/small"
+IMAGE = "/bench/image"
+WARMUP_S = 2.0
+SLOW_RCVBUF = 128 * 1024
+FRAGMENT = 64 * 1024  # fragment_size of the json-frag rows
+TICK = os.sysconf("SC_CLK_TCK")
+
+
+# -- a WebSocket reader on a plain socket (so that the slow client can pace its reads) ---------------
+class Reader(threading.Thread):
+    def __init__(
+        self, port: int, subscribe: list[dict], rate_bytes: float | None = None, rcvbuf: int = SLOW_RCVBUF
+    ) -> None:
+        super().__init__(daemon=True)
+        self.sock = socket.socket()
+        if rate_bytes is not None:
+            self.sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, rcvbuf)
+        self.sock.connect(("127.0.0.1", port))
+        self.sock.sendall(
+            b"GET / HTTP/1.1\r\nHost: 127.0.0.1\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
+            b"Sec-WebSocket-Key: "
+            + base64.b64encode(os.urandom(16))
+            + b"\r\nSec-WebSocket-Version: 13\r\n\r\n"
+        )
+        head = b""
+        while b"\r\n\r\n" not in head:
+            head += self.sock.recv(4096)
+        assert b" 101 " in head.split(b"\r\n", 1)[0], head
+        self.buf = bytearray(head.split(b"\r\n\r\n", 1)[1])
+        self.rate = rate_bytes
+        self.images: list[int] = []  # receive times (ns)
+        self.small: list[tuple[int, int]] = []  # (publish ns, receive ns)
+        self.stop = False
+        for frame in subscribe:
+            self.send(json.dumps(frame).encode())
+
+    def send(self, payload: bytes, opcode: int = 1) -> None:
+        mask = b"\x00\x00\x00\x00"  # a valid key that leaves the payload as it is: no Python XOR of MBs
+        n = len(payload)
+        head = bytes([0x80 | opcode])
+        if n < 126:
+            head += bytes([0x80 | n])
+        elif n < 65536:
+            head += bytes([0x80 | 126]) + struct.pack("!H", n)
+        else:
+            head += bytes([0x80 | 127]) + struct.pack("!Q", n)
+        self.sock.sendall(head + mask + payload)
+
+    def run(self) -> None:
+        budget, last = 0.0, time.monotonic()
+        self.sock.settimeout(0.5)
+        while not self.stop:
+            want = 1 << 20
+            if self.rate is not None:
+                now = time.monotonic()
+                budget = min(budget + (now - last) * self.rate, 65536.0)
+                last = now
+                if budget < 4096:
+                    time.sleep((4096 - budget) / self.rate)
+                    continue
+                want = int(budget)
+            try:
+                data = self.sock.recv(want)
+            except TimeoutError:
+                continue
+            except OSError:
+                return
+            if not data:
+                return
+            if self.rate is not None:
+                budget -= len(data)
+            self.buf += data
+            self._frames()
+
+    def _frames(self) -> None:
+        buf = self.buf
+        while len(buf) >= 2:
+            opcode, n, i = buf[0] & 0x0F, buf[1] & 0x7F, 2
+            if n == 126:
+                if len(buf) < 4:
+                    return
+                (n,) = struct.unpack_from("!H", buf, 2)
+                i = 4
+            elif n == 127:
+                if len(buf) < 10:
+                    return
+                (n,) = struct.unpack_from("!Q", buf, 2)
+                i = 10
+            if len(buf) < i + n:
+                return
+            now = time.time_ns()
+            if opcode in (1, 2):
+                head = bytes(buf[i : i + 80])
+                if SMALL.encode() in head:
+                    payload = bytes(buf[i : i + n])
+                    frame = json.loads(payload) if opcode == 1 else cbor2.loads(payload)
+                    self.small.append((int(frame["msg"]["data"]), now))
+                elif IMAGE.encode() in head:
+                    if b'"op":"fragment"' in head:  # fragment_size: a frame is whole at its last fragment
+                        frag = json.loads(bytes(buf[i : i + n]))
+                        if frag["num"] == frag["total"] - 1:
+                            self.images.append(now)
+                    else:
+                        self.images.append(now)
+            elif opcode == 9:
+                self.send(bytes(buf[i : i + n]), opcode=10)
+            elif opcode == 8:
+                self.stop = True
+            del buf[: i + n]
+
+    def close(self) -> None:
+        self.stop = True
+        self.join(2)
+        self.sock.close()
+
+
+# -- publishers ------------------------------------------------------------------------------------
+def publish_ros(width: int, height: int) -> None:
+    import rclpy
+    from sensor_msgs.msg import Image
+    from std_msgs.msg import String
+
+    rclpy.init()
+    node = rclpy.create_node("bigmsg_publisher")
+    cam = node.create_publisher(Image, IMAGE, 10)
+    small = node.create_publisher(String, SMALL, 10)
+    img = Image(height=height, width=width, encoding="rgb8", step=width * 3)
+    img.data = bytes(random.Random(1).randbytes(width * height * 3))
+    _loop(lambda: cam.publish(img), lambda: small.publish(String(data=str(time.time_ns()))))
+
+
+def publish_ws(port: int, width: int, height: int) -> None:
+    sock = Reader(port, [])
+    for topic, type_name in ((IMAGE, "sensor_msgs/Image"), (SMALL, "std_msgs/String")):
+        sock.send(json.dumps({"op": "advertise", "topic": topic, "type": type_name}).encode())
+    data = base64.b64encode(random.Random(1).randbytes(width * height * 3)).decode()
+    image = json.dumps(
+        {
+            "op": "publish",
+            "topic": IMAGE,
+            "msg": {"height": height, "width": width, "encoding": "rgb8", "step": width * 3, "data": data},
+        }
+    ).encode()
+    threading.Thread(target=_drain, args=(sock.sock,), daemon=True).start()
+    _loop(
+        lambda: sock.send(image),
+        lambda: sock.send(
+            json.dumps({"op": "publish", "topic": SMALL, "msg": {"data": str(time.time_ns())}}).encode()
+        ),
+    )
+
+
+def _drain(sock: socket.socket) -> None:
+    while sock.recv(65536):
+        pass
+
+
+def _loop(image, small) -> None:
+    t0 = time.monotonic()
+    next_image, next_small = t0, t0
+    while True:
+        now = time.monotonic()
+        if now >= next_image:
+            image()
+            next_image += 1 / 30
+        if now >= next_small:
+            small()
+            next_small += 1 / 20
+        time.sleep(max(0.0, min(next_image, next_small) - time.monotonic()))
+
+
+# -- one row -----------------------------------------------------------------------------------------
+def cpu_s(pid: int) -> float:
+    with open(f"/proc/{pid}/stat") as fh:
+        fields = fh.read().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / TICK
+
+
+def start_backend(transport: str, env: dict) -> tuple[subprocess.Popen, int, int]:
+    cmd = [sys.executable, "-m", "arbiter_backend.cli", "--transport", transport, "--no-sim"]
+    cmd += ["--bridge-port", "0", "--api-port", "0", "--max-frame", "16000000", "--log-level", "WARNING"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, text=True, env=env)
+    deadline = time.monotonic() + 30
+    while time.monotonic() < deadline:
+        found = parse_listening(proc.stdout.readline())
+        if found is not None:
+            return proc, found.bridge_port, found.api_port
+    proc.kill()
+    raise RuntimeError("backend did not start")
+
+
+def run_row(
+    transport: str,
+    width: int,
+    height: int,
+    encoding: str,
+    seconds: float,
+    slow: float | None,
+    rcvbuf: int = SLOW_RCVBUF,
+) -> dict:
+    env = {
+        **os.environ,
+        "ROS_DOMAIN_ID": str(random.randint(1, 100)),
+        "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST",
+    }
+    env["PYTHONPATH"] = str(Path(__file__).resolve().parent.parent)
+    proc, port, api_port = start_backend(transport, env)
+    me = [
+        sys.executable,
+        __file__,
+        "--publisher",
+        transport,
+        "--size",
+        f"{width}x{height}",
+        "--port",
+        str(port),
+    ]
+    pub = subprocess.Popen(me, env=env)
+    try:
+        extra = {"compression": "cbor"} if encoding == "cbor" else {}
+        cam = {"op": "subscribe", "topic": IMAGE, "type": "sensor_msgs/Image", **extra}
+        if slow is not None:
+            cam["queue_length"] = 1
+        if encoding == "json-frag":
+            cam["fragment_size"] = FRAGMENT
+        reader = Reader(
+            port,
+            [cam, {"op": "subscribe", "topic": SMALL, "type": "std_msgs/String", **extra}],
+            rate_bytes=None
+            if slow is None
+            else slow * width * height * 3 * (1 if encoding == "cbor" else 4 / 3),
+            rcvbuf=rcvbuf,
+        )
+        reader.start()
+        deadline = time.monotonic() + 30
+        while not (reader.images and reader.small) and time.monotonic() < deadline:
+            time.sleep(0.05)  # discovery, first frames
+        time.sleep(WARMUP_S)
+        t0, c0 = time.time_ns(), cpu_s(proc.pid)
+        time.sleep(seconds)
+        t1, c1 = time.time_ns(), cpu_s(proc.pid)
+        images = [t for t in reader.images if t0 <= t < t1]
+        lat = [(r - p) / 1e6 for p, r in reader.small if t0 <= r < t1]
+        sent = int((t1 - t0) / 1e9 * 20)
+        try:
+            import httpx
+
+            dropped = httpx.get(f"http://127.0.0.1:{api_port}/api/health", timeout=5).json()["bridge"][
+                "dropped"
+            ]
+        except Exception:
+            dropped = {}
+        reader.close()
+        return {
+            "transport": transport,
+            "size": f"{width}x{height}",
+            "encoding": encoding,
+            "client": "normal" if slow is None else f"slow ({slow:g}/s, {rcvbuf // 1024}K)",
+            "frames_per_s": round(len(images) / ((t1 - t0) / 1e9), 2),
+            "small_p50_ms": pct(lat, 0.5),
+            "small_p95_ms": pct(lat, 0.95),
+            "small_max_ms": round(max(lat), 3) if lat else None,
+            "small_received": len(lat),
+            "small_expected": sent,
+            "server_cpu_pct": round(100 * (c1 - c0) / ((t1 - t0) / 1e9), 1),
+            "dropped": dropped,
+        }
+    finally:
+        pub.kill()
+        pub.wait()
+        proc.terminate()
+        try:
+            proc.wait(10)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+
+
+def median_row(rows: list[dict]) -> dict:
+    out = dict(rows[0])
+    for key in ("frames_per_s", "small_p50_ms", "small_p95_ms", "small_max_ms", "server_cpu_pct"):
+        vals = [r[key] for r in rows if r[key] is not None]
+        out[key] = round(statistics.median(vals), 3) if vals else None
+    out["runs"] = len(rows)
+    return out
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--transport", choices=("embedded", "ros", "both"), default="both")
+    p.add_argument("--sizes", default="640x480,1280x720")
+    p.add_argument("--encodings", default="json,cbor")
+    p.add_argument("--seconds", type=float, default=15.0)
+    p.add_argument("--repeat", type=int, default=3)
+    p.add_argument(
+        "--slow", type=float, default=5.0, help="the slow client's image frames/s (0: no such row)"
+    )
+    p.add_argument(
+        "--slow-rcvbuf",
+        type=int,
+        default=SLOW_RCVBUF,
+        help="the slow client's SO_RCVBUF (Linux doubles it): bytes a small message may wait behind there",
+    )
+    p.add_argument("--publisher", help=argparse.SUPPRESS)
+    p.add_argument("--size", help=argparse.SUPPRESS)
+    p.add_argument("--port", type=int, help=argparse.SUPPRESS)
+    args = p.parse_args()
+    if args.publisher:
+        w, h = map(int, args.size.split("x"))
+        publish_ros(w, h) if args.publisher == "ros" else publish_ws(args.port, w, h)
+        return
+    transports = ("embedded", "ros") if args.transport == "both" else (args.transport,)
+    sizes = [tuple(map(int, s.split("x"))) for s in args.sizes.split(",")]
+    encodings = args.encodings.split(",")
+    cases = [(t, w, h, e, None) for t in transports for (w, h) in sizes for e in encodings]
+    if args.slow:
+        slow_encodings = [*encodings, "json-frag"] if "json" in encodings else encodings
+        cases += [(t, *sizes[0], e, args.slow) for t in transports for e in slow_encodings]
+    rows = []
+    head = f"{'transport':9} {'size':9} {'enc':9} {'client':18} {'frames/s':>8} {'p50 ms':>8} {'p95 ms':>8}"
+    print(head + f" {'max ms':>8} {'small':>9} {'cpu %':>6}  dropped", flush=True)
+    for t, w, h, e, slow in cases:
+        row = median_row(
+            [run_row(t, w, h, e, args.seconds, slow, args.slow_rcvbuf) for _ in range(args.repeat)]
+        )
+        rows.append(row)
+        print(
+            f"{row['transport']:9} {row['size']:9} {row['encoding']:9} {row['client']:18} "
+            f"{row['frames_per_s']:8.2f} {row['small_p50_ms']:8.2f} {row['small_p95_ms']:8.2f} "
+            f"{row['small_max_ms']:8.2f} {row['small_received']:4}/{row['small_expected']:<4} "
+            f"{row['server_cpu_pct']:6.1f}  {row['dropped']}",
+            flush=True,
+        )
+    print("stock rosbridge_server: not measured (not installed here; run it with a publisher and compare)")
+    emit({"bench": "bigmsg", "seconds": args.seconds, "repeat": args.repeat, "rows": rows})
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,106 @@
+"""call_service to any service on the ROS graph (issue 34, item 1): answers, failures as ``result: false``
+within the call's ``timeout``, never a hang, and the connection stays up."""
+
+import asyncio
+import json
+import threading
+
+import aiohttp
+import pytest
+
+from ..support.backend import start_backend
+from ..support.ros import Peer, use_test_domain
+from ..support.waits import async_until
+
+srv = pytest.importorskip("rcl_interfaces.srv")
+
+ros_domain = pytest.fixture(scope="module", autouse=True)(use_test_domain)
+
+
+@pytest.fixture
+def peer():
+    p = Peer("arbiter_srv_peer")
+    yield p
+    p.close()
+
+
+@pytest.fixture
+def stuck_peer():
+    p = Peer("arbiter_stuck_peer")  # its own executor thread: a stuck callback blocks only it
+    yield p
+    p.close()
+
+
+@pytest.fixture
+def ros_backend(peer):
+    b = start_backend("--transport", "ros", "--no-sim", timeout=30)
+    yield b
+    b.stop()
+
+
+async def call(ws, **frame):
+    await ws.send_str(json.dumps({"op": "call_service", **frame}))
+    while True:
+        reply = json.loads((await ws.receive(timeout=15)).data)
+        if reply.get("id") == frame.get("id"):
+            return reply
+
+
+async def test_call_service_reaches_any_service_and_fails_cleanly(peer, stuck_peer, ros_backend):
+    peer.node.declare_parameter("speed", 1.5)
+    release, called = threading.Event(), threading.Event()
+
+    def stuck(request, response):  # a server that answers only when told to
+        called.set()
+        release.wait(20)
+        return response
+
+    stuck_peer.node.create_service(srv.GetParameterTypes, "/stuck", stuck)
+    url = f"ws://127.0.0.1:{ros_backend.bridge_port}/"
+    async with aiohttp.ClientSession() as session:
+        ws = await session.ws_connect(url)
+        name = "/arbiter_srv_peer/get_parameters"
+        # the graph needs a moment to show the peer's services to the backend
+        for _ in range(100):
+            reply = await call(ws, id="g", service=name, args={"names": ["speed"]})
+            if reply["result"]:
+                break
+            await asyncio.sleep(0.1)
+        assert reply["result"] is True, reply
+        assert reply["values"]["values"][0]["double_value"] == 1.5
+        assert reply["service"] == name
+        # args as a list in field order, as the protocol document has it
+        reply = await call(ws, id="l", service=name, args=[["speed"]])
+        assert reply["result"] is True and reply["values"]["values"][0]["double_value"] == 1.5
+
+        reply = await call(ws, id="n", service="/no/such/service")
+        assert reply == {
+            "op": "service_response",
+            "service": "/no/such/service",
+            "id": "n",
+            "result": False,
+            "values": "Service /no/such/service does not exist",
+        }
+        reply = await call(ws, id="b", service=name, args={"nope": 1})
+        assert reply["result"] is False and "unknown field" in reply["values"]
+
+        # a server that does not answer: result false after the call's timeout, and the socket is free
+        await ws.send_str(json.dumps({"op": "call_service", "id": "t", "service": "/stuck", "timeout": 0.5}))
+        await ws.send_str(
+            json.dumps({"op": "call_service", "id": "g2", "service": name, "args": {"names": []}})
+        )
+        first = json.loads((await ws.receive(timeout=15)).data)
+        second = json.loads((await ws.receive(timeout=15)).data)
+        assert first["id"] == "g2" and first["result"] is True  # not held behind the stuck call
+        assert second["id"] == "t" and second["result"] is False
+        assert second["values"] == "/stuck: no response within 0.5 s"
+        assert called.is_set()  # it reached the server, which did not answer in time
+        release.set()  # (before stuck_peer closes)
+
+        await ws.send_str(json.dumps({"op": "call_service", "id": "x", "service": name, "timeout": -1}))
+        bad = json.loads((await ws.receive(timeout=5)).data)
+        assert bad["op"] == "status" and bad["id"] == "x" and "timeout" in bad["msg"]
+        assert await async_until(lambda: not ws.closed)
+        # rosapi still answers from the endpoint itself
+        reply = await call(ws, id="r", service="/rosapi/topics")
+        assert reply["result"] is True
