@@ -59,8 +59,9 @@ def build_parser() -> argparse.ArgumentParser:
         "starts the bundled backend (rosbridge endpoint, latency tracker, simulated robot) on 127.0.0.1 and "
         "drives it. Subcommands: 'arbiter-tui compare [--help]' runs every controller on every mission in "
         "simulated time (behind a modelled link with --latency) and ranks them per mission; 'arbiter-tui "
-        "stats FILE [--help]' prints the statistics of an export; 'arbiter-tui topics [--help]' prints "
-        "every topic's rate, bandwidth, delay and age as the backend measures them.",
+        "stats FILE|BAG_DIR [--help]' prints the statistics of an export or of a ros2 bag recorded on the "
+        "robot; 'arbiter-tui topics [--help]' prints every topic's rate, bandwidth, delay and age as the "
+        "backend measures them.",
     )
     m = p.add_mutually_exclusive_group()
     m.add_argument(
