@@ -10,8 +10,8 @@ from typing import Any, Protocol
 from aiohttp import web
 
 from arbiter_core import auth
+from arbiter_core.hostclock import HostClock
 
-from .hostclock import HostClock
 from .tracker import DEFAULT_LIMIT, LatencyTracker
 
 

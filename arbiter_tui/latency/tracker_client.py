@@ -14,11 +14,10 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from arbiter_core.failures import connect_failure, http_failure
+from arbiter_core.hostclock import HostClock
 from arbiter_core.record import LatencyRecord, RecordError, parse_latency_stats
 from arbiter_core.stats import Summary
 from arbiter_core.timesync import TimeSync
-
-from .hostclock import HostClock
 
 if TYPE_CHECKING:
     import httpx

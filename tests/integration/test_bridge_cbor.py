@@ -7,25 +7,8 @@ import struct
 
 import aiohttp
 import cbor2
-import pytest
-
-from arbiter_backend.server import Backend, BackendConfig
 
 from ..support.waits import async_until
-
-
-@pytest.fixture
-async def server():
-    b = Backend(BackendConfig(bridge_port=0, api_port=0, sim=False))
-    await b.start()
-    yield b
-    await b.stop()
-
-
-@pytest.fixture
-async def session():
-    async with aiohttp.ClientSession() as s:
-        yield s
 
 
 async def connect(session, server):

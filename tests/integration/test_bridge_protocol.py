@@ -8,24 +8,9 @@ import aiohttp
 import pytest
 
 from arbiter_backend.bridge import Client
-from arbiter_backend.server import Backend, BackendConfig
 from arbiter_core import envelope
 
 from ..support.waits import async_until
-
-
-@pytest.fixture
-async def server():
-    b = Backend(BackendConfig(bridge_port=0, api_port=0, sim=False))
-    await b.start()
-    yield b
-    await b.stop()
-
-
-@pytest.fixture
-async def session():
-    async with aiohttp.ClientSession() as s:
-        yield s
 
 
 async def ws_connect(session, backend):

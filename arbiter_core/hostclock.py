@@ -1,5 +1,8 @@
 """This host's time-sync status (the probing; parsing and order are ``arbiter_core.timesync``'s).
 
+Shared by the backend (``/api/health``) and the console (its own host): one probe, in the shared core
+although it runs programs, because the two sides never import each other and it uses no I/O framework.
+
 Read-only and unprivileged: ``chronyc -c tracking`` and ``timedatectl show`` with a short timeout,
 then the ``adjtimex`` syscall with no modes set (Linux; via ctypes). A missing tool, a failure or a
 timeout is "not this one", never an error. The answer is cached for ``max_age_s``: the status
