@@ -22,7 +22,6 @@ reconnect does no harm.
 
 from __future__ import annotations
 
-import contextlib
 import threading
 import time
 from collections.abc import Callable
@@ -99,15 +98,19 @@ class Streams:
         listener = _Listener(callback, throttle_ms / 1000.0, queue_length)
         with self._lock:
             stream = self._streams.get(topic)
+            new = stream is None
             if stream is None:
                 self._ids += 1
                 stream = _Stream(topic, type_name, f"subscribe:{topic}:{self._ids}", lambda m: None)
                 stream.dispatcher = self._dispatcher(stream)
                 self._streams[topic] = stream
-                self._attach(topic, stream.dispatcher)
             key = id(listener)
             stream.listeners[key] = listener
             self._sync(stream)
+        if new:
+            # outside our lock: the link's emitter holds its own lock while it calls a dispatcher
+            # (which takes ours), so taking them in the other order here could deadlock
+            self._attach(topic, stream.dispatcher)
 
         def remove() -> None:
             self._remove(stream, key)
@@ -125,9 +128,9 @@ class Streams:
                 return
             if self._streams.get(stream.topic) is stream:
                 del self._streams[stream.topic]
-            self._detach(stream.topic, stream.dispatcher)
             if self._connected and stream.sent is not None:
                 self._write({"op": "unsubscribe", "id": stream.sub_id, "topic": stream.topic})
+        self._detach(stream.topic, stream.dispatcher)  # outside our lock, as in ``listen``
 
     # the connection
 
@@ -197,8 +200,8 @@ class Streams:
                     if listener.timer is None and self._call_later is not None:
                         wait = listener.last_at + listener.throttle_s - now
                         listener.timer = self._call_later(wait, self._flusher(stream, listener))
-        for callback in due:  # outside the lock: a listener may add or remove listeners
-            callback(msg)
+        for callback in due:  # outside the lock: a listener may add or remove listeners (and so one
+            callback(msg)  # removed by another thread meanwhile may still get this last message)
 
     def _flusher(self, stream: _Stream, listener: _Listener) -> Callable[[], None]:
         def flush() -> None:
@@ -214,13 +217,9 @@ class Streams:
 
     @staticmethod
     def _cancel(listener: _Listener) -> None:
+        """Drop the held-back message. Its timer is left to fire and find nothing: a Twisted timer
+        may be cancelled only on the reactor's thread, and listeners go from the UI's."""
         listener.pending = None
-        if listener.timer is not None:
-            cancel = getattr(listener.timer, "cancel", None)
-            if cancel is not None:
-                with contextlib.suppress(Exception):  # already fired or cancelled: Twisted raises
-                    cancel()
-            listener.timer = None
 
     # what is there
 

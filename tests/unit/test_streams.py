@@ -168,3 +168,39 @@ def test_a_listener_may_remove_itself_while_called():
 def test_negative_parameters_are_refused():
     with pytest.raises(ValueError):
         Streams(lambda f: None).listen("/t", "std_msgs/String", lambda m: None, throttle_ms=-1)
+
+
+def test_a_new_listener_never_deadlocks_with_a_message_being_dispatched():
+    """roslibpy's emitter holds its lock while it calls our dispatcher (which takes ours); listening to a
+    new topic takes the emitter's lock to attach. Attaching under our lock deadlocked the UI thread
+    (selecting a row on screen 4) against the reactor (odometry arriving): both hung."""
+    import threading
+
+    from roslibpy.event_emitter import EventEmitterMixin
+
+    emitter = EventEmitterMixin()
+    in_attach, emitting = threading.Event(), threading.Event()
+
+    def attach(topic: str, fn: Any) -> None:
+        if topic == "/scan":  # the second listener: hold here until a dispatch is under way
+            in_attach.set()
+            emitting.wait(5)
+        emitter.on(topic, fn)
+
+    streams = Streams(lambda f: None, attach=attach, detach=emitter.off)
+    streams.connected()
+    got: list[Any] = []
+    streams.listen("/odom", "nav_msgs/Odometry", got.append)
+    emitter.on("/odom", lambda msg: emitting.set())  # runs under the emitter's lock, before ours is taken
+    ui = threading.Thread(
+        target=streams.listen, args=("/scan", "sensor_msgs/LaserScan", got.append), daemon=True
+    )
+    reactor = threading.Thread(
+        target=lambda: (in_attach.wait(5), emitter.emit("/odom", {"n": 1})), daemon=True
+    )
+    ui.start()
+    reactor.start()
+    ui.join(5)
+    reactor.join(5)
+    assert not ui.is_alive() and not reactor.is_alive(), "deadlocked"
+    assert got == [{"n": 1}]
