@@ -64,19 +64,21 @@ class HostClock:
     def __init__(self, max_age_s: float = 30.0) -> None:
         self.max_age_s = max_age_s
         self._lock = threading.Lock()
+        self._probing = threading.Lock()
         self._value: TimeSync | None = None
         self._at = 0.0
 
     def read(self) -> TimeSync:
         """Blocking (up to ~2 s when probing): call it off the event loop."""
-        now = time.monotonic()
-        with self._lock:
-            if self._value is not None and now - self._at < self.max_age_s:
-                return self._value
-        value = timesync.probe(run, adjtimex)
-        with self._lock:
-            self._value, self._at = value, time.monotonic()
-        return value
+        with self._probing:  # one probe at a time: callers that come meanwhile take its answer
+            now = time.monotonic()
+            with self._lock:
+                if self._value is not None and now - self._at < self.max_age_s:
+                    return self._value
+            value = timesync.probe(run, adjtimex)
+            with self._lock:
+                self._value, self._at = value, time.monotonic()
+            return value
 
     def cached(self) -> TimeSync | None:
         with self._lock:

@@ -731,12 +731,13 @@ class ArbiterApp(App[None]):
     def _export_written(self, event: ExportWritten) -> None:
         r = event.result
         where = Path(r.path).resolve() if r.path is not None else r.path  # the whole path: no guessing where
-        self.notify(f"wrote {where} ({r.points} points)", timeout=4)
+        self.notify(f"wrote {where} ({r.points} points)", timeout=4, markup=False)  # a path is no markup
 
     @on(ExportFailed)
     def _export_failed(self, event: ExportFailed) -> None:
         r = event.result
-        self.notify(f"EXPORT FAILED ({r.fmt}): {r.error} — collected data kept", severity="error", timeout=8)
+        text = f"EXPORT FAILED ({r.fmt}): {r.error} — collected data kept"
+        self.notify(text, severity="error", timeout=8, markup=False)
 
     # -- shared views ------------------------------------------------------------------------------
     def latency_view(self) -> LatencyView | None:

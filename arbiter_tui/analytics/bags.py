@@ -10,6 +10,7 @@ recording this expects (topic names are options).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -47,10 +48,14 @@ DEFAULT_CONFIG = ObserveConfig()
 
 
 def read_bag(
-    path: Path, topics: BagTopics = DEFAULT_TOPICS, config: ObserveConfig = DEFAULT_CONFIG
+    path: Path,
+    topics: BagTopics = DEFAULT_TOPICS,
+    config: ObserveConfig = DEFAULT_CONFIG,
+    warn: Callable[[str], None] = lambda text: None,
 ) -> Export:
     """The bag's runs and samples as an :class:`Export` (points and run summaries); ExportFormatError
-    with one line saying what is wrong (not a bag, damaged, no odometry)."""
+    with one line saying what is wrong (not a bag, damaged, no odometry). ``warn``: what the figures
+    cannot vouch for (frames that differ, stamps from another clock), once each."""
     try:
         from rosbags.highlevel import AnyReader
         from rosbags.typesys import Stores, get_typestore
@@ -83,6 +88,7 @@ def read_bag(
                     _check_type(conn, types)
                     wanted.append(conn)
             pending_cmd: tuple[Any, int, bytes] | None = None  # the latest command, decoded when sampled
+            frames: dict[str, str] = {}  # each topic's header.frame_id, as first seen
             for conn, t_ns, raw in reader.messages(connections=wanted):
                 topic = conn.topic
                 if topic == topics.odom:
@@ -91,20 +97,36 @@ def read_bag(
                     if pending_cmd is not None:
                         _command(observer, reader, *pending_cmd)
                         pending_cmd = None
-                    _odometry(observer, t_ns, reader.deserialize(raw, conn.msgtype))
+                    msg = reader.deserialize(raw, conn.msgtype)
+                    frames.setdefault(topic, msg.header.frame_id)
+                    _odometry(observer, t_ns, msg)
                 elif topic == topics.cmd:
                     pending_cmd = (conn, t_ns, raw)
                 elif topic == topics.plan:
                     msg = reader.deserialize(raw, conn.msgtype)
+                    frames.setdefault(topic, msg.header.frame_id)
                     observer.on_plan(t_ns, [(p.pose.position.x, p.pose.position.y) for p in msg.poses])
                 else:
                     msg = reader.deserialize(raw, conn.msgtype)
+                    frames.setdefault(topic, msg.header.frame_id)
                     observer.on_goal(t_ns, msg.pose.position.x, msg.pose.position.y)
     except ExportFormatError:
         raise
     except Exception as exc:  # rosbags' own errors, and what a damaged file makes its decoders raise
         raise ExportFormatError(f"damaged or unreadable ros2 bag {path}: {_reason(exc)}") from None
     observer.finish()
+    odom_frame = frames.get(topics.odom)
+    other = {t: f for t, f in frames.items() if t != topics.odom and f and odom_frame and f != odom_frame}
+    for topic, frame in other.items():
+        warn(
+            f"{topic} is in frame '{frame}', odometry in '{odom_frame}': errors and cross-track figures take "
+            "the two as one (true while the robot's odometry has not drifted from the map)"
+        )
+    if observer.foreign_stamps:
+        warn(
+            f"{observer.foreign_stamps} stamped commands carry another clock's stamp (over a minute off the "
+            "recording's: use_sim_time?): no latency taken from them"
+        )
     return Export(store.points(), store.runs(), store.runs_by_algorithm())
 
 

@@ -40,6 +40,7 @@ from .store import AnalyticsStore
 from .tracking import reference_path
 
 Point = tuple[float, float]
+MAX_AGE_MS = 60_000.0  # a command "older" than a minute (or from the future) carries another clock's stamp
 
 
 @dataclass(frozen=True, slots=True)
@@ -71,6 +72,7 @@ class Observer:
         self._pending_plan: np.ndarray | None = None  # ... with this plan, when one came for it
         self._last_ms = 0.0
         self.samples = 0
+        self.foreign_stamps = 0  # stamped commands whose stamp is from another clock (no latency taken)
 
     # -- what arrives --------------------------------------------------------------------------
     def wants_odometry(self, t_ns: int) -> bool:
@@ -123,12 +125,17 @@ class Observer:
         if not (math.isfinite(v) and math.isfinite(w)):
             return
         self._cmd = (v, w)
-        self._cmd_latency_ms = None if stamp_ns is None else round((t_ns - stamp_ns) / 1e6, 4)
+        age_ms = None if stamp_ns is None else (t_ns - stamp_ns) / 1e6
+        if age_ms is not None and abs(age_ms) > MAX_AGE_MS:
+            self.foreign_stamps += 1  # another clock (use_sim_time): no latency, rather than 1.7e12 ms
+            age_ms = None
+        self._cmd_latency_ms = None if age_ms is None else round(age_ms, 4)
 
     def on_plan(self, t_ns: int, points: Sequence[Point]) -> None:
+        points = [(float(x), float(y)) for x, y in points if math.isfinite(x) and math.isfinite(y)]
         if not points:
             return  # Nav2 publishes an empty path when planning fails: no new goal
-        end = (float(points[-1][0]), float(points[-1][1]))
+        end = points[-1]
         path = np.asarray(points, dtype=np.float64).reshape(-1, 2)
         goal = self._goal or self._pending_goal
         if goal is not None and math.hypot(end[0] - goal[0], end[1] - goal[1]) <= self.config.tolerance_m:
@@ -148,8 +155,9 @@ class Observer:
     def on_goal(self, t_ns: int, x: float, y: float) -> None:
         if not (math.isfinite(x) and math.isfinite(y)):
             return
-        if self._goal is not None and math.hypot(x - self._goal[0], y - self._goal[1]) <= 1e-9:
-            return  # the same goal again (a latched topic replayed)
+        same = self._pending_goal if self._pending_goal is not None else (self._goal if self._run else None)
+        if same is not None and math.hypot(x - same[0], y - same[1]) <= 1e-9:
+            return  # the goal in force again (a latched topic replayed); after a run ended it is a new run
         if self._pose is None:
             self._pending_goal, self._pending_plan = (x, y), None
             return

@@ -150,7 +150,12 @@ def run(argv: list[str]) -> int:
     try:
         if is_bag(args.file):
             topics = BagTopics(args.odom_topic, args.cmd_topic, args.plan_topic, args.goal_topic)
-            export = read_bag(args.file, topics, ObserveConfig(label=args.label))
+            export = read_bag(
+                args.file,
+                topics,
+                ObserveConfig(label=args.label),
+                warn=lambda text: print(f"arbiter-tui stats: {args.file}: warning: {text}", file=sys.stderr),
+            )
         else:
             export = load_export(args.file)
     except FileNotFoundError:

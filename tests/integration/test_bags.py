@@ -36,6 +36,9 @@ def test_an_mcap_and_an_sqlite_bag_of_one_run_give_the_same_stats_and_tracking(b
     outs = [stats(bag, "--by", "run", "--json", "--label", "rpp_on_robot") for bag in (mcap, db3)]
     assert [o.returncode for o in outs] == [0, 0], [o.stderr for o in outs]
     assert outs[0].stdout == outs[1].stdout
+    # the plan and goal are in 'map', the odometry in 'odom': said once each, not hidden
+    warnings = outs[0].stderr.strip().splitlines()
+    assert len(warnings) == 2 and all("in frame 'map', odometry in 'odom'" in w for w in warnings), warnings
     body = json.loads(outs[0].stdout)
     run = body["run 1"]
     assert (run["algorithm"], run["mission"], run["outcome"]) == (

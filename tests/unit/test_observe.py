@@ -107,3 +107,26 @@ def test_the_data_ending_mid_run_leaves_it_aborted_and_bad_numbers_are_skipped()
 def test_a_rate_must_be_positive():
     with pytest.raises(ValueError):
         observer(rate_hz=0.0)
+
+
+def test_the_same_goal_after_a_run_ended_is_a_new_run_and_a_replayed_one_during_it_is_not():
+    obs, store = observer()
+    obs.on_odometry(T0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    obs.on_goal(T0 + 1, 1.0, 0.0)
+    end = straight_drive(obs, T0 + S // 10, 0.0, 1.0)
+    obs.on_odometry(end + S, 0.0, 0.0, 0.0, 0.0, 0.0)  # carried back to the start
+    obs.on_goal(end + 2 * S, 1.0, 0.0)  # a second trial to the same point: a new run
+    obs.on_goal(end + 3 * S, 1.0, 0.0)  # replayed while that run is in force: the same run
+    straight_drive(obs, end + 4 * S, 0.0, 1.0)
+    runs = store.runs()
+    assert [r.outcome for r in runs] == [COMPLETED, COMPLETED] and len({r.id for r in runs}) == 2
+
+
+def test_non_finite_plan_points_are_dropped_and_a_stamp_from_another_clock_gives_no_latency():
+    obs, store = observer()
+    obs.on_odometry(T0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    obs.on_plan(T0 + 1, [(0.0, 0.0), (float("nan"), 1.0), (2.0, 0.0)])
+    obs.on_command(T0 + S // 2, 0.3, 0.0, stamp_ns=120 * S)  # use_sim_time: 2 minutes after its start
+    obs.on_odometry(T0 + S, 0.5, 0.0, 0.0, 0.3, 0.0)
+    assert store.run(store.active_run).mission == "goal (+2.00, +0.00)"
+    assert store.points()[-1].latencyMs is None and obs.foreign_stamps == 1
