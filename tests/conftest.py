@@ -7,6 +7,13 @@ import pytest
 from .support.backend import start_backend
 
 
+@pytest.fixture(autouse=True)
+def _own_cache_dir(tmp_path_factory, monkeypatch):
+    """Every test its own user cache directory (XDG): the analytics sweep keeps its curves there, and a
+    test must neither read a developer's nor leave its own."""
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.mktemp("cache")))
+
+
 @pytest.fixture
 def backend():
     b = start_backend()

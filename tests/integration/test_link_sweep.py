@@ -1,6 +1,7 @@
 """The analytics screen's sweep runs ``arbiter-tui compare`` in a real child process, at lower priority."""
 
 import asyncio
+import json
 import os
 
 import pytest
@@ -48,3 +49,22 @@ def test_cancelling_kills_the_child(monkeypatch):
     asyncio.run(cancel_it())
     (pid,) = started
     assert not os.path.exists(f"/proc/{pid}")  # killed and reaped (not even a zombie)
+
+
+def test_a_setting_swept_once_is_read_from_the_cache_afterwards(monkeypatch):
+    """The sweep runs once per setting: the next session reads its file, and the control loop's CPU
+    quota pays nothing (a child under a cgroup quota spends the console's, nice or not)."""
+    first = asyncio.run(link_sweep.sweep_curve("corner", 0.5, 1.0))
+    path = link_sweep.cache_path("corner", 0.5, 1.0)
+    assert path.is_file() and str(path).startswith(os.environ["XDG_CACHE_HOME"])
+
+    async def no_child(*args, **kwargs):
+        raise AssertionError("the child ran although the setting was cached")
+
+    with monkeypatch.context() as patched:
+        patched.setattr(asyncio, "create_subprocess_exec", no_child)
+        assert asyncio.run(link_sweep.sweep_curve("corner", 0.5, 1.0)) == first
+    assert link_sweep.cache_path("corner", 0.6, 1.0) != path  # another speed: another sweep
+    path.write_text('{"runs": [trunc')  # damaged: computed again, and kept whole
+    assert asyncio.run(link_sweep.sweep_curve("corner", 0.5, 1.0)) == first
+    assert json.loads(path.read_text())["sweep"]
