@@ -175,6 +175,7 @@ class ArbiterApp(App[None]):
         self._latency_at = float("-inf")
         self._echo: tuple[str, str] | None = None  # the topics screen's echo (written on the link's thread)
         self._echo_cancel: Callable[[], None] | None = None
+        self._echo_lock = threading.Lock()  # a late message of the last topic must not overwrite this one's
         self._count_at = float("-inf")  # when the status line's sample count last changed
         self._frozen_modes: set[str] = set()
         # Teleop keys straight from the input thread (see key_on_input_thread)
@@ -335,7 +336,8 @@ class ArbiterApp(App[None]):
             with contextlib.suppress(Exception):
                 self._echo_cancel()
             self._echo_cancel = None
-        self._echo = None
+        with self._echo_lock:
+            self._echo = None
         figures = next((t for t in self.topics.topics if t.name == name), None)
         if name is None or figures is None:
             return
@@ -344,11 +346,16 @@ class ArbiterApp(App[None]):
         if refusal is not None:
             self._echo = (name, refusal)
             return
-        self._echo = (name, "waiting for a message ...")
+        shown = (name, "waiting for a message ...")
+        with self._echo_lock:
+            self._echo = shown
 
         def received(msg: dict[str, object]) -> None:  # the link's thread: a tuple swap, nothing else
-            if self._echo is not None and self._echo[0] == name:
-                self._echo = (name, echo_text(msg))
+            nonlocal shown
+            text = echo_text(msg)
+            with self._echo_lock:  # still this echo's (a message may come after it was removed)
+                if self._echo is shown:
+                    self._echo = shown = (name, text)
 
         self._echo_cancel = echo(name, figures.type, received)
 

@@ -158,3 +158,38 @@ async def test_the_rate_plot_covers_the_last_minute_the_moment_the_screen_opens(
         x = plot._datasets[0].x
         assert len(x) == 60 and x[0] == -59.0 and x[-1] == 0.0
         assert app.topics.rates("/camera/image_raw")[:2] == (15.0, 15.0)
+
+
+def test_a_late_message_of_the_last_topic_never_takes_the_new_topics_echo():
+    """The link's thread may deliver one more message of a topic after its echo was removed (it was under
+    way): it must not overwrite the echo of the topic now selected, which would then never show. (The
+    check and the swap are one step under a lock, so the race between them is closed too; this test
+    pins the rule, sequentially.)"""
+    from arbiter_tui.link.base import Telemetry
+
+    class EchoLink:
+        state = "CONNECTED"
+
+        def __init__(self) -> None:
+            self.telemetry = Telemetry()
+            self.echoes: dict[str, object] = {}
+
+        def send(self, v: float, w: float) -> bool:
+            return True
+
+        def close(self) -> None:
+            pass
+
+        def echo(self, topic, type_name, callback):
+            self.echoes[topic] = callback
+            return lambda: None
+
+    link = EchoLink()
+    app = still_app(link=link)
+    app.topics = STATE
+    app.echo_topic("/odom")
+    app.echo_topic("/scan")  # the user moved on
+    link.echoes["/odom"]({"header": {"frame_id": "odom"}})  # /odom's last message, late
+    assert app._echo == ("/scan", "waiting for a message ...")
+    link.echoes["/scan"]({"ranges": [1.0]})
+    assert app._echo[0] == "/scan" and "ranges" in app._echo[1]
