@@ -25,7 +25,7 @@ from arbiter_core.listening import format_listening
 from arbiter_core.simulator import RATE_HZ, DiffDriveSimulator
 from arbiter_core.topicstats import WINDOW_S
 
-from . import api, bridge
+from . import api, bridge, rosapi
 from .bridge import MAX_FRAME_BYTES, WS_PING_S
 from .bus import Bus, TopicBus
 from .topicwatch import EmbeddedTopics, TopicFilter, TopicWatch
@@ -62,8 +62,10 @@ class BackendConfig:
 
     def make_endpoint(self, bus: Bus) -> bridge.RosbridgeEndpoint:
         """The rosbridge endpoint of either transport (the embedded bus or the DDS relay)."""
+        # rosapi from the live graph where there is one (ROS mode); the embedded bus has none
+        services = rosapi.handlers(bus) if hasattr(bus, "node_names") else None  # type: ignore[arg-type]
         return bridge.RosbridgeEndpoint(
-            bus, token=self.token, heartbeat=self.ws_ping or None, max_frame=self.max_frame
+            bus, token=self.token, heartbeat=self.ws_ping or None, max_frame=self.max_frame, services=services
         )
 
     def make_topic_watch(self) -> TopicWatch:

@@ -146,6 +146,11 @@ class RosMessage(dict):  # type: ignore[type-arg]
         self.received_ns = received_ns
 
 
+def _full(name: str, namespace: str) -> str:
+    """``/ns/name`` (``/name`` in the root namespace), as rosapi names nodes."""
+    return f"{namespace.rstrip('/')}/{name}"
+
+
 class RosBus:
     def __init__(self, node: Node, loop: asyncio.AbstractEventLoop) -> None:
         self.node = node
@@ -185,6 +190,29 @@ class RosBus:
             return have
         types = self._graph().get(topic)
         return types[0] if types else None
+
+    # -- the graph, for rosapi (arbiter_backend.rosapi.Graph) ------------------------------------------
+    def node_names(self) -> list[str]:
+        return [_full(name, ns) for name, ns in self.node.get_node_names_and_namespaces()]
+
+    def topic_endpoints(self, topic: str) -> tuple[list[str], list[str]]:
+        pubs = [_full(i.node_name, i.node_namespace) for i in self.node.get_publishers_info_by_topic(topic)]
+        subs = [
+            _full(i.node_name, i.node_namespace) for i in self.node.get_subscriptions_info_by_topic(topic)
+        ]
+        return pubs, subs
+
+    def node_endpoints(self, node: str) -> tuple[list[str], list[str], list[str]]:
+        ns, _, name = node.rpartition("/")
+        ns = ns or "/"
+        return (
+            [t for t, _ in self.node.get_subscriber_names_and_types_by_node(name, ns)],
+            [t for t, _ in self.node.get_publisher_names_and_types_by_node(name, ns)],
+            [s for s, _ in self.node.get_service_names_and_types_by_node(name, ns)],
+        )
+
+    def service_names_and_types(self) -> list[tuple[str, list[str]]]:
+        return [(name, list(types)) for name, types in self.node.get_service_names_and_types()]
 
     def topics(self) -> list[tuple[str, str]]:
         merged = {name: types[0] for name, types in self._graph().items() if types}

@@ -104,3 +104,48 @@ async def test_call_service_reaches_any_service_and_fails_cleanly(peer, stuck_pe
         # rosapi still answers from the endpoint itself
         reply = await call(ws, id="r", service="/rosapi/topics")
         assert reply["result"] is True
+
+
+async def test_rosapi_answers_from_the_live_graph(peer, ros_backend):
+    """/rosapi/nodes, publishers, subscribers, node_details, services, service_type from the graph as it
+    is (the peer appears with its topic and services); bad args are result false naming the field."""
+    from std_msgs.msg import String
+
+    peer.node.create_publisher(String, "/arbiter_graph_test", 10)
+    url = f"ws://127.0.0.1:{ros_backend.bridge_port}/"
+    async with aiohttp.ClientSession() as session:
+        ws = await session.ws_connect(url)
+
+        async def values(service, args=None):
+            reply = await call(ws, id=service, service=service, args=args or {})
+            assert reply["result"] is True, reply
+            return reply["values"]
+
+        async def eventually(
+            check, timeout: float = 15.0
+        ) -> bool:  # the graph takes a moment to show the peer
+            for _ in range(int(timeout / 0.1)):
+                if await check():
+                    return True
+                await asyncio.sleep(0.1)
+            return await check()
+
+        async def peer_seen() -> bool:
+            return "/arbiter_srv_peer" in (await values("/rosapi/nodes"))["nodes"]
+
+        async def peer_publishes() -> bool:
+            found = await values("/rosapi/publishers", {"topic": "/arbiter_graph_test"})
+            return "/arbiter_srv_peer" in found["publishers"]
+
+        assert await eventually(peer_seen)
+        assert await eventually(peer_publishes)
+        details = await values("/rosapi/node_details", {"node": "/arbiter_srv_peer"})
+        assert "/arbiter_graph_test" in details["publishing"]
+        assert "/arbiter_srv_peer/get_parameters" in details["services"]
+        assert "/arbiter_srv_peer/get_parameters" in (await values("/rosapi/services"))["services"]
+        kind = await values("/rosapi/service_type", {"service": "/arbiter_srv_peer/get_parameters"})
+        assert kind == {"type": "rcl_interfaces/srv/GetParameters"}
+        assert (await values("/rosapi/get_time"))["time"]["sec"] > 1_700_000_000
+        bad = await call(ws, id="bad", service="/rosapi/node_details", args={"node": 7})
+        assert bad["result"] is False and "args.node" in bad["values"]
+        await ws.close()
