@@ -46,6 +46,7 @@ from arbiter_core.msgtypes import MessageError, normalize_type
 
 from . import cborenc
 from .bus import Bus
+from .topicwatch import TopicFilter
 
 log = logging.getLogger(__name__)
 
@@ -324,6 +325,8 @@ class RosbridgeEndpoint:
         max_frame: int = MAX_FRAME_BYTES,
         client_queue: int = CLIENT_QUEUE,
         services: dict[str, Callable[[Any], dict[str, Any]]] | None = None,
+        expose_topics: TopicFilter | None = None,
+        expose_services: TopicFilter | None = None,
         heartbeat: float | None = WS_PING_S,
         token: str | None = None,
     ) -> None:
@@ -338,6 +341,9 @@ class RosbridgeEndpoint:
         # (topic, encoding) -> (the last message, its frame)
         self._encoded: dict[tuple[str, str], tuple[Any, Payload]] = {}
         self._fragment_ids = itertools.count(1)
+        # what a client may reach (rosbridge_server's topics_glob / services_glob); None: everything
+        self.expose_topics = expose_topics
+        self.expose_services = expose_services
         self.services: dict[str, Callable[[Any], dict[str, Any]]] = {
             "/rosapi/topics": self._svc_topics,
             "/rosapi/topic_type": self._svc_topic_type,
@@ -638,8 +644,20 @@ class RosbridgeEndpoint:
             )
         return topic
 
-    def _advertise(self, client: Client, frame: dict[str, Any]) -> None:
+    def topic_exposed(self, topic: str) -> bool:
+        return self.expose_topics is None or self.expose_topics.wants(topic)
+
+    def service_exposed(self, service: str) -> bool:
+        return self.expose_services is None or self.expose_services.wants(service)
+
+    def _exposed_topic(self, frame: dict[str, Any]) -> str:
         topic = self._topic(frame)
+        if not self.topic_exposed(topic):
+            raise BadFrame(f"topic {topic} is not exposed by this server (--topics-glob)")
+        return topic
+
+    def _advertise(self, client: Client, frame: dict[str, Any]) -> None:
+        topic = self._exposed_topic(frame)
         type_name = self._field(frame, "type", str)
         latch = self._field(frame, "latch", bool, required=False) is True  # rosbridge's field
         if topic in client.advertised:
@@ -653,7 +671,7 @@ class RosbridgeEndpoint:
             self.bus.unadvertise(topic)
 
     def _publish(self, client: Client, frame: dict[str, Any]) -> None:
-        topic = self._topic(frame)
+        topic = self._exposed_topic(frame)
         msg = frame.get("msg", {})
         type_name = client.advertised.get(topic) or self.bus.type_of(topic)
         if type_name is None:
@@ -661,7 +679,7 @@ class RosbridgeEndpoint:
         self.bus.publish(topic, msg, type_name)
 
     def _subscribe(self, client: Client, frame: dict[str, Any]) -> None:
-        topic = self._topic(frame)
+        topic = self._exposed_topic(frame)
         type_name = self._field(frame, "type", str, required=False)
         throttle = self._field(frame, "throttle_rate", int, required=False) or 0
         queue_length = self._field(frame, "queue_length", int, required=False) or 0
@@ -812,6 +830,12 @@ class RosbridgeEndpoint:
         reply: dict[str, Any] = {"op": "service_response", "service": service}
         if req_id is not None:
             reply["id"] = req_id
+        if not service.startswith("/rosapi/") and not self.service_exposed(service):
+            reply.update(
+                result=False, values=f"Service {service} is not exposed by this server (--services-glob)"
+            )
+            client.send(_dumps(reply))
+            return
         handler = self.services.get(service)
         remote = getattr(self.bus, "call_service", None)
         if handler is None and remote is not None:  # ROS mode: any service on the graph
@@ -868,7 +892,7 @@ class RosbridgeEndpoint:
 
     # -- rosapi --------------------------------------------------------------------------------
     def _svc_topics(self, args: Any) -> dict[str, Any]:
-        topics = self.bus.topics()
+        topics = [(t, ty) for t, ty in self.bus.topics() if self.topic_exposed(t)]
         return {"topics": [t for t, _ in topics], "types": [ty for _, ty in topics]}
 
     def _svc_topic_type(self, args: Any) -> dict[str, Any]:
@@ -879,14 +903,14 @@ class RosbridgeEndpoint:
         )
         if not isinstance(topic, str):
             raise BadFrame("args.topic must be a string")
-        return {"type": self.bus.type_of(topic) or ""}
+        return {"type": (self.bus.type_of(topic) or "") if self.topic_exposed(topic) else ""}
 
     def _svc_topics_for_type(self, args: Any) -> dict[str, Any]:
         t = args.get("type") if isinstance(args, dict) else None
         if not isinstance(t, str):
             raise BadFrame("args.type must be a string")
         want = normalize_type(t)
-        return {"topics": [topic for topic, ty in self.bus.topics() if ty == want]}
+        return {"topics": [t for t, ty in self.bus.topics() if ty == want and self.topic_exposed(t)]}
 
 
 def quick_ack(sock: socket.socket | None) -> None:

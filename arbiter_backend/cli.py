@@ -144,6 +144,19 @@ def build_parser() -> argparse.ArgumentParser:
         help=f"the sliding window of /api/topics' rates, bandwidths and delays (default: {WINDOW_S:g} s)",
     )
     p.add_argument(
+        "--topics-glob",
+        metavar="GLOBS",
+        help="the only topics a rosbridge client may subscribe, publish or advertise, and that rosapi lists: "
+        "comma-separated globs, e.g. '/odom,/scan,/camera/*' (rosbridge_server's topics_glob; default: all)",
+    )
+    p.add_argument(
+        "--services-glob",
+        metavar="GLOBS",
+        help="the only services a rosbridge client may call (rosapi's own excepted) and that rosapi lists, "
+        "e.g. '/arbiter/*' (rosbridge_server's services_glob; default: all). Keep services that move the "
+        "robot out unless the operator means clients to reach them",
+    )
+    p.add_argument(
         "--ws-ping",
         type=non_negative_float,
         default=WS_PING_S,
@@ -308,6 +321,8 @@ def main(argv: list[str] | None = None) -> int:
         topics_exclude=args.topics_exclude,
         topics_window=args.topics_window,
         ws_ping=args.ws_ping,
+        topics_glob=args.topics_glob,
+        services_glob=args.services_glob,
         max_frame=args.max_frame,
     )
     try:

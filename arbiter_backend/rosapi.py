@@ -42,8 +42,23 @@ def _arg(args: Any, name: str, position: int = 0) -> str:
     return value
 
 
-def handlers(graph: Graph, clock_ns: Callable[[], int] = time.time_ns) -> dict[str, Handler]:
-    """The rosapi services over ``graph``, by service name."""
+def handlers(
+    graph: Graph,
+    clock_ns: Callable[[], int] = time.time_ns,
+    topic_ok: Callable[[str], bool] = lambda name: True,
+    service_ok: Callable[[str], bool] = lambda name: True,
+) -> dict[str, Handler]:
+    """The rosapi services over ``graph``, by service name; nothing outside what the server exposes
+    (``topic_ok``, ``service_ok``: its --topics-glob and --services-glob) appears in an answer."""
+
+    def exposed_topic(args: Any) -> str:
+        topic = _arg(args, "topic")
+        if not topic_ok(topic):
+            raise ValueError(f"topic {topic} is not exposed by this server")
+        return topic
+
+    def service_list() -> list[tuple[str, list[str]]]:
+        return [(n, types) for n, types in graph.service_names_and_types() if service_ok(n)]
 
     def nodes(args: Any) -> dict[str, Any]:
         return {"nodes": sorted(graph.node_names())}
@@ -53,27 +68,31 @@ def handlers(graph: Graph, clock_ns: Callable[[], int] = time.time_ns) -> dict[s
         if node not in graph.node_names():
             raise ValueError(f"no node {node} on the graph")
         subs, pubs, srvs = graph.node_endpoints(node)
-        return {"subscribing": sorted(subs), "publishing": sorted(pubs), "services": sorted(srvs)}
+        return {
+            "subscribing": sorted(t for t in subs if topic_ok(t)),
+            "publishing": sorted(t for t in pubs if topic_ok(t)),
+            "services": sorted(x for x in srvs if service_ok(x)),
+        }
 
     def publishers(args: Any) -> dict[str, Any]:
-        return {"publishers": sorted(set(graph.topic_endpoints(_arg(args, "topic"))[0]))}
+        return {"publishers": sorted(set(graph.topic_endpoints(exposed_topic(args))[0]))}
 
     def subscribers(args: Any) -> dict[str, Any]:
-        return {"subscribers": sorted(set(graph.topic_endpoints(_arg(args, "topic"))[1]))}
+        return {"subscribers": sorted(set(graph.topic_endpoints(exposed_topic(args))[1]))}
 
     def services(args: Any) -> dict[str, Any]:
-        return {"services": sorted(name for name, _types in graph.service_names_and_types())}
+        return {"services": sorted(name for name, _types in service_list())}
 
     def service_type(args: Any) -> dict[str, Any]:
         service = _arg(args, "service")
-        types = dict(graph.service_names_and_types()).get(service)
+        types = dict(service_list()).get(service)
         if not types:
             raise ValueError(f"no service {service} on the graph")
         return {"type": types[0]}
 
     def services_for_type(args: Any) -> dict[str, Any]:
         wanted = _arg(args, "type")
-        return {"services": sorted(n for n, types in graph.service_names_and_types() if wanted in types)}
+        return {"services": sorted(n for n, types in service_list() if wanted in types)}
 
     def get_time(args: Any) -> dict[str, Any]:
         now = clock_ns()

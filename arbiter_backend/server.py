@@ -59,13 +59,28 @@ class BackendConfig:
     topics_window: float = WINDOW_S
     ws_ping: float = WS_PING_S  # the endpoint's liveness pings (seconds; 0: none)
     max_frame: int = MAX_FRAME_BYTES  # a client's frames above this are answered with a status error
+    topics_glob: str | None = None  # comma-separated globs of the topics clients may reach (None: all)
+    services_glob: str | None = None  # ... and of the services they may call
 
     def make_endpoint(self, bus: Bus) -> bridge.RosbridgeEndpoint:
         """The rosbridge endpoint of either transport (the embedded bus or the DDS relay)."""
-        # rosapi from the live graph where there is one (ROS mode); the embedded bus has none
-        services = rosapi.handlers(bus) if hasattr(bus, "node_names") else None  # type: ignore[arg-type]
+        topics = TopicFilter.parse(self.topics_glob, None) if self.topics_glob else None
+        services = TopicFilter.parse(self.services_glob, None) if self.services_glob else None
+        rosapi_services = None
+        if hasattr(bus, "node_names"):  # rosapi from the live graph where there is one (ROS mode)
+            rosapi_services = rosapi.handlers(
+                bus,  # type: ignore[arg-type]
+                topic_ok=topics.wants if topics else lambda name: True,
+                service_ok=services.wants if services else lambda name: True,
+            )
         return bridge.RosbridgeEndpoint(
-            bus, token=self.token, heartbeat=self.ws_ping or None, max_frame=self.max_frame, services=services
+            bus,
+            token=self.token,
+            heartbeat=self.ws_ping or None,
+            max_frame=self.max_frame,
+            services=rosapi_services,
+            expose_topics=topics,
+            expose_services=services,
         )
 
     def make_topic_watch(self) -> TopicWatch:

@@ -52,3 +52,15 @@ def test_each_rosapi_service_answers_in_rosapis_own_shape():
 def test_bad_arguments_say_which(service, args, said):
     with pytest.raises(ValueError, match=said):
         API[service](args)
+
+
+def test_nothing_outside_what_the_server_exposes_appears():
+    api = handlers(Graph(), topic_ok=lambda t: t != "/cmd_vel", service_ok=lambda s: s.startswith("/nav2/"))
+    details = api["/rosapi/node_details"]({"node": "/nav2/controller_server"})
+    assert (details["subscribing"], details["publishing"]) == (["/odom"], ["/plan"])
+    assert details["services"] == ["/nav2/controller_server/get_parameters"]
+    assert api["/rosapi/services"]({})["services"] == ["/nav2/controller_server/get_parameters"]
+    with pytest.raises(ValueError, match="not exposed"):
+        api["/rosapi/publishers"]({"topic": "/cmd_vel"})
+    with pytest.raises(ValueError, match="no service /reset"):
+        api["/rosapi/service_type"]({"service": "/reset"})
