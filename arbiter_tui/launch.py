@@ -93,6 +93,30 @@ def build_parser() -> argparse.ArgumentParser:
         help="nav_msgs/Odometry topic; relative names resolve under --namespace, absolute ones are used "
         "as given (default: odom; a Jazzy diff_drive_controller: diff_drive_controller/odom)",
     )
+    obs = p.add_argument_group(
+        "observe (README 'Grade any controller'): analytics of what drives the robot, from its own topics"
+    )
+    obs.add_argument(
+        "--observe",
+        action="store_true",
+        help="record samples and runs from the robot's odometry, command, plan and goal topics instead of "
+        "the console's own driving (a new goal starts a run; reaching it, stopped, completes it)",
+    )
+    obs.add_argument(
+        "--label", default=D.observe_label, help="what drives the robot, e.g. nav2_rpp (default %(default)s)"
+    )
+    obs.add_argument(
+        "--cmd-topic", type=topic_name, default=D.cmd_topic, help="its command (default %(default)s)"
+    )
+    obs.add_argument(
+        "--cmd-stamped", action="store_true", help="the command is TwistStamped (its age is the latency)"
+    )
+    obs.add_argument(
+        "--plan-topic", type=topic_name, default=D.plan_topic, help="nav_msgs/Path (default %(default)s)"
+    )
+    obs.add_argument(
+        "--goal-topic", type=topic_name, default=D.goal_topic, help="PoseStamped goal (default %(default)s)"
+    )
     p.add_argument(
         "--ca-file",
         type=existing_file,
@@ -274,6 +298,12 @@ def run_app(argv: list[str]) -> int:
         theme=loaded.theme,
         start_paused=args.start_paused,
         notes=tuple(n for n in (speed_note, turn_note) if n),
+        observe=args.observe,
+        observe_label=args.label,
+        cmd_topic=args.cmd_topic,
+        cmd_stamped=args.cmd_stamped,
+        plan_topic=args.plan_topic,
+        goal_topic=args.goal_topic,
     )
     if mode == CONNECT:
         settings.rosbridge_url, settings.tracker_url = bridge.url, tracker.url

@@ -41,3 +41,10 @@ class Settings:
     theme: str | None = None  # from the config file
     start_paused: bool = False  # analytics recording starts at once unless this is set (``r`` toggles it)
     notes: tuple[str, ...] = ()  # settings the command line asked for and the console changed, said once
+    # observe mode: analytics of whatever drives the robot, from its own topics (analytics/observe.py)
+    observe: bool = False
+    observe_label: str = "observed"  # what drives: the observed samples' algorithm
+    cmd_topic: str = "cmd_vel"  # relative names resolve under the link's namespace
+    cmd_stamped: bool = False  # geometry_msgs/TwistStamped (its age is the sample's latency), else Twist
+    plan_topic: str = "plan"
+    goal_topic: str = "goal_pose"

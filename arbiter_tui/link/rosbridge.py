@@ -14,8 +14,19 @@ from typing import Any
 from arbiter_core import envelope, topics
 from arbiter_core import failures as errors
 
+from ..analytics.observe import Observer
 from . import wsframe
 from .base import CONNECTED, CONNECTING, DISCONNECTED, RECONNECTING, Telemetry
+from .observed import (
+    TYPE_PATH,
+    TYPE_POSE_STAMPED,
+    TYPE_TWIST,
+    TYPE_TWIST_STAMPED,
+    observe_command,
+    observe_goal,
+    observe_odometry,
+    observe_plan,
+)
 from .streams import Streams
 
 log = logging.getLogger(__name__)
@@ -89,6 +100,7 @@ class RosLink:
         self.topic_stamped = topics.resolve(topics.STAMPED, namespace)
         self.topic_report = topics.resolve(topics.REPORT, namespace)
         self.topic_odom = topics.resolve(odom_topic, namespace)
+        self.namespace = namespace
         host_part = f"[{host}]" if ":" in host else host
         self.url = f"{'wss' if secure else 'ws'}://{host_part}:{port}{path or '/'}"
         self._tls = tls_options(host, ca_file) if secure else None
@@ -315,6 +327,32 @@ class RosLink:
         our side; any other gets a server subscription with rosbridge's ``throttle_rate`` and
         ``queue_length`` 1. Returns the function that removes this echo and nothing else."""
         return self.streams.listen(topic, type_name, callback, ECHO_THROTTLE_MS, queue_length=1)
+
+    def observe(
+        self, observer: Observer, cmd: str, cmd_stamped: bool, plan: str, goal: str
+    ) -> Callable[[], None]:
+        """Feed ``observer`` from the robot's own topics (relative names under the namespace): odometry
+        shares the console's stream; the command, plan and goal are streams of their own. Every call
+        comes on the link's thread, stamped with this host's clock. Returns the function that stops it."""
+        ns = self.namespace
+        removers = [
+            self.streams.listen(self.topic_odom, topics.TYPE_ODOM, lambda m: observe_odometry(observer, m)),
+            self.streams.listen(
+                topics.resolve(cmd, ns),
+                TYPE_TWIST_STAMPED if cmd_stamped else TYPE_TWIST,
+                lambda m: observe_command(observer, m, cmd_stamped),
+            ),
+            self.streams.listen(topics.resolve(plan, ns), TYPE_PATH, lambda m: observe_plan(observer, m)),
+            self.streams.listen(
+                topics.resolve(goal, ns), TYPE_POSE_STAMPED, lambda m: observe_goal(observer, m)
+            ),
+        ]
+
+        def stop() -> None:
+            for remove in removers:
+                remove()
+
+        return stop
 
     def close(self) -> None:
         with self._lock:

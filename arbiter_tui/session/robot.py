@@ -27,6 +27,7 @@ from pathlib import Path
 from arbiter_core.simulator import RATE_HZ as SIM_HZ
 
 from ..analytics.files import FORMATS, ExportError, NothingToExport, export_stem, export_store
+from ..analytics.observe import ObserveConfig, Observer
 from ..analytics.runs import MANUAL
 from ..analytics.store import AnalyticsStore
 from ..control.algorithms import choose_controller_hint
@@ -81,6 +82,14 @@ class RobotSession:
             self.store.start_collection()  # recording is on unless asked otherwise (r pauses it)
         self.teleop = Teleop(speed=config.speed, turn=config.turn, key_timeout=config.key_timeout)
         self.loop = ControlLoop(link, self.store, self.teleop, max_rate=config.repeat_rate)
+        # observe mode: the robot's own topics make the samples and runs (analytics/observe.py)
+        self.observer = (
+            Observer(self.store, ObserveConfig(label=config.observe_label, rate_hz=config.collection_rate))
+            if config.observe
+            else None
+        )
+        self._unobserve: Callable[[], None] | None = None
+        self._observe(link)
         self.too_small = False
         self.stop_reason: str | None = None
         self.on_event: Callable[[object], None] = lambda event: None
@@ -96,6 +105,16 @@ class RobotSession:
         with self.lock:
             self.link = link
             self.loop.link = link
+        self._observe(link)
+
+    def _observe(self, link: Link) -> None:
+        observe = getattr(link, "observe", None)
+        if self.observer is None or observe is None:
+            return
+        if self._unobserve is not None:
+            self._unobserve()
+        c = self.config
+        self._unobserve = observe(self.observer, c.cmd_topic, c.cmd_stamped, c.plan_topic, c.goal_topic)
 
     def link_down(self) -> bool:
         """The rosbridge link was lost (or never came up): nothing the console sends goes out."""
@@ -119,6 +138,8 @@ class RobotSession:
             self.on_event(event)
 
     def sample(self) -> None:
+        if self.observer is not None:
+            return  # observing: the robot's odometry makes the samples, on the link's thread
         with self.lock:
             try:
                 self.loop.sample()

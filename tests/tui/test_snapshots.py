@@ -1,5 +1,7 @@
 """Snapshots of every screen at fixed sizes with deterministic data (no timers, no clock on screen)."""
 
+import math
+
 import pytest
 
 from arbiter_tui.link.base import RECONNECTING
@@ -131,3 +133,24 @@ def test_analytics_marks_the_measured_latency_on_the_error_vs_latency_curve(snap
         pilot.app.link_sweep = LinkSweepView(READY, "square", curve, None)
 
     assert snap_compare(app, terminal_size=(130, 36), press=["2"], run_before=swept)
+
+
+def test_an_observed_run_beside_driven_ones(snap_compare):
+    """A robot-side controller's run (observe mode, analytics/observe.py), graded in the same table as the
+    console's own: 'nav2_rpp' to a goal, from odometry, its command and its plan (synthetic, fixed)."""
+    from arbiter_tui.analytics.observe import ObserveConfig, Observer
+
+    store = seeded_store()
+    store.start_collection()
+    obs = Observer(store, ObserveConfig(label="nav2_rpp"))
+    t0 = 1_800_000_100_000_000_000
+    obs.on_odometry(t0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    obs.on_plan(t0 + 1, [(0.1 * k, 0.05 * k) for k in range(21)])  # to (2.0, 1.0)
+    for k in range(1, 60):  # 6 s at 10 Hz along the plan, a little off it, then stopped at the goal
+        x = min(2.0, 0.034 * k)
+        v = 0.0 if x >= 2.0 else 0.38
+        obs.on_command(t0 + k * 100_000_000 - 1, v, 0.0)
+        obs.on_odometry(t0 + k * 100_000_000, x, 0.5 * x + 0.03 * math.sin(k / 5), 0.46, v, 0.0)
+    store.stop_collection()
+    app = still_app(store=store)
+    assert snap_compare(app, terminal_size=(100, 30), press=["2"])
