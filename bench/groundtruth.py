@@ -40,7 +40,6 @@ With asymmetric paths the corrected one-way *cannot* be right (no round trip tel
 from __future__ import annotations
 
 import argparse
-import bisect
 import json
 import sys
 import time
@@ -84,48 +83,13 @@ def quick() -> list[Case]:
     return [c for c in m if c.name in pick] + SPECIAL
 
 
-def windows(m: Measured, window_s: float = 1.0, after: float | None = None) -> tuple[int, int, int]:
-    """(windows, offset bound held, one-way interval held): the last command of each second."""
-    samples = sorted(m.samples, key=lambda s: s.at_s)
-    if not samples:
-        return 0, 0, 0
-    t0 = samples[0].at_s
-    last: dict[int, object] = {}
-    for s in samples:
-        if after is None or s.at_s >= after:
-            last[int((s.at_s - t0) // window_s)] = s
-    n = off_ok = ow_ok = 0
-    for s in last.values():
-        live = s.raw_ms - s.corrected_ms
-        truth = m.true_offset_at(s.at_s)
-        true_ow = s.raw_ms - truth
-        lo, hi = max(s.corrected_ms - s.bound_ms, 0.0), min(s.corrected_ms + s.bound_ms, s.delay_ms)
-        n += 1
-        off_ok += abs(live - truth) <= s.bound_ms
-        ow_ok += lo <= true_ow <= hi
-    return n, off_ok, ow_ok
-
-
-def lost_then_late_expected(m: Measured) -> int:
-    """Commands whose report came after an expiry pass past their deadline: what must count lost, then
-    late."""
-    calls = m.expire_calls
-    n = 0
-    for s in m.samples:
-        sent = s.at_s - s.rtt_ms / 2000.0
-        arrival = sent + s.rtt_ms / 1000.0
-        i = bisect.bisect_right(calls, sent + m.case.lost_after_s)
-        n += i < len(calls) and calls[i] < arrival
-    return n
-
-
 def row(m: Measured) -> dict:
     c = m.case
     drift_err = None if m.drift_ppm is None else m.drift_ppm - c.drift_ppm
     after = None
     if c.step_ms and m.stepped_at is not None and m.extra.get("reanchored_after_s") is not None:
         after = m.stepped_at + m.extra["reanchored_after_s"]
-    nw, off_ok, ow_ok = windows(m, after=after)
+    nw, off_ok, ow_ok = m.windows(after=after)
     r = {
         "case": c.name,
         "n": m.matched,
@@ -158,7 +122,7 @@ def row(m: Measured) -> dict:
         r["jitter_p95_recovered_ms"] = stats.percentile(cor, 0.95) - jitter_free
         r["jitter_p95_injected_ms"] = stats.percentile(m.jitter_drawn_ms, 0.95)
     if c.stall_s:
-        r["lost_then_late_expected"] = lost_then_late_expected(m)
+        r["lost_then_late_expected"] = m.lost_then_late_expected()
         r["max_lost"], r["lost"], r["late"] = m.max_lost, m.lost, m.late
     return r
 

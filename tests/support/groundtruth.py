@@ -14,6 +14,7 @@ whose wall clock is. ``FAKETIME_NO_CACHE=1`` makes it re-read its settings on ev
 
 from __future__ import annotations
 
+import bisect
 import glob
 import os
 import tempfile
@@ -136,6 +137,39 @@ class Measured:
     @property
     def one_way_in_interval(self) -> bool:
         return self.corrected_p50_lo_ms <= self.true_one_way_ms <= self.corrected_p50_hi_ms
+
+    def windows(self, window_s: float = 1.0, after: float | None = None) -> tuple[int, int, int]:
+        """(windows, offset bound held, one-way interval held): the last command of each second."""
+        samples = sorted(self.samples, key=lambda s: s.at_s)
+        if not samples:
+            return 0, 0, 0
+        t0 = samples[0].at_s
+        last: dict[int, object] = {}
+        for s in samples:
+            if after is None or s.at_s >= after:
+                last[int((s.at_s - t0) // window_s)] = s
+        n = off_ok = ow_ok = 0
+        for s in last.values():
+            live = s.raw_ms - s.corrected_ms
+            truth = self.true_offset_at(s.at_s)
+            true_ow = s.raw_ms - truth
+            lo, hi = max(s.corrected_ms - s.bound_ms, 0.0), min(s.corrected_ms + s.bound_ms, s.delay_ms)
+            n += 1
+            off_ok += abs(live - truth) <= s.bound_ms
+            ow_ok += lo <= true_ow <= hi
+        return n, off_ok, ow_ok
+
+    def lost_then_late_expected(self) -> int:
+        """Commands whose report came after an expiry pass past their deadline: what must count lost, then
+        late."""
+        calls = self.expire_calls
+        n = 0
+        for s in self.samples:
+            sent = s.at_s - s.rtt_ms / 2000.0
+            arrival = sent + s.rtt_ms / 1000.0
+            i = bisect.bisect_right(calls, sent + self.case.lost_after_s)
+            n += i < len(calls) and calls[i] < arrival
+        return n
 
 
 def before_issue_33(samples: list, window_s: float = 64.0) -> tuple[float, float, float]:
