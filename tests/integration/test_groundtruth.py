@@ -1,7 +1,7 @@
 """Latency you can prove: injected truth (the backend's clock shifted and drifting under libfaketime, each
 direction of the link delayed by a proxy) recovered by the console's meter, with bounds that hold.
 
-Two representative cases here; the full matrix is bench/groundtruth.py's."""
+Three representative cases here; the full matrix is bench/groundtruth.py's."""
 
 import socket
 import threading
