@@ -33,9 +33,11 @@ clock filter + frequency loop, in a form that can be reasoned about:
 The bound of the offset at time ``x``: for every bucket point i, the truth at ``x_i`` is within
 ``delay_i / 2`` of ``offset_i``, and moves by the true drift from there, so
 ``|truth(x) - model(x)| <= |residual_i| + delay_i / 2 + drift_error * |x - x_i|``; the bound is the
-least of these over the points. ``drift_error`` is three standard errors of the fitted slope (a
-statistical, not a hard, part) or, before a slope can be fitted, ``max_drift_ppm``: an extrapolation
-that admits any plausible crystal.
+least of these over the points. ``drift_error`` is the 99.7 % interval of the fitted slope (a
+statistical, not a hard, part): Student's t for ``points - 2`` degrees of freedom times its standard
+error, as the scatter is estimated from those few points (3 standard errors for many points; with 5
+points, 10 s of 2 s buckets, it is 6.6, and 3 would be exceeded about one run in ten under jitter);
+or, before a slope can be fitted, ``max_drift_ppm``: an extrapolation that admits any plausible crystal.
 
 Times: ``at_s`` is our monotonic clock in seconds (where the exchange happened, its midpoint);
 offsets and delays are in ms. No I/O, no clock read here: callers pass every time in.
@@ -84,7 +86,7 @@ class ClockEstimate:
     offset_ms: float  # their clock minus ours, at at_s
     bound_ms: float  # the truth lies within offset_ms ± bound_ms
     drift_ppm: float | None  # None: too short a span to fit a slope
-    drift_bound_ppm: float | None  # the drift's error (3 standard errors)
+    drift_bound_ppm: float | None  # the drift's error (its 99.7 % interval: ~3 standard errors)
     best_delay_ms: float  # the least delay among the points used
     points: int  # bucket minima in the model
     epoch: int  # how many times the model re-anchored (clock steps)
@@ -111,7 +113,7 @@ class _Fit:
     x0: float
     a: float  # offset at x0
     b: float  # slope, ms per s
-    b_err: float  # ms per s (3 standard errors, or the max-drift allowance)
+    b_err: float  # ms per s (the slope's 99.7 % half-interval, or the max-drift allowance)
     fitted: bool  # a slope was fitted (else b == 0 and b_err is the allowance)
     points: tuple[tuple[float, float, float], ...]  # (x, offset, half-delay) used
     residuals: tuple[float, ...]
@@ -238,7 +240,9 @@ class ClockModel:
             pts = kept
         a, b, b_se, x0 = fit
         residuals = tuple(o - (a + b * (x - x0)) for x, o, _h in pts)
-        return _Fit(x0, a, b, 3.0 * b_se, True, tuple(pts), residuals)
+        # no wider than "any plausible crystal" allows: the true drift is within ± max_drift_ppm
+        b_err = min(t_997(len(pts) - 2) * b_se, abs(b) + allowance)
+        return _Fit(x0, a, b, b_err, True, tuple(pts), residuals)
 
     # -- reading ---------------------------------------------------------------------------------
     def estimate(self, at_s: float) -> ClockEstimate | None:
@@ -269,6 +273,21 @@ class ClockModel:
         slack = np.array([abs(r) + p[2] for p, r in zip(fit.points, fit.residuals, strict=True)])
         bounds = (slack[:, None] + fit.b_err * np.abs(x[None, :] - px[:, None])).min(axis=0)
         return fit.a + fit.b * (x - fit.x0), bounds
+
+
+# Student's t, two-sided 99.73 % (the "3 sigma" level), for 1..30 degrees of freedom
+_T997 = (
+    235.78, 19.21, 9.22, 6.62, 5.51, 4.90, 4.53, 4.28, 4.09, 3.96, 3.85, 3.76, 3.69, 3.64, 3.59,
+    3.54, 3.51, 3.48, 3.45, 3.42, 3.40, 3.38, 3.36, 3.34, 3.33, 3.32, 3.30, 3.29, 3.28, 3.27,
+)  # fmt: skip
+
+
+def t_997(dof: int) -> float:
+    """The multiple of a standard error that a 99.73 % interval takes with ``dof`` degrees of freedom
+    (the scatter estimated from the data); tends to 3 (beyond 30: the first-order expansion)."""
+    if dof < 1:
+        return math.inf
+    return _T997[dof - 1] if dof <= len(_T997) else 3.0 + 7.5 / dof
 
 
 def _median(values: list[float]) -> float:

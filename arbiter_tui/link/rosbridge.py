@@ -36,6 +36,7 @@ AUTH_RETRY_S = 30.0  # a rejected token is retried this slowly: it will be rejec
 PING_INTERVAL_S = 1.0  # WebSocket keep-alive: a ping every second...
 ECHO_THROTTLE_MS = 500  # the topics screen's echo: at most 2 messages a second
 PING_TIMEOUT_S = 2.0  # ...and a link with no pong for this long is dropped (then reconnected)
+REPORT_QUEUE = 1000  # latency reports the server may hold for us (its default): 10 s of 100 Hz commands
 
 
 def _write_now(proto: Any, payload: bytes) -> None:
@@ -192,7 +193,11 @@ class RosLink:
         self.streams.listen(
             self.topic_odom, topics.TYPE_ODOM, self.telemetry.set_odom, odom_throttle_ms, queue_length=1
         )
-        self.streams.listen(self.topic_report, topics.TYPE_STRING, self.telemetry.set_report, queue_length=10)
+        # every report: one dropped by the server's queue counts its command lost for good (a link that
+        # stalls delivers a burst of commands, and so of reports: 10 kept only the newest 10 of it)
+        self.streams.listen(
+            self.topic_report, topics.TYPE_STRING, self.telemetry.set_report, queue_length=REPORT_QUEUE
+        )
 
     def _write_frame(self, frame: dict[str, Any]) -> None:
         """Send one rosbridge frame of the registry on the reactor thread (now when called there);

@@ -1,7 +1,7 @@
 """Latency you can prove: injected truth (the backend's clock shifted and drifting under libfaketime, each
 direction of the link delayed by a proxy) recovered by the console's meter, with bounds that hold.
 
-Two representative cases here; the full matrix is bench/groundtruth.py's."""
+Three representative cases here; the full matrix is bench/groundtruth.py's."""
 
 import socket
 import threading
@@ -84,3 +84,15 @@ def test_a_drifting_clock_is_modelled_and_the_corrected_one_way_stays_right(base
     # is the path's own (well under a ms on an idle machine, more when the cores are shared)
     assert m.jitter_ms < 2.0
     assert m.extra["steps"] == 0
+
+
+def test_a_stalled_link_counts_its_commands_lost_then_late_exactly(base_rtt):
+    """A 2 s stall (no clock faked): the commands it holds past the meter's deadline (1 s here) count
+    lost, then late when their reports come after all; every one is reported in the end (the burst of
+    reports after the stall must not overflow the report subscription's queue)."""
+    m = measure(Case("stall", forward_ms=5.0, back_ms=5.0, stall_s=2.0, stall_at_s=2.0, lost_after_s=1.0,
+                     seconds=5), base_rtt)  # fmt: skip
+    expected = m.lost_then_late_expected()
+    assert 15 <= expected <= 25, expected  # about the stall's second past the deadline, at 20 Hz
+    assert (m.max_lost, m.late, m.lost) == (expected, expected, 0)
+    assert m.matched == m.case.seconds * m.case.rate_hz

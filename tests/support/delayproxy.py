@@ -2,10 +2,12 @@
 latency figures (tests/integration/test_groundtruth.py, bench/groundtruth.py).
 
 asyncio, on its own loop in a daemon thread. Every chunk read is released ``delay (+ jitter)`` after it
-arrived, in order (a chunk never overtakes the one before it, as on a TCP stream). ``forward`` is client
-to upstream (the console's commands), ``back`` upstream to client (the reports). ``stall(s)`` holds
-every byte for ``s`` seconds (a link that hangs, then delivers); ``blackhole(s)`` drops what arrives for
-``s`` seconds and then closes the connections (a link that dies: the stream cannot carry on with a hole).
+arrived, in order (a chunk never overtakes the one before it, as on a TCP stream); jitter is uniform
+``[0, jitter]`` or half-normal ``|N(0, jitter)|``, on both directions or the forward one only.
+``forward`` is client to upstream (the console's commands), ``back`` upstream to client (the reports).
+``stall(s)`` holds every byte for ``s`` seconds (a link that hangs, then delivers); ``blackhole(s)`` drops
+what arrives for ``s`` seconds and then closes the connections (a link that dies: the stream cannot carry
+on with a hole).
 
 Precision: the event loop's timers round up to the millisecond (epoll), so the last 1.5 ms of each wait
 is a busy wait that yields to the loop (``sleep(0)``: the other direction keeps being served, its
@@ -31,6 +33,8 @@ class Delays:
     forward_ms: float = 0.0
     back_ms: float = 0.0
     jitter_ms: float = 0.0  # each chunk: + uniform [0, jitter] (never reordered)
+    jitter_kind: str = "uniform"  # or "halfnormal": + |N(0, jitter)|
+    jitter_back: bool = True  # False: only the forward direction is jittered
 
 
 class DelayProxy:
@@ -42,6 +46,7 @@ class DelayProxy:
         self._drop_until = 0.0  # monotonic: dropping until then
         self._writers: set[asyncio.StreamWriter] = set()
         self.chunks = [0, 0]  # forwarded chunks: forward, back
+        self.jitter_drawn: tuple[list[float], list[float]] = ([], [])  # ms, per direction (the truth)
         self._loop = asyncio.new_event_loop()
         ready = threading.Event()
         self._thread = threading.Thread(target=self._run, args=(ready,), daemon=True)
@@ -50,8 +55,9 @@ class DelayProxy:
         self.port: int = self._port
 
     # -- control (any thread) --------------------------------------------------------------------
-    def set(self, forward_ms: float, back_ms: float, jitter_ms: float = 0.0) -> None:
-        self.delays = Delays(forward_ms, back_ms, jitter_ms)
+    def set(self, forward_ms: float, back_ms: float, jitter_ms: float = 0.0, jitter_kind: str = "uniform",
+            jitter_back: bool = True) -> None:  # fmt: skip
+        self.delays = Delays(forward_ms, back_ms, jitter_ms, jitter_kind, jitter_back)
 
     def stall(self, seconds: float) -> None:
         self._hold_until = time.monotonic() + seconds
@@ -133,8 +139,13 @@ class DelayProxy:
                     continue
                 d = self.delays
                 delay = (d.forward_ms if direction == 0 else d.back_ms) / 1000.0
-                if d.jitter_ms:
-                    delay += self._rnd.uniform(0.0, d.jitter_ms) / 1000.0
+                if d.jitter_ms and (direction == 0 or d.jitter_back):
+                    if d.jitter_kind == "halfnormal":
+                        j = abs(self._rnd.gauss(0.0, d.jitter_ms))
+                    else:
+                        j = self._rnd.uniform(0.0, d.jitter_ms)
+                    self.jitter_drawn[direction].append(j)
+                    delay += j / 1000.0
                 last = max(last, now + delay)  # in order, as a stream
                 queue.put_nowait((last, data))
         finally:
