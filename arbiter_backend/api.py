@@ -113,6 +113,7 @@ def make_app(
     middlewares = [json_errors] if token is None else [json_errors, bearer_required(token)]
     app = web.Application(middlewares=middlewares)
     app.router.add_get("/api/latency", latency)
+
     async def probe_early(app: web.Application) -> None:
         # the first probe can take up to a second or two (a chronyc with no daemon to talk to): start
         # it with the server, so that the first /api/health seldom waits for it

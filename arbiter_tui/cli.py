@@ -8,15 +8,15 @@ import sys
 def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     if argv and argv[0] == "stats":
-        from .analytics.stats_cmd import run
+        from .commands.stats import run
 
         return run(argv[1:])
     if argv and argv[0] == "compare":
-        from .session.compare_cmd import run as run_compare
+        from .commands.compare import run as run_compare
 
         return run_compare(argv[1:])
     if argv and argv[0] == "topics":
-        from .latency.topics_cmd import run as run_topics
+        from .commands.topics import run as run_topics
 
         return run_topics(argv[1:])
     from .launch import run_app

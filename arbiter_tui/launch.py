@@ -36,9 +36,9 @@ from arbiter_core.urls import (
     tracker_endpoint,
 )
 
-from . import config
 from .control.teleop import cap_setting
-from .settings import (
+from .session import config
+from .session.settings import (
     COLLECTION_RATE_HZ,
     CONNECT,
     EMBEDDED,
@@ -307,7 +307,7 @@ def run_app(argv: list[str]) -> int:
     )
     if mode == CONNECT:
         settings.rosbridge_url, settings.tracker_url = bridge.url, tracker.url
-    from .app import make_app
+    from .shell.app import make_app
 
     if mode == SIM:
         from .link.sim import SimLink

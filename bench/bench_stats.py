@@ -159,11 +159,11 @@ def bench_screen(n: int, repeat: int) -> dict[str, float]:
     """
     import asyncio
 
-    from arbiter_tui import views
-    from arbiter_tui.app import make_app
     from arbiter_tui.link.sim import SimLink
-    from arbiter_tui.plots import Plot
-    from arbiter_tui.settings import Settings
+    from arbiter_tui.session import views
+    from arbiter_tui.session.settings import Settings
+    from arbiter_tui.shell.app import make_app
+    from arbiter_tui.shell.plots import Plot
 
     store = AnalyticsStore(max_data_points=n)
     store.start_collection()

@@ -21,9 +21,9 @@ from _common import emit
 
 from arbiter_core.kinematics import Pose
 from arbiter_core.linkmodel import LinkModel
+from arbiter_tui.commands.compare import Sweep, run_sweep
 from arbiter_tui.control.algorithms import MissionProgress, make_controller
 from arbiter_tui.session.compare import AUTONOMOUS, MISSION_NAMES
-from arbiter_tui.session.compare_cmd import Sweep, run_sweep
 
 LATENCIES_MS = (0, 50, 100, 200, 300)
 

@@ -22,9 +22,9 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 CHILD = """
 import asyncio, sys, time
-from arbiter_tui.app import make_app
+from arbiter_tui.shell.app import make_app
 from arbiter_tui.link.sim import SimLink
-from arbiter_tui.settings import Settings
+from arbiter_tui.session.settings import Settings
 
 W, H, KEY, SECONDS = int(sys.argv[1]), int(sys.argv[2]), sys.argv[3], float(sys.argv[4])
 

@@ -35,7 +35,7 @@ from ..control.loop import ControlLoop
 from ..control.teleop import MOVE_KEYS, SCALE_KEYS, STOP_KEYS, Teleop
 from ..link.base import DISCONNECTED, RECONNECTING, STARTING, Link
 from ..link.sim import SimLink
-from ..settings import Settings
+from .settings import Settings
 
 log = logging.getLogger(__name__)
 

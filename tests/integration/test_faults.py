@@ -8,12 +8,12 @@ from pathlib import Path
 
 from arbiter_tui.analytics.files import FORMATS
 from arbiter_tui.analytics.store import AnalyticsStore
-from arbiter_tui.app import make_app
 from arbiter_tui.latency.tracker_client import TrackerClient
 from arbiter_tui.link.base import CONNECTED
 from arbiter_tui.link.rosbridge import RosLink
-from arbiter_tui.settings import Settings
-from arbiter_tui.widgets import LINK_DOWN, StatusLine
+from arbiter_tui.session.settings import Settings
+from arbiter_tui.shell.app import make_app
+from arbiter_tui.shell.widgets import LINK_DOWN, StatusLine
 
 from ..support.backend import free_port, get_json, start_backend
 from ..support.points import make_point

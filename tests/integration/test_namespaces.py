@@ -6,11 +6,11 @@ import json
 import aiohttp
 
 from arbiter_tui.analytics.store import AnalyticsStore
-from arbiter_tui.app import make_app
 from arbiter_tui.latency.tracker_client import TrackerClient
 from arbiter_tui.link.base import CONNECTED
 from arbiter_tui.link.rosbridge import RosLink
-from arbiter_tui.settings import Settings
+from arbiter_tui.session.settings import Settings
+from arbiter_tui.shell.app import make_app
 
 from ..support.backend import get_json, start_backend
 from ..support.tui import until

@@ -17,7 +17,7 @@ from arbiter_tui.control.algorithms import MissionProgress, make_controller
 from arbiter_tui.link.base import CONNECTED
 from arbiter_tui.link.rosbridge import RosLink
 from arbiter_tui.session.robot import RobotSession
-from arbiter_tui.settings import Settings
+from arbiter_tui.session.settings import Settings
 
 from ..support.backend import get_json, start_backend
 from ..support.waits import wait_for

@@ -16,7 +16,7 @@ from arbiter_tui.control.algorithms import MissionProgress, make_controller
 from arbiter_tui.link.base import CONNECTED
 from arbiter_tui.link.rosbridge import RosLink
 from arbiter_tui.session.robot import RobotSession
-from arbiter_tui.settings import Settings
+from arbiter_tui.session.settings import Settings
 
 from ..support.backend import start_backend
 from ..support.ros import Odometry, Peer, PoseStamped, TwistStamped, use_test_domain

@@ -14,12 +14,12 @@ import roslibpy
 
 from arbiter_core import envelope
 from arbiter_tui.analytics.store import AnalyticsStore
-from arbiter_tui.app import make_app
 from arbiter_tui.latency.tracker_client import TrackerClient
 from arbiter_tui.link.base import CONNECTED
 from arbiter_tui.link.embedded import EmbeddedBackend
 from arbiter_tui.link.rosbridge import RosLink
-from arbiter_tui.settings import Settings
+from arbiter_tui.session.settings import Settings
+from arbiter_tui.shell.app import make_app
 
 from ..support.backend import get_json, start_backend, wait_for
 from ..support.ros import (

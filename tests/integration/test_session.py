@@ -8,12 +8,12 @@ from rich.text import Text
 from textual.widget import Widget
 
 from arbiter_tui.analytics.runs import COMPLETED
-from arbiter_tui.app import make_app
 from arbiter_tui.latency.tracker_client import TrackerClient
 from arbiter_tui.link.base import CONNECTED, Telemetry
 from arbiter_tui.link.rosbridge import RosLink
 from arbiter_tui.session.robot import MissionFinished, RobotSession
-from arbiter_tui.settings import Settings
+from arbiter_tui.session.settings import Settings
+from arbiter_tui.shell.app import make_app
 
 from ..support.backend import get_json, start_backend
 from ..support.waits import async_until, wait_for

@@ -154,18 +154,24 @@ GOOD_JSON = to_json(random_points(10)).encode()
         (b"[]", "JSON, but not an arbiter analytics export: the top level is an empty list"),
         (b"42", "JSON, but not an arbiter analytics export: the top level is a number"),
         (b'{"foo": 1}', "JSON, but not an arbiter analytics export: no \"dataPoints\" (its keys: 'foo')"),
-        (b"{}", "JSON, but not an arbiter analytics export: no \"dataPoints\" (an empty object)"),
-        (b'{"dataPoints": {}}', "JSON, but not an arbiter analytics export: \"dataPoints\" is an object"),
+        (b"{}", 'JSON, but not an arbiter analytics export: no "dataPoints" (an empty object)'),
+        (b'{"dataPoints": {}}', 'JSON, but not an arbiter analytics export: "dataPoints" is an object'),
         (GOOD_JSON[:200], "truncated JSON: it ends at line"),
         (b"{oops", "invalid JSON: "),
         (b'{"dataPoints": [{"timestamp": "x"}]}', "bad arbiter JSON export: dataPoints[0]: timestamp is not"),
         (GOOD_MCAP[:8], "truncated MCAP: 8 bytes and no end marker"),
         (GOOD_MCAP[:-1], f"truncated MCAP: {len(GOOD_MCAP) - 1} bytes"),
         (_flipped(GOOD_MCAP, 0.5), "corrupt MCAP: "),
-        (_foreign_mcap("/chatter"), "MCAP, but not an arbiter analytics export: no /arbiter/data_point "
-         "channel (its topics: /chatter)"),
-        (_foreign_mcap("/arbiter/data_point"), "MCAP, but not an arbiter analytics export: its "
-         "/arbiter/data_point messages have no field 'timestamp'"),
+        (
+            _foreign_mcap("/chatter"),
+            "MCAP, but not an arbiter analytics export: no /arbiter/data_point "
+            "channel (its topics: /chatter)",
+        ),
+        (
+            _foreign_mcap("/arbiter/data_point"),
+            "MCAP, but not an arbiter analytics export: its "
+            "/arbiter/data_point messages have no field 'timestamp'",
+        ),
     ],
     ids=lambda v: repr(v[:24]) if isinstance(v, bytes) else None,
 )

@@ -8,12 +8,12 @@ over ``/latency_report`` every later command was counted lost."""
 
 import time
 
-from arbiter_tui.app import make_app
 from arbiter_tui.latency.tracker_client import TrackerClient
 from arbiter_tui.link.base import CONNECTED, DISCONNECTED, RECONNECTING
 from arbiter_tui.link.rosbridge import RosLink
-from arbiter_tui.screens.topics import TopicsList
-from arbiter_tui.settings import Settings
+from arbiter_tui.session.settings import Settings
+from arbiter_tui.shell.app import make_app
+from arbiter_tui.shell.screens.topics import TopicsList
 
 from ..support.backend import get_json, start_backend
 from ..support.tui import until

@@ -4,11 +4,11 @@ import asyncio
 import time
 
 from arbiter_tui.analytics.store import AnalyticsStore
-from arbiter_tui.app import make_app
 from arbiter_tui.latency.tracker_client import TrackerClient
 from arbiter_tui.link.base import CONNECTED, DISCONNECTED, RECONNECTING
 from arbiter_tui.link.rosbridge import RosLink
-from arbiter_tui.settings import Settings
+from arbiter_tui.session.settings import Settings
+from arbiter_tui.shell.app import make_app
 
 from ..support.backend import get_json, start_backend
 from ..support.tui import until
@@ -79,7 +79,7 @@ async def test_topics_screen_polls_the_backend_and_echoes_the_selected_topic(tmp
     """Screen 4 against the real backend: the table fills from GET /api/topics, the simulator's odometry
     is ok at its rate, and the selected topic's latest message arrives through rosbridge (throttled).
     Leaving the screen stops both the polls and the echo."""
-    from arbiter_tui.screens.topics import TopicDetail, TopicsList
+    from arbiter_tui.shell.screens.topics import TopicDetail, TopicsList
 
     backend = start_backend("--topics-window", "2")
     link = RosLink("127.0.0.1", backend.bridge_port)

@@ -138,8 +138,8 @@ def test_bad_urls_and_the_token_rule_stop_before_anything_starts(args, words, ca
 
 
 async def test_connection_errors_say_what_failed_on_screen(tmp_path):
-    from arbiter_tui.app import make_app
-    from arbiter_tui.settings import Settings
+    from arbiter_tui.session.settings import Settings
+    from arbiter_tui.shell.app import make_app
 
     from ..support.backend import free_port
     from ..support.tui import until

@@ -5,10 +5,10 @@ import time
 from arbiter_core.kinematics import Pose
 from arbiter_core.record import LatencyRecord
 from arbiter_tui.analytics.store import AnalyticsStore
-from arbiter_tui.app import make_app
 from arbiter_tui.latency.tracker_client import TrackerClient
 from arbiter_tui.link.base import CONNECTED, Telemetry
-from arbiter_tui.settings import Settings
+from arbiter_tui.session.settings import Settings
+from arbiter_tui.shell.app import make_app
 
 SEEDED_POINTS = 300  # the seeded store's ring: smaller than its runs, so it has dropped samples of run 1
 

@@ -6,10 +6,10 @@ import time
 from arbiter_core.kinematics import Pose
 from arbiter_tui.control.algorithms import MISSIONS
 from arbiter_tui.link.base import CONNECTED, RECONNECTING
-from arbiter_tui.plots import LatencyPlot, LiveMap
-from arbiter_tui.screens.analytics import CompareTable
-from arbiter_tui.screens.control import ControlScreen
-from arbiter_tui.widgets import RobotPanel, TrackerCards
+from arbiter_tui.shell.plots import LatencyPlot, LiveMap
+from arbiter_tui.shell.screens.analytics import CompareTable
+from arbiter_tui.shell.screens.control import ControlScreen
+from arbiter_tui.shell.widgets import RobotPanel, TrackerCards
 
 from ..support.tui import RecordingLink, still_app, until
 
@@ -126,10 +126,10 @@ def test_readme_and_help_name_every_key_the_screens_bind():
     key is named in its screen's README row and in the help text, with the screen's action."""
     from pathlib import Path
 
-    from arbiter_tui.app import ArbiterApp
-    from arbiter_tui.screens.analytics import AnalyticsScreen
-    from arbiter_tui.screens.help import HELP
-    from arbiter_tui.screens.topics import TopicsScreen
+    from arbiter_tui.shell.app import ArbiterApp
+    from arbiter_tui.shell.screens.analytics import AnalyticsScreen
+    from arbiter_tui.shell.screens.help import HELP
+    from arbiter_tui.shell.screens.topics import TopicsScreen
 
     readme = Path(__file__).resolve().parents[2].joinpath("README.md").read_text()
     table = readme[readme.index("## Keys") :].split("\n\n", 1)[0]
@@ -153,7 +153,7 @@ def test_readme_and_help_name_every_key_the_screens_bind():
 
 
 async def test_the_map_follows_the_robot_at_most_every_follow_period_and_ends_where_it_is():
-    from arbiter_tui.plots import FOLLOW_S
+    from arbiter_tui.shell.plots import FOLLOW_S
 
     app = still_app()
     async with app.run_test(size=(100, 30)) as pilot:
@@ -186,7 +186,7 @@ def from_input_thread(app, *keys: str) -> None:
     from textual import events
     from textual.drivers.headless_driver import HeadlessDriver
 
-    from arbiter_tui.app import direct_keys
+    from arbiter_tui.shell.app import direct_keys
 
     driver = direct_keys(HeadlessDriver)(app)
 

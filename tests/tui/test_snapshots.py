@@ -60,7 +60,7 @@ def test_comparison_per_run_sorted(snap_compare, size):
     """The comparison per run (v), sorted by time to complete (clicked twice: longest first)."""
 
     async def per_run_by_time(pilot):
-        from arbiter_tui.screens.analytics import CompareTable
+        from arbiter_tui.shell.screens.analytics import CompareTable
 
         await pilot.press("2", "v")
         table = pilot.app.screen.query_one(CompareTable)
@@ -122,8 +122,8 @@ def test_analytics_marks_the_measured_latency_on_the_error_vs_latency_curve(snap
     recorded (the store's, as the app computes it) marked on it, in the plot and in words."""
     from arbiter_core.linkmodel import LinkModel
     from arbiter_tui.analytics.linkcurve import READY, SWEEP_LATENCIES_MS, LinkSweepView, curve_of
+    from arbiter_tui.commands.compare import Sweep, run_sweep, sweep_body
     from arbiter_tui.session.compare import AUTONOMOUS
-    from arbiter_tui.session.compare_cmd import Sweep, run_sweep, sweep_body
 
     setup = Sweep(["square"], list(AUTONOMOUS), 0.5, 1.0, [LinkModel(ms / 1e3) for ms in SWEEP_LATENCIES_MS])
     curve = curve_of(sweep_body(setup, run_sweep(setup)), "square")

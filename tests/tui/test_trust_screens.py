@@ -9,10 +9,10 @@ from textual_plot.plot_widget import BarPlot, LinePlot
 
 from arbiter_tui.analytics.runs import COMPLETED
 from arbiter_tui.analytics.store import AnalyticsStore, DataPoint
-from arbiter_tui.plots import ErrorPlot, LatencyHistogram, LatencyPlot
-from arbiter_tui.screens.analytics import CompareTable, EmptyState, RingWarning
-from arbiter_tui.views import AnalyticsView
-from arbiter_tui.widgets import TrackerCards, TrackerLine
+from arbiter_tui.session.views import AnalyticsView
+from arbiter_tui.shell.plots import ErrorPlot, LatencyHistogram, LatencyPlot
+from arbiter_tui.shell.screens.analytics import CompareTable, EmptyState, RingWarning
+from arbiter_tui.shell.widgets import TrackerCards, TrackerLine
 
 from ..support.tui import still_app, until
 
@@ -192,13 +192,13 @@ async def test_the_trajectory_legend_fits_its_border():
     app = still_app()
     async with app.run_test(size=(80, 24)) as pilot:
         await pilot.press("2")
-        from arbiter_tui.plots import TrajectoryPlot
+        from arbiter_tui.shell.plots import TrajectoryPlot
 
         plot = app.screen.query_one(TrajectoryPlot)
         assert await until(pilot, lambda: bool(plot.border_subtitle))
         assert len(plot.border_subtitle) <= plot.size.width - 6 and "…" not in plot.border_subtitle
         assert plot.border_subtitle == "+ go_to_goal x pure_pursuit"
-        from arbiter_tui.plots import legend_text
+        from arbiter_tui.shell.plots import legend_text
 
         items = [("·", "manual"), ("+", "go_to_goal"), ("x", "pure_pursuit"), ("o", "waypoint"),
                  ("G", "goal")]  # fmt: skip
@@ -209,7 +209,7 @@ async def test_the_trajectory_legend_fits_its_border():
 async def test_the_status_line_at_80_columns_shows_whole_parts_and_marks_what_it_left_out():
     """At 80 columns the full line (83 columns here) does not fit: the deploy mode is left out whole (…),
     the count, the hint and the algorithm stay; widened, everything shows again; on every screen."""
-    from arbiter_tui.widgets import StatusLine
+    from arbiter_tui.shell.widgets import StatusLine
 
     app = still_app()
     async with app.run_test(size=(80, 24)) as pilot:

@@ -9,11 +9,11 @@ from arbiter_core.kinematics import Pose
 from arbiter_tui.analytics.exports import CSV_HEADER
 from arbiter_tui.analytics.store import AnalyticsStore
 from arbiter_tui.link.base import DISCONNECTED
-from arbiter_tui.screens.analytics import AnalyticsScreen
-from arbiter_tui.screens.confirm import ConfirmClear
-from arbiter_tui.screens.control import ControlScreen
-from arbiter_tui.screens.help import HelpScreen
-from arbiter_tui.screens.latency import LatencyScreen
+from arbiter_tui.shell.screens.analytics import AnalyticsScreen
+from arbiter_tui.shell.screens.confirm import ConfirmClear
+from arbiter_tui.shell.screens.control import ControlScreen
+from arbiter_tui.shell.screens.help import HelpScreen
+from arbiter_tui.shell.screens.latency import LatencyScreen
 
 from ..support.tui import SEEDED_POINTS, RecordingLink, still_app, until
 
@@ -283,8 +283,8 @@ async def test_autonomous_controller_sends_commands_and_manual_keys_take_over():
 async def test_one_store_per_session_outlives_screen_switches():
     """The seed's singleton, scoped to the robot session: every screen shares it, another session
     (another robot, another test) has its own; no module-level store."""
-    from arbiter_tui.app import make_app
-    from arbiter_tui.settings import Settings
+    from arbiter_tui.session.settings import Settings
+    from arbiter_tui.shell.app import make_app
 
     app = make_app(Settings(live=False, handle_signals=False), RecordingLink())
     other = make_app(Settings(live=False, handle_signals=False), RecordingLink())
@@ -299,8 +299,8 @@ async def test_one_store_per_session_outlives_screen_switches():
 async def test_the_first_frame_comes_before_the_link_and_the_link_is_attached_when_ready():
     import threading
 
-    from arbiter_tui.app import make_app
-    from arbiter_tui.settings import Settings
+    from arbiter_tui.session.settings import Settings
+    from arbiter_tui.shell.app import make_app
 
     release = threading.Event()
     link = RecordingLink()
@@ -328,8 +328,8 @@ async def test_the_first_frame_comes_before_the_link_and_the_link_is_attached_wh
 
 
 async def test_a_backend_that_cannot_start_is_said_on_screen():
-    from arbiter_tui.app import make_app
-    from arbiter_tui.settings import Settings
+    from arbiter_tui.session.settings import Settings
+    from arbiter_tui.shell.app import make_app
 
     def connector():
         raise RuntimeError("the bundled backend exited: address already in use")
@@ -344,8 +344,8 @@ async def test_a_backend_that_cannot_start_is_said_on_screen():
 
 
 async def test_a_theme_chosen_in_the_console_is_kept_in_the_config_file(tmp_path):
-    from arbiter_tui.app import make_app
-    from arbiter_tui.settings import Settings
+    from arbiter_tui.session.settings import Settings
+    from arbiter_tui.shell.app import make_app
 
     path = tmp_path / "config.toml"
     path.write_text("speed = 0.3\n")

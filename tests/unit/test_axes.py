@@ -6,7 +6,7 @@ import random
 from textual.geometry import Region
 from textual_plot.plot_widget import map_coordinate_to_pixel
 
-from arbiter_tui import axes
+from arbiter_tui.analytics import axes
 
 
 def gaps(cells: list[int]) -> set[int]:

@@ -248,8 +248,8 @@ def test_a_trial_tables_column_has_one_form_and_the_digits_the_verdict_needs():
     """Issue 31: figure_eight at 0 ms printed stanley `0.016±0.000` (an interval of 1e-18, rounding noise)
     beside go_to_goal `0.016` under the verdict "stanley, apart from every other". Every cell of a column
     now has the same form, and avg e_xt has as many decimals as tell the ranked means apart."""
+    from arbiter_tui.commands.compare import trial_table
     from arbiter_tui.session import trials as TR
-    from arbiter_tui.session.compare_cmd import trial_table
 
     summaries = [
         _cell("stanley", 0.015611, 1e-18),
@@ -278,8 +278,8 @@ def test_a_trial_tables_column_has_one_form_and_the_digits_the_verdict_needs():
     ],
 )
 def test_the_printed_intervals_overlap_exactly_when_the_verdict_says_so(best, rival):
+    from arbiter_tui.commands.compare import trial_table
     from arbiter_tui.session import trials as TR
-    from arbiter_tui.session.compare_cmd import trial_table
 
     (v,) = TR.verdicts([_cell("stanley", *best), _cell("go_to_goal", *rival)])
     cells = _xte_cells(trial_table([v]))
@@ -291,7 +291,7 @@ def test_the_printed_intervals_overlap_exactly_when_the_verdict_says_so(best, ri
 def test_the_single_comparisons_table_tells_close_runs_apart():
     from dataclasses import replace
 
-    from arbiter_tui.session.compare_cmd import table
+    from arbiter_tui.commands.compare import table
 
     runs = [run_one(a, "figure_eight") for a in ("stanley", "go_to_goal")]
     xte = (0.015611, 0.016049)
@@ -316,8 +316,8 @@ def test_the_plots_legend_is_off_the_data_and_in_the_image(tmp_path, monkeypatch
     from matplotlib.figure import Figure
 
     from arbiter_core.linkmodel import LinkModel
-    from arbiter_tui.session.compare_cmd import Sweep, run_sweep
-    from arbiter_tui.session.plotfile import write_plot
+    from arbiter_tui.commands.compare import Sweep, run_sweep
+    from arbiter_tui.commands.plotfile import write_plot
 
     seen = []
     original = Figure.savefig

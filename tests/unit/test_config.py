@@ -5,8 +5,8 @@ import os
 
 import pytest
 
-from arbiter_tui import config
 from arbiter_tui.launch import build_parser, parse
+from arbiter_tui.session import config
 
 
 def write(tmp_path, text):

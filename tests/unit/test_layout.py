@@ -32,7 +32,7 @@ def lint_imports(cwd: Path) -> subprocess.CompletedProcess:
 def test_import_contracts_are_kept():
     r = lint_imports(ROOT)
     assert r.returncode == 0, r.stdout + r.stderr
-    assert "5 kept, 0 broken" in r.stdout
+    assert "6 kept, 0 broken" in r.stdout
 
 
 def test_import_contracts_catch_a_console_import_of_the_backend_and_textual_in_core(tmp_path):
@@ -42,13 +42,13 @@ def test_import_contracts_catch_a_console_import_of_the_backend_and_textual_in_c
             shutil.copytree(src, tmp_path / name, ignore=shutil.ignore_patterns("__pycache__"))
         else:
             shutil.copy(src, tmp_path / name)
-    with (tmp_path / "arbiter_tui" / "app.py").open("a") as f:
+    with (tmp_path / "arbiter_tui" / "shell" / "app.py").open("a") as f:
         f.write("\nimport arbiter_backend.tracker  # noqa\n")
     with (tmp_path / "arbiter_core" / "stats.py").open("a") as f:
         f.write("\nimport textual  # noqa\n")
     r = lint_imports(tmp_path)
     assert r.returncode != 0
-    assert "arbiter_tui.app -> arbiter_backend.tracker" in r.stdout
+    assert "arbiter_tui.shell.app -> arbiter_backend.tracker" in r.stdout
     assert "arbiter_core.stats -> textual" in r.stdout
 
 

@@ -3,7 +3,7 @@
 import pytest
 
 from arbiter_tui.link.base import CONNECTED, RECONNECTING
-from arbiter_tui.views import Part, StatusView, cells, fit_parts
+from arbiter_tui.session.views import Part, StatusView, cells, fit_parts
 
 PAUSED = StatusView(
     link=CONNECTED, target="embedded 9090/8085", deploy="native", algorithm="manual", points=153

@@ -12,9 +12,9 @@ from arbiter_tui.analytics import tracking as T
 from arbiter_tui.analytics.exports import read_mcap, runs_from, to_json, to_mcap
 from arbiter_tui.analytics.runs import COMPLETED
 from arbiter_tui.analytics.store import AnalyticsStore
+from arbiter_tui.commands.compare import Sweep, run_sweep
 from arbiter_tui.session import trials as TR
 from arbiter_tui.session.compare import AUTONOMOUS, run_one
-from arbiter_tui.session.compare_cmd import Sweep, run_sweep
 
 
 def test_cross_track_is_the_distance_to_the_nearest_segment():

@@ -17,12 +17,12 @@ from textual import events
 from textual_plot import HiResMode, PlotWidget
 from textual_plot.axis_formatter import AxisFormatter
 
-from . import axes
-from .analytics.linkcurve import LinkSweepView, format_ms
-from .analytics.runs import MANUAL
-from .analytics.styles import GOAL, ROBOT_ARROWS, WAYPOINT, style_of
+from ..analytics import axes
+from ..analytics.linkcurve import LinkSweepView, format_ms
+from ..analytics.runs import MANUAL
+from ..analytics.styles import GOAL, ROBOT_ARROWS, WAYPOINT, style_of
+from ..session.views import PLOT_PERIOD_S, AnalyticsView, LatencySnapshot, MapView, thin
 from .messages import GoalPicked
-from .views import PLOT_PERIOD_S, AnalyticsView, LatencySnapshot, MapView, thin
 
 
 def algorithm_style(name: str) -> tuple[str, str]:

@@ -23,9 +23,8 @@ from ..analytics.files import ExportError, load_points, write_new_file
 from ..analytics.runs import row_of
 from ..analytics.store import stats_of_points
 from ..control.teleop import cap_setting
-from ..settings import Settings
-from . import trials as TR
-from .compare import (
+from ..session import trials as TR
+from ..session.compare import (
     AUTONOMOUS,
     CMD_TIMEOUT_S,
     MISSION_NAMES,
@@ -35,7 +34,8 @@ from .compare import (
     parse_names,
     ranking_of,
 )
-from .trials import INTERVAL, VERDICT_RULE
+from ..session.settings import Settings
+from ..session.trials import INTERVAL, VERDICT_RULE
 
 D = Settings()  # the console's defaults, one place
 

@@ -17,11 +17,11 @@ from textual_plot import HiResMode
 
 from arbiter_core.topicstats import SAMPLE_S
 
-from .. import axes
-from ..latency.topics_client import TopicsState
-from ..latency.topics_table import COLUMNS, SORT_ORDER, aligned, cells, detail, headers, select
+from ...analytics import axes
+from ...latency.topics_client import TopicsState
+from ...latency.topics_table import COLUMNS, SORT_ORDER, aligned, cells, detail, headers, select
+from ...session.views import PLOT_PERIOD_S
 from ..plots import MIN_GAP_X, MIN_GAP_Y, Plot
-from ..views import PLOT_PERIOD_S
 from .base import BaseScreen
 
 # column -> width; columns are shown in PRIORITY order while they fit, the topic column takes the rest

@@ -16,10 +16,10 @@ from textual.reactive import reactive
 from textual.widget import Widget
 from textual.widgets import DataTable
 
-from ..analytics import table as T
-from ..analytics.linkcurve import LinkSweepView
+from ...analytics import table as T
+from ...analytics.linkcurve import LinkSweepView
+from ...session.views import AnalyticsView
 from ..plots import ErrorPlot, LinkPlot, TrajectoryPlot
-from ..views import AnalyticsView
 from ..widgets import Bound, StatsCards
 from .base import BaseScreen
 

@@ -9,8 +9,8 @@ from textual.containers import Vertical
 from textual.screen import ModalScreen
 from textual.widgets import Input, Static
 
-from ..control.algorithms import DEFAULT_CONTROLLER
-from ..control.goals import GoalError, parse_goal
+from ...control.algorithms import DEFAULT_CONTROLLER
+from ...control.goals import GoalError, parse_goal
 
 
 class GoalPrompt(ModalScreen[tuple[float, float] | None]):

@@ -11,9 +11,9 @@ from textual.geometry import Size
 from textual.screen import Screen
 from textual.widgets import Footer, Static
 
-from ..analytics.store import AnalyticsStore
-from ..control.loop import ControlLoop
-from ..session.robot import ExportResult
+from ...analytics.store import AnalyticsStore
+from ...control.loop import ControlLoop
+from ...session.robot import ExportResult
 from ..widgets import StatusLine
 
 

@@ -15,7 +15,7 @@ from ..analytics.styles import style_of
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-    from .compare_cmd import SweepCell
+    from .compare import SweepCell
 
 
 def series(cells: list[SweepCell]) -> dict[str, dict[str, list[tuple[float, float, float]]]]:

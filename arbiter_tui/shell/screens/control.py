@@ -11,8 +11,8 @@ from textual.binding import Binding
 from textual.containers import Horizontal, Vertical
 from textual.widgets import Static
 
-from ..control.algorithms import ALGORITHMS
-from ..control.teleop import key_name
+from ...control.algorithms import ALGORITHMS
+from ...control.teleop import key_name
 from ..plots import ErrorPlot, LatencyPlot, LiveMap
 from ..widgets import KEY_HELP, ClientLine, RobotPanel, StatsCards, TrackerCards, TrackerLine
 from .analytics import CompareTable, RuleLine

@@ -12,13 +12,20 @@ import numpy as np
 
 from arbiter_core.cliargs import OneLineParser
 
-from .bags import DEFAULT_TOPICS, BagTopics, is_bag, read_bag
-from .exports import Export, ExportFormatError
-from .files import load_export
-from .labels import format_stat
-from .model import STATS_FIELDS, AnalyticsStats, DataPoint, columns_of, grouped_stats, stats_of_points
-from .observe import ObserveConfig
-from .runs import MANUAL, RunSummary
+from ..analytics.bags import DEFAULT_TOPICS, BagTopics, is_bag, read_bag
+from ..analytics.exports import Export, ExportFormatError
+from ..analytics.files import load_export
+from ..analytics.labels import format_stat
+from ..analytics.model import (
+    STATS_FIELDS,
+    AnalyticsStats,
+    DataPoint,
+    columns_of,
+    grouped_stats,
+    stats_of_points,
+)
+from ..analytics.observe import ObserveConfig
+from ..analytics.runs import MANUAL, RunSummary
 
 
 def build_parser() -> argparse.ArgumentParser:

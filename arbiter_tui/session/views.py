@@ -21,12 +21,12 @@ from arbiter_core.record import LatencyRecord
 from arbiter_core.stats import Summary
 from arbiter_core.timesync import TimeSync, one_way_bound_ms
 
-from .analytics.runs import MANUAL, AlgorithmSummary, RunSummary
-from .analytics.store import EMPTY_STATS, AnalyticsStats, AnalyticsStore
-from .control.loop import ControlLoop
-from .latency.clocksync import MeterSummary
-from .latency.tracker_client import LatencyView
-from .link.base import CONNECTED, DISCONNECTED, RECONNECTING, STARTING, Link
+from ..analytics.runs import MANUAL, AlgorithmSummary, RunSummary
+from ..analytics.store import EMPTY_STATS, AnalyticsStats, AnalyticsStore
+from ..control.loop import ControlLoop
+from ..latency.clocksync import MeterSummary
+from ..latency.tracker_client import LatencyView
+from ..link.base import CONNECTED, DISCONNECTED, RECONNECTING, STARTING, Link
 
 # -- the status line: parts by priority, fitted to a width ---------------------------------------------
 SEP = " · "

@@ -11,9 +11,9 @@ from collections.abc import Callable
 
 from textual.message import Message
 
-from .latency.tracker_client import TrackerClient
-from .link.base import Link
-from .session.robot import ExportResult
+from ..latency.tracker_client import TrackerClient
+from ..link.base import Link
+from ..session.robot import ExportResult
 
 __all__ = ["ExportResult"]  # the session's; the messages below carry it
 

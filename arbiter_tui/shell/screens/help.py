@@ -8,7 +8,7 @@ from textual.containers import VerticalScroll
 from textual.screen import ModalScreen
 from textual.widgets import Static
 
-from ..control.teleop import legend_long
+from ...control.teleop import legend_long
 
 HELP = f"""[b]arbiter-tui[/b] — teleop console, analytics and latency monitor
 

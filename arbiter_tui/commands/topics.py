@@ -17,9 +17,9 @@ from arbiter_core.cliargs import OneLineParser
 from arbiter_core.topicstats import Expectation, TopicsAnswer, parse_expect, unmet
 from arbiter_core.urls import UrlError, check_token_transport, tracker_endpoint
 
-from .topics_client import TopicsPoller
-from .topics_table import COLUMNS, aligned, cells
-from .tracker_client import TrackerClient
+from ..latency.topics_client import TopicsPoller
+from ..latency.topics_table import COLUMNS, aligned, cells
+from ..latency.tracker_client import TrackerClient
 
 DEFAULT_TRACKER = "http://127.0.0.1:8085"
 

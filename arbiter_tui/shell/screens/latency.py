@@ -8,8 +8,8 @@ from textual.app import ComposeResult
 from textual.containers import Horizontal
 from textual.reactive import reactive
 
+from ...session.views import LatencySnapshot
 from ..plots import LatencyHistogram, LatencyPlot
-from ..views import LatencySnapshot
 from ..widgets import Bound, ClientLine, TrackerCards, TrackerLine, fmt_ms
 from .base import BaseScreen
 

@@ -28,18 +28,33 @@ from textual.message import Message
 from textual.reactive import var
 from textual.screen import Screen
 
-from .analytics.files import FORMATS
-from .analytics.linkcurve import FAILED, READY, RUNNING, CurveError, LinkSweepView, measured_p95
-from .analytics.store import AnalyticsStore
-from .config import save_theme
-from .control.algorithms import ALGORITHMS, MISSIONS
-from .control.loop import ControlLoop
-from .control.teleop import TELEOP_KEYS, Teleop, key_name
-from .latency.topics_client import PERIOD_S as TOPICS_PERIOD_S
-from .latency.topics_client import TopicsPoller, TopicsState
-from .latency.topics_table import echo_refusal, echo_text
-from .latency.tracker_client import LatencyView, TrackerClient
-from .link.base import STARTING, Link, PendingLink
+from ..analytics.files import FORMATS
+from ..analytics.linkcurve import FAILED, READY, RUNNING, CurveError, LinkSweepView, measured_p95
+from ..analytics.store import AnalyticsStore
+from ..control.algorithms import ALGORITHMS, MISSIONS
+from ..control.loop import ControlLoop
+from ..control.teleop import TELEOP_KEYS, Teleop, key_name
+from ..latency.topics_client import PERIOD_S as TOPICS_PERIOD_S
+from ..latency.topics_client import TopicsPoller, TopicsState
+from ..latency.topics_table import echo_refusal, echo_text
+from ..latency.tracker_client import LatencyView, TrackerClient
+from ..link.base import STARTING, Link, PendingLink
+from ..session.config import save_theme
+from ..session.link_sweep import sweep_curve
+from ..session.robot import MissionFinished, RobotSession
+from ..session.settings import SIM, Settings
+from ..session.views import (
+    AnalyticsView,
+    LatencySnapshot,
+    MapView,
+    RobotView,
+    StatusView,
+    analytics_view,
+    latency_snapshot,
+    map_view,
+    robot_view,
+    status_view,
+)
 from .messages import (
     BackendFailed,
     BackendStarted,
@@ -58,21 +73,6 @@ from .screens.control import ControlScreen
 from .screens.help import HelpScreen
 from .screens.latency import LatencyScreen
 from .screens.topics import TopicsScreen
-from .session.link_sweep import sweep_curve
-from .session.robot import MissionFinished, RobotSession
-from .settings import SIM, Settings
-from .views import (
-    AnalyticsView,
-    LatencySnapshot,
-    MapView,
-    RobotView,
-    StatusView,
-    analytics_view,
-    latency_snapshot,
-    map_view,
-    robot_view,
-    status_view,
-)
 
 log = logging.getLogger(__name__)
 FREEZE_AFTER_S = 2.0
@@ -668,7 +668,7 @@ class ArbiterApp(App[None]):
         self.publish_views(force=True)
 
     def ask_goal(self) -> None:
-        from .control.algorithms import goal_driver
+        from ..control.algorithms import goal_driver
         from .screens.goal import GoalPrompt
 
         pose = self.link.telemetry.snapshot()[0]
