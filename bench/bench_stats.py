@@ -186,7 +186,7 @@ def bench_screen(n: int, repeat: int) -> dict[str, float]:
             for i in range(repeat):
                 sample(i)
                 c0, t0 = time.process_time(), time.perf_counter()
-                app.publish_views(force=True)
+                app.refresh_frame(force=True)
                 view.append(time.perf_counter() - t0)
                 await pilot.pause()  # Textual processes the change and repaints
                 update.append(time.process_time() - c0)
@@ -194,7 +194,7 @@ def bench_screen(n: int, repeat: int) -> dict[str, float]:
             for i in range(repeat):
                 sample(repeat + i)
                 c0 = time.process_time()
-                app.publish_views(force=True)
+                app.refresh_frame(force=True)
                 await pilot.pause()
                 plots.append(time.process_time() - c0)
             views.PLOT_PERIOD_S = period

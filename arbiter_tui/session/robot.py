@@ -33,8 +33,10 @@ from ..analytics.store import AnalyticsStore
 from ..control.algorithms import choose_controller_hint
 from ..control.loop import ControlLoop
 from ..control.teleop import MOVE_KEYS, SCALE_KEYS, STOP_KEYS, Teleop
+from ..latency.topics_client import TopicFigures
 from ..link.base import DISCONNECTED, RECONNECTING, STARTING, Link
 from ..link.sim import SimLink
+from .echo import TopicEcho
 from .settings import Settings
 
 log = logging.getLogger(__name__)
@@ -90,6 +92,7 @@ class RobotSession:
         )
         self._unobserve: Callable[[], None] | None = None
         self._observe(link)
+        self.echo = TopicEcho()  # the topics screen's echo of one topic
         self.too_small = False
         self.stop_reason: str | None = None
         self.on_event: Callable[[object], None] = lambda event: None
@@ -115,6 +118,10 @@ class RobotSession:
             self._unobserve()
         c = self.config
         self._unobserve = observe(self.observer, c.cmd_topic, c.cmd_stamped, c.plan_topic, c.goal_topic)
+
+    def echo_topic(self, figures: TopicFigures | None) -> None:
+        """Echo the topic ``figures`` describes on the topics screen (None: stop), through the link."""
+        self.echo.show(self.link, figures)
 
     def link_down(self) -> bool:
         """The rosbridge link was lost (or never came up): nothing the console sends goes out."""

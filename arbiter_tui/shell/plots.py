@@ -1,7 +1,8 @@
 """Plots drawn with ``textual-plot`` (axes, ticks, labels, legends, braille resolution), fed by snapshots.
 
-Each plot watches one app attribute and redraws only when the data it draws changed (the store's
-version, a poll). Series are distinguished by marker shape and named in a legend, never by colour
+Each plot is bound to its screen's frame, picks its typed part (``pick``) and redraws only when the
+data it draws changed (``data_key``: the store's version, a poll, the robot's cell; a frozen value
+with named fields). Series are distinguished by marker shape and named in a legend, never by colour
 alone. The plots take no focus and no keys: the screens' keys stay the screens'.
 """
 
@@ -10,19 +11,25 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Sequence
-from typing import Any, ClassVar
+from dataclasses import dataclass
+from typing import Any, Generic, TypeVar
 
 import numpy as np
 from textual import events
+from textual.reactive import reactive
 from textual_plot import HiResMode, PlotWidget
 from textual_plot.axis_formatter import AxisFormatter
 
 from ..analytics import axes
-from ..analytics.linkcurve import LinkSweepView, format_ms
+from ..analytics.linkcurve import LinkCurve, LinkSweepView, format_ms
 from ..analytics.runs import MANUAL
 from ..analytics.styles import GOAL, ROBOT_ARROWS, WAYPOINT, style_of
+from ..session.frames import Frame
 from ..session.views import PLOT_PERIOD_S, AnalyticsView, LatencySnapshot, MapView, thin
 from .messages import GoalPicked
+
+V = TypeVar("V")  # the part of the frame a plot shows
+K = TypeVar("K")  # what it draws of it: equal keys, equal drawings
 
 
 def algorithm_style(name: str) -> tuple[str, str]:
@@ -72,39 +79,45 @@ class DecadeFormatter(AxisFormatter):
         return [f"{10 ** (round(t) - 1):g}" for t in ticks]
 
 
-class Plot(PlotWidget, can_focus=False):
-    """A PlotWidget that follows one snapshot attribute of the app (``SOURCE``)."""
+class Plot(PlotWidget, Generic[V, K], can_focus=False):
+    """A PlotWidget that shows one part of the frame (``pick``), redrawn only when what it draws changed
+    (``data_key``, a value that compares equal exactly when the drawing would be the same). Bind it with
+    ``.data_bind(BaseScreen.frame)``."""
 
-    SOURCE: ClassVar[str] = ""
     DEFAULT_CSS = """
     Plot { border: round $primary; height: 1fr; width: 1fr; }
     """
+    # every frame (equal or not): a change that waits for its follow period is drawn at the first frame
+    # after it, in the same paint as the widgets that changed with that frame
+    frame: reactive[Frame] = reactive(Frame, repaint=False, always_update=True)
     draws = 0  # tests: how often the data was redrawn
 
     def __init__(self, title: str, **kwargs: Any) -> None:
         super().__init__(allow_pan_and_zoom=False, **kwargs)
         self.border_title = title
-        self._key: object = None
+        self._key: K | None = None
         self._drawn_at = float("-inf")  # monotonic s
-        self._pending = False  # a change waits for its follow period
 
     def on_mount(self) -> None:
         # axis names and units are in the border title: the margins hold just the tick labels
         self.margin_top = 0
         self.margin_bottom = 1
         self.margin_left = 7
-        self.watch(self.app, self.SOURCE, self._receive, init=True)
-        self.watch(self.app, "ui_tick", self._tick, init=False)
 
-    def _receive(self, view: Any) -> None:
+    def pick(self, frame: Frame) -> V:
+        raise NotImplementedError
+
+    def watch_frame(self, frame: Frame) -> None:
+        if self.is_mounted:
+            self._receive(self.pick(frame))
+
+    def _receive(self, view: V) -> None:
         key = self.data_key(view)
         if key == self._key:
             return  # nothing this plot draws changed
         wait = self.follow_period(self._key, key) - (time.monotonic() - self._drawn_at)
-        if wait > 0:  # drawn at the first UI tick after the period, with what is newest then
-            self._pending = True
+        if wait > 0:  # drawn at the first frame after the period, with what is newest then
             return
-        self._pending = False
         self._key = key
         self._drawn_at = time.monotonic()
         self.draws += 1
@@ -115,20 +128,13 @@ class Plot(PlotWidget, can_focus=False):
             # during a frame, and the canvases it dirties then take a frame of their own.
             self.render()
 
-    def _tick(self) -> None:
-        """The app sampled its sources (``ui_tick``): a change that waited is drawn now, in the same frame
-        as the widgets that changed with this tick (a plot's own timer made a frame of its own, and each
-        frame renders every widget in the box around what changed)."""
-        if self._pending:
-            self._receive(getattr(self.app, self.SOURCE))
-
-    def follow_period(self, old: object, new: object) -> float:
+    def follow_period(self, old: K | None, new: K) -> float:
         """How long after the last draw a change from ``old`` to ``new`` may wait (0: draw at once)."""
         return 0.0
 
     def on_resize(self) -> None:
         self._key = None  # limits that keep an aspect depend on the size
-        self._receive(getattr(self.app, self.SOURCE))
+        self._receive(self.pick(self.frame))
 
     def canvas_size(self) -> tuple[int, int]:
         """Columns and rows of the data area, from this widget's own size (known when it is resized,
@@ -152,19 +158,20 @@ class Plot(PlotWidget, can_focus=False):
         self.set_ylimits(y.lo, y.hi)
         self.set_yticks(list(y.ticks))
 
-    def data_key(self, view: Any) -> object:
+    def data_key(self, view: V) -> K:
         raise NotImplementedError
 
-    def draw(self, view: Any) -> None:
+    def draw(self, view: V) -> None:
         raise NotImplementedError
 
 
-class ErrorPlot(Plot):
+class ErrorPlot(Plot[AnalyticsView, int]):
     """Distance error over time (the newest samples)."""
 
-    SOURCE = "analytics"
+    def pick(self, frame: Frame) -> AnalyticsView:
+        return frame.analytics
 
-    def data_key(self, view: AnalyticsView) -> object:
+    def data_key(self, view: AnalyticsView) -> int:
         return view.plot_version
 
     def draw(self, view: AnalyticsView) -> None:
@@ -179,7 +186,30 @@ class ErrorPlot(Plot):
             self.set_axes(axes.aligned(0.0, 10.0, cols, MIN_GAP_X), axes.aligned(0.0, 1.0, rows, MIN_GAP_Y))
 
 
-class MapPlot(Plot):
+@dataclass(frozen=True)
+class Mission:
+    """What a map shows of the mission: a change draws at once."""
+
+    goal: tuple[float, float] | None
+    waypoints: tuple[tuple[float, float], ...]
+    stale: bool = False
+
+
+@dataclass(frozen=True)
+class TrajectoryKey:
+    plot_version: int
+    mission: Mission
+
+
+@dataclass(frozen=True)
+class MapKey:
+    x_axis: axes.Axis
+    y_axis: axes.Axis
+    robot: tuple[int, int, str] | None  # the robot's cell and its heading arrow
+    mission: Mission
+
+
+class MapPlot(Plot[V, K]):
     """A path in metres at equal aspect: the axes are the scale. Shared by the analytics trajectory and
     the control screen's live map, so both are drawn (and read) the same way."""
 
@@ -226,14 +256,15 @@ class MapPlot(Plot):
         return x[first], y[first]
 
 
-class TrajectoryPlot(MapPlot):
+class TrajectoryPlot(MapPlot[AnalyticsView, TrajectoryKey]):
     """The collected path, one marker per algorithm (legend), the mission's waypoints ``o`` and goal ``G``,
     at equal aspect: the axes in metres are the scale."""
 
-    SOURCE = "analytics"
+    def pick(self, frame: Frame) -> AnalyticsView:
+        return frame.analytics
 
-    def data_key(self, view: AnalyticsView) -> object:
-        return (view.plot_version, view.waypoints, view.goal)
+    def data_key(self, view: AnalyticsView) -> TrajectoryKey:
+        return TrajectoryKey(view.plot_version, Mission(view.goal, view.waypoints))
 
     def draw(self, view: AnalyticsView) -> None:
         tracks = [(t, np.asarray(t.x), np.asarray(t.y)) for t in view.tracks]
@@ -251,33 +282,33 @@ class TrajectoryPlot(MapPlot):
         self.border_subtitle = legend_text(legend, self.size.width - 6)
 
 
-class LiveMap(MapPlot):
+class LiveMap(MapPlot[MapView, MapKey]):
     """The control screen's map: the robot (an arrow along its heading), its trail, the origin ``+``, and
     the waypoints and goal where ``g`` takes it, drawn as the analytics trajectory is. Redrawn only when
     what it shows moves by a cell (the robot, the axes) or the mission changes, not at every pose. A click
     sets a go-to-goal target there."""
 
-    SOURCE = "trajectory"
     view: MapView | None = None
 
-    def data_key(self, view: MapView) -> object:
+    def pick(self, frame: Frame) -> MapView:
+        return frame.map
+
+    def data_key(self, view: MapView) -> MapKey:
         x_axis, y_axis = self._axes(view)
         cols, rows = self.scale_size()
         cell = None
         if view.pose is not None:
             x, y, theta = view.pose
             cell = (axes.cell(x, x_axis, cols), axes.cell(y, y_axis, rows), heading_arrow(theta))
-        return (x_axis, y_axis, cell, view.goal, view.waypoints, view.stale)
+        return MapKey(x_axis, y_axis, cell, Mission(view.goal, view.waypoints, view.stale))
 
-    def follow_period(self, old: object, new: object) -> float:
+    def follow_period(self, old: MapKey | None, new: MapKey) -> float:
         """The robot moving (by a cell, or out of the axes, which then grow) is drawn at most every
         ``FOLLOW_S``: a plot repaint was most of the control screen's CPU under a Pi-class quota
         (bench/pi.py), and a robot driving out of the map changed the axes at almost every tick. A new
         mission or goal, or a pose turning stale, is drawn at once. The panel beside it shows the pose at
         the full UI rate."""
-        if isinstance(old, tuple) and isinstance(new, tuple) and old[3:] == new[3:]:
-            return FOLLOW_S
-        return 0.0
+        return FOLLOW_S if old is not None and old.mission == new.mission else 0.0
 
     def _axes(self, view: MapView) -> tuple[axes.Axis, axes.Axis]:
         xs, ys = [0.0], [0.0]  # the origin is always on the map
@@ -325,21 +356,26 @@ def heading_arrow(theta: float) -> str:
     return ROBOT_ARROWS[round(theta / (math.pi / 4)) % 8]
 
 
-class _LatencyWindow(Plot):
+@dataclass(frozen=True)
+class WindowKey:
+    polled: object  # the poll that brought the window
+    simulated: bool
+
+
+class _LatencyWindow(Plot[LatencySnapshot, WindowKey]):
     """A plot of the tracker's latency window: redrawn when a poll brought new records."""
 
-    SOURCE = "latency"
+    def pick(self, frame: Frame) -> LatencySnapshot:
+        return frame.latency
 
-    def data_key(self, view: LatencySnapshot) -> object:
-        return (view.polled, view.simulated)
+    def data_key(self, view: LatencySnapshot) -> WindowKey:
+        return WindowKey(view.polled, view.simulated)
 
-    def follow_period(self, old: object, new: object) -> float:
+    def follow_period(self, old: WindowKey | None, new: WindowKey) -> float:
         """While records stream in, the plots follow at most every ``PLOT_PERIOD_S``, as the analytics
         plots do (the cards and records above them: every poll); a plot repaint costs more than the
         numbers, and this screen must cost no more than the analytics screen (bench/pi.py)."""
-        if isinstance(old, tuple) and isinstance(new, tuple) and old[1] == new[1]:
-            return PLOT_PERIOD_S
-        return 0.0
+        return PLOT_PERIOD_S if old is not None and old.simulated == new.simulated else 0.0
 
 
 class LatencyPlot(_LatencyWindow):
@@ -391,14 +427,21 @@ class LatencyHistogram(_LatencyWindow):
         self.border_subtitle = f"count (log) · {len(lat)} commands"
 
 
-class LinkPlot(Plot):
+@dataclass(frozen=True)
+class SweepKey:
+    curve: LinkCurve | None
+    p95_ms: float | None  # to the 0.1 ms the legend shows
+
+
+class LinkPlot(Plot[LinkSweepView, SweepKey]):
     """Avg cross-track error against one-way latency, one line per controller (a sweep of the selected
     mission in simulated time), and the latency this console measures (its p95) as a vertical line."""
 
-    SOURCE = "link_sweep"
+    def pick(self, frame: Frame) -> LinkSweepView:
+        return frame.link_sweep
 
-    def data_key(self, view: LinkSweepView) -> object:
-        return (view.curve, None if view.p95_ms is None else round(view.p95_ms, 1))
+    def data_key(self, view: LinkSweepView) -> SweepKey:
+        return SweepKey(view.curve, None if view.p95_ms is None else round(view.p95_ms, 1))
 
     def draw(self, view: LinkSweepView) -> None:
         cols, rows = self.scale_size()

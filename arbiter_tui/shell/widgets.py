@@ -1,13 +1,14 @@
 """Widgets that show one snapshot each (``views.py``): a reactive ``view``, rendered only when it changed.
 
-Each widget names the app attribute it shows (``SOURCE``) and watches it; Textual compares the new
-snapshot with the old and calls nothing when they are equal, so a widget whose data did not change
-does no work. ``renders`` counts render calls (tests check that equal data costs nothing).
+Each widget is bound (``data_bind``) to its screen's ``frame`` and picks its own typed part of it
+(``pick``); Textual compares the new part with the old and calls nothing when they are equal, so a widget
+whose data did not change does no work. ``renders`` counts render calls (tests check that equal data
+costs nothing).
 """
 
 from __future__ import annotations
 
-from typing import Any, ClassVar
+from typing import Generic, TypeVar
 
 from rich.text import Text
 from textual.reactive import reactive
@@ -19,6 +20,7 @@ from ..analytics.labels import STAT_LABELS, format_stat
 from ..analytics.store import STATS_FIELDS
 from ..control.teleop import legend_compact
 from ..latency.clocksync import OffsetEstimate
+from ..session.frames import Frame
 from ..session.views import AnalyticsView, LatencySnapshot, RobotView, StatusView
 
 LINK_DOWN = (  # two lines of the 36 columns inside the panel: the rows below stay in view
@@ -28,17 +30,20 @@ STALE = "*"  # marks a value that is the last received, not live
 KEY_HELP = legend_compact()
 
 
-class Bound(Widget):
-    """A widget that shows the app attribute named ``SOURCE`` (a frozen snapshot)."""
+V = TypeVar("V")
 
-    SOURCE: ClassVar[str] = ""
+
+class Bound(Widget, Generic[V]):
+    """A widget that shows one part of the frame (``pick``): bind it with ``.data_bind(BaseScreen.frame)``."""
+
+    frame: reactive[Frame] = reactive(Frame, repaint=False)
     renders = 0
 
-    def on_mount(self) -> None:
-        self.watch(self.app, self.SOURCE, self._receive, init=True)
+    def pick(self, frame: Frame) -> V:
+        raise NotImplementedError
 
-    def _receive(self, value: Any) -> None:
-        self.view = value  # type: ignore[attr-defined]  # a reactive on each subclass
+    def watch_frame(self, frame: Frame) -> None:
+        self.view = self.pick(frame)  # a reactive ``view`` on each subclass: equal values do nothing
 
     def render(self) -> Text:
         self.renders += 1
@@ -48,13 +53,15 @@ class Bound(Widget):
         raise NotImplementedError
 
 
-class StatusLine(Bound):
-    SOURCE = "status"
+class StatusLine(Bound[StatusView]):
     DEFAULT_CSS = """
     StatusLine { dock: top; height: 1; background: $panel; color: $text; padding: 0 1; }
     StatusLine.alarm { background: $error; text-style: bold; }
     """
     view: reactive[StatusView] = reactive(StatusView)
+
+    def pick(self, frame: Frame) -> StatusView:
+        return frame.status
 
     def watch_view(self, view: StatusView) -> None:
         self.set_class(view.alarm, "alarm")
@@ -64,9 +71,11 @@ class StatusLine(Bound):
         return Text(self.view.text(self.size.width or None), no_wrap=True, overflow="ellipsis")
 
 
-class RobotPanel(Bound):
-    SOURCE = "robot"
+class RobotPanel(Bound[RobotView]):
     view: reactive[RobotView] = reactive(RobotView)
+
+    def pick(self, frame: Frame) -> RobotView:
+        return frame.robot
 
     def draw(self) -> Text:
         r = self.view
@@ -108,9 +117,11 @@ class RobotPanel(Bound):
         return t
 
 
-class StatsCards(Bound):
-    SOURCE = "analytics"
+class StatsCards(Bound[AnalyticsView]):
     view: reactive[AnalyticsView] = reactive(AnalyticsView)
+
+    def pick(self, frame: Frame) -> AnalyticsView:
+        return frame.analytics
 
     def draw(self) -> Text:
         stats = self.view.stats
@@ -173,9 +184,11 @@ CARDS = (("count", "count"), ("mean_ms", "mean"), ("min_ms", "min"), ("max_ms", 
          ("stddev_ms", "stddev"))  # fmt: skip
 
 
-class TrackerLine(Bound):
-    SOURCE = "latency"
+class TrackerLine(Bound[LatencySnapshot]):
     view: reactive[LatencySnapshot] = reactive(LatencySnapshot)
+
+    def pick(self, frame: Frame) -> LatencySnapshot:
+        return frame.latency
 
     def draw(self) -> Text:
         v = self.view
@@ -201,12 +214,14 @@ class TrackerLine(Bound):
         return state
 
 
-class TrackerCards(Bound):
+class TrackerCards(Bound[LatencySnapshot]):
     """One-way latency over the console's window of the tracker's records: the same records, and so the
     same p95, as the plot and the histogram beside it."""
 
-    SOURCE = "latency"
     view: reactive[LatencySnapshot] = reactive(LatencySnapshot)
+
+    def pick(self, frame: Frame) -> LatencySnapshot:
+        return frame.latency
 
     def draw(self) -> Text:
         s = self.view.summary
@@ -223,11 +238,13 @@ class TrackerCards(Bound):
         return cards
 
 
-class ClientLine(Bound):
+class ClientLine(Bound[LatencySnapshot]):
     """This console's own view: round trip, offset (NTP method), corrected one-way, loss."""
 
-    SOURCE = "latency"
     view: reactive[LatencySnapshot] = reactive(LatencySnapshot)
+
+    def pick(self, frame: Frame) -> LatencySnapshot:
+        return frame.latency
 
     def watch_view(self, view: LatencySnapshot) -> None:
         self.display = not view.simulated

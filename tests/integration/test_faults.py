@@ -46,7 +46,7 @@ async def test_backend_killed_and_restarted_mid_drive(tmp_path):
             store.start_collection()
             await pilot.press("i")
             assert await until(pilot, lambda: link.telemetry.pose.x > 0.05, timeout=5)
-            assert app.teleop.moving
+            assert app.session.teleop.moving
 
             backend.proc.kill()
             killed = time.monotonic()
@@ -56,7 +56,7 @@ async def test_backend_killed_and_restarted_mid_drive(tmp_path):
             # the panel repaints on its own (the same UI tick, maybe a frame later): wait for it
             assert await until(pilot, lambda: LINK_DOWN.splitlines()[0] in text_of(app, "#robot"), timeout=2)
             # the held key is forgotten at the session's next control tick: no motion when the link returns
-            assert await until(pilot, lambda: not app.teleop.moving, timeout=1)
+            assert await until(pilot, lambda: not app.session.teleop.moving, timeout=1)
             backend.proc.wait()
             await pilot.pause(1.0)  # an absence: a dead link adds no points and sends nothing
             kept = store.points()

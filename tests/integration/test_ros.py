@@ -343,8 +343,8 @@ async def test_best_effort_odometry_that_starts_after_the_console_reaches_its_co
 
             arrived = await until(pilot, published_and_received, timeout=10)
             assert arrived, "best-effort odometry never arrived"
-            assert await until(pilot, lambda: app.robot.x == 1.5, timeout=5)
-            assert "no odometry" not in app.status.text()
+            assert await until(pilot, lambda: app.frame.robot.x == 1.5, timeout=5)
+            assert "no odometry" not in app.frame.status.text()
     finally:
         link.close()
         backend.stop()

@@ -33,10 +33,15 @@ async def _walk_topics(pilot, app, halfway=None) -> list[str]:
     await pilot.press("home")
     visited = []
     for i, name in enumerate(names):
-        assert await until(pilot, lambda n=name: table.selected == n and app._echo is not None)
-        assert app._echo[0] == name
+        assert await until(pilot, lambda n=name: table.selected == n and app.session.echo.current is not None)
+        assert app.session.echo.current[0] == name
         if name in ("/odom", "/latency_report"):  # the streams the console itself depends on: echoed
-            assert await until(pilot, lambda n=name: app._echo[0] == n and app._echo[1].startswith("{"))
+            assert await until(
+                pilot,
+                lambda n=name: (
+                    app.session.echo.current[0] == n and app.session.echo.current[1].startswith("{")
+                ),
+            )
         visited.append(name)
         if halfway is not None and i == len(names) // 2:
             await halfway()
@@ -49,7 +54,7 @@ async def _assert_streams_flow(pilot, app, link: RosLink, api: str) -> None:
     count = link.telemetry.odom_count
     assert await until(pilot, lambda: link.telemetry.odom_count >= count + 5, timeout=5), "odometry stopped"
     assert not link.telemetry.odometry_missing(time.monotonic())
-    assert await until(pilot, lambda: "no odometry" not in app.status_text(), timeout=3)
+    assert await until(pilot, lambda: "no odometry" not in app.sampler.status().text(), timeout=3)
     await pilot.press("1", "space")  # stop the mission; then count with nothing in flight
     meter = link.telemetry.meter
     assert await until(pilot, lambda: meter.summary().in_flight == 0, timeout=5)
@@ -86,7 +91,7 @@ async def test_a_tour_of_every_screen_and_topic_leaves_the_consoles_streams_flow
             visited = await _walk_topics(pilot, app)
             assert {"/odom", "/latency_report"} <= set(visited)
             await pilot.press("1")
-            assert await until(pilot, lambda: app._echo is None)
+            assert await until(pilot, lambda: app.session.echo.current is None)
             assert set(link.streams.subscriptions()) == {link.topic_odom, link.topic_report}
             await _assert_streams_flow(pilot, app, link, backend.api)
     finally:

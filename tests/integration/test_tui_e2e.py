@@ -92,8 +92,8 @@ async def test_topics_screen_polls_the_backend_and_echoes_the_selected_topic(tmp
             await pilot.press("4")
             table = app.screen.query_one(TopicsList)
 
-            def odom_ok() -> bool:
-                odom = next((t for t in app.topics.topics if t.name == "/odom"), None)
+            def odom_ok() -> bool:  # as the table on screen shows it
+                odom = next((t for t in table.state.topics if t.name == "/odom"), None)
                 return odom is not None and odom.state == "ok" and (odom.rate_hz or 0) > 40
 
             assert await until(pilot, odom_ok, timeout=15)
@@ -103,17 +103,17 @@ async def test_topics_screen_polls_the_backend_and_echoes_the_selected_topic(tmp
             detail = app.screen.query_one(TopicDetail)
 
             def echoed() -> bool:
-                echo = app.topics.echo
+                echo = app.frame.topics.echo
                 return echo is not None and echo[0] == "/odom" and echo[1].startswith('{"header"')
 
             assert await until(pilot, echoed, timeout=10)
             await pilot.pause(0.1)
             assert '{"header"' in str(detail.render())
-            polls = app.topics.polls
+            polls = app.frame.topics.polls
             await pilot.press("1")
             await pilot.pause(1.5)
-            assert app.topics.polls <= polls + 1  # at most the poll in flight when the screen was left
-            assert app._echo is None and app._echo_cancel is None
+            assert app.frame.topics.polls <= polls + 1  # at most the poll in flight when the screen was left
+            assert app.session.echo.current is None and app.session.echo._cancel is None
     finally:
         link.close()
         backend.stop()

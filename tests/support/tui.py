@@ -1,6 +1,7 @@
 """Test doubles at the link boundary and a deterministic app builder for snapshot and Pilot tests."""
 
 import time
+from dataclasses import replace
 
 from arbiter_core.kinematics import Pose
 from arbiter_core.record import LatencyRecord
@@ -9,6 +10,7 @@ from arbiter_tui.latency.tracker_client import TrackerClient
 from arbiter_tui.link.base import CONNECTED, Telemetry
 from arbiter_tui.session.settings import Settings
 from arbiter_tui.shell.app import make_app
+from arbiter_tui.shell.screens.base import BaseScreen
 
 SEEDED_POINTS = 300  # the seeded store's ring: smaller than its runs, so it has dropped samples of run 1
 
@@ -123,7 +125,7 @@ def still_app(tmp_path=None, link=None, store=None, tracker_view=True, mode="emb
     app = make_app(settings, link, tracker, store=store, clock=clock)
     app.fake_clock = clock
     for _ in range(30):
-        app.loop.add_trail(0.05 * _, 0.01 * _ * _ / 10)
+        app.session.loop.add_trail(0.05 * _, 0.01 * _ * _ / 10)
     return app
 
 
@@ -135,3 +137,12 @@ async def until(pilot, predicate, timeout: float = 8.0, step: float = 0.02) -> b
             return True
         await pilot.pause(step)
     return predicate()
+
+
+def show_frame(app, **parts) -> None:
+    """Put ``parts`` (fields of ``Frame``) on screen as they are, without sampling: data the session
+    cannot make on its own (a backend's answer, a sweep's curve, a run the ring dropped)."""
+    frame = app.sampler.frame = replace(app.sampler.frame, **parts)
+    for screen in app.screen_stack:
+        if isinstance(screen, BaseScreen):
+            screen.frame = frame

@@ -23,54 +23,56 @@ async def test_the_map_shows_the_mission_where_g_will_take_the_robot():
     drives to (not the mission's own frame at the origin), and after g they are the same points."""
     app = still_app()
     async with app.run_test(size=(100, 30)) as pilot:
-        app.link.telemetry.pose = Pose(1.0, 1.0, 0.0)
+        app.session.link.telemetry.pose = Pose(1.0, 1.0, 0.0)
         await pilot.press("a")  # go_to_goal, the square selected
-        app.publish_views(force=True)
+        app.refresh_frame(force=True)
         await pilot.pause()
-        shown = app.trajectory
+        shown = app.frame.map
         assert shown.waypoints == ((3.0, 1.0), (3.0, 3.0), (1.0, 3.0), (1.0, 1.0))
-        assert shown.goal == (3.0, 1.0) and app.robot.goal == (3.0, 1.0)
-        assert app.robot.e_d == 2.0  # measured to that goal, 2 m ahead
+        assert shown.goal == (3.0, 1.0) and app.frame.robot.goal == (3.0, 1.0)
+        assert app.frame.robot.e_d == 2.0  # measured to that goal, 2 m ahead
         live_map = app.screen.query_one(LiveMap)
         assert await until(pilot, lambda: live_map.view is not None and live_map.view.goal == (3.0, 1.0))
         assert "G goal" in str(live_map.border_subtitle) and "+ origin" in str(live_map.border_subtitle)
         await pilot.press("g")
-        assert app.loop.running and [tuple(p) for p in app.loop.mission.waypoints] == list(shown.waypoints)
+        assert app.session.loop.running and [tuple(p) for p in app.session.loop.mission.waypoints] == list(
+            shown.waypoints
+        )
         # another mission chosen while the robot stands elsewhere: its waypoints move with the robot
         await pilot.press("space")
-        app.link.telemetry.pose = Pose(-2.0, 0.5, 0.0)
+        app.session.link.telemetry.pose = Pose(-2.0, 0.5, 0.0)
         await pilot.press(*"n" * len(MISSIONS))  # round every mission back to square: no run to resume
-        app.publish_views(force=True)
-        assert app.trajectory.waypoints[0] == (0.0, 0.5)
+        app.refresh_frame(force=True)
+        assert app.frame.map.waypoints[0] == (0.0, 0.5)
 
 
 async def test_manual_driving_shows_no_goal_and_resuming_shows_the_interrupted_mission():
     app = still_app()
     async with app.run_test(size=(100, 30)) as pilot:
-        app.publish_views(force=True)
-        assert app.trajectory.goal is None and app.trajectory.waypoints == () and app.robot.goal is None
+        app.refresh_frame(force=True)
+        assert app.frame.map.goal is None and app.frame.map.waypoints == () and app.frame.robot.goal is None
         await pilot.press("a", "g")
-        first_goal = app.loop.mission.goal
+        first_goal = app.session.loop.mission.goal
         await pilot.press("i")  # a movement key takes over: manual, the mission interrupted
-        assert app.loop.algorithm == "manual" and not app.loop.running
-        app.link.telemetry.pose = Pose(5.0, 5.0, 0.0)
-        app.publish_views(force=True)
-        assert app.trajectory.goal == first_goal  # g resumes it: that goal, not a square from (5, 5)
+        assert app.session.loop.algorithm == "manual" and not app.session.loop.running
+        app.session.link.telemetry.pose = Pose(5.0, 5.0, 0.0)
+        app.refresh_frame(force=True)
+        assert app.frame.map.goal == first_goal  # g resumes it: that goal, not a square from (5, 5)
 
 
 async def test_values_that_are_not_live_are_marked_stale_and_the_rows_stay_in_view():
     link = RecordingLink(state=CONNECTED)
     app = still_app(link=link)
     async with app.run_test(size=(80, 24)) as pilot:
-        app.publish_views(force=True)
+        app.refresh_frame(force=True)
         await pilot.pause()
         panel = app.screen.query_one(RobotPanel)
-        assert not app.robot.stale and "stale" not in text_of(panel)
+        assert not app.frame.robot.stale and "stale" not in text_of(panel)
         link._state = RECONNECTING
-        app.publish_views(force=True)
+        app.refresh_frame(force=True)
         await pilot.pause()
         text = text_of(panel)
-        assert app.robot.stale and app.trajectory.stale
+        assert app.frame.robot.stale and app.frame.map.stale
         assert "Pose*" in text and "Odom*" in text and "* stale" in text and "LINK DOWN" in text
         # every row of the panel is still inside it at 80x24: the banner pushed none of them out
         assert panel.region.bottom <= app.screen.query_one("#panel").content_region.bottom
@@ -97,7 +99,7 @@ async def test_a_large_terminal_shows_the_dashboard_and_the_arrows_still_drive()
         assert screen.query_one(LatencyPlot).draws >= 1
         assert app.focused is None or app.focused is not table
         await pilot.press("up")  # drives: the table never takes the arrows here
-        assert app.loop.command[0] > 0 and app.link.sent[-1][0] > 0
+        assert app.session.loop.command[0] > 0 and app.session.link.sent[-1][0] > 0
         await pilot.press("space")
     small = still_app()
     async with small.run_test(size=(159, 45)) as pilot:
@@ -158,20 +160,20 @@ async def test_the_map_follows_the_robot_at_most_every_follow_period_and_ends_wh
     app = still_app()
     async with app.run_test(size=(100, 30)) as pilot:
         live_map = app.screen.query_one(LiveMap)
-        app.publish_views(force=True)
+        app.refresh_frame(force=True)
         assert await until(pilot, lambda: live_map.view is not None)
         await pilot.pause(FOLLOW_S)  # the first draw is behind us
         before = live_map.draws
         started = time.monotonic()
         for i in range(1, 6):  # five cells and more in a tenth of a second, inside the axes shown
-            app.link.telemetry.pose = Pose(1.25 - 0.2 * i, -0.5, 0.6)
-            app.publish_views()
+            app.session.link.telemetry.pose = Pose(1.25 - 0.2 * i, -0.5, 0.6)
+            app.sample_frame()
             await pilot.pause(0.02)
         # the first move at once, the rest wait (a loaded machine may take longer over the five)
         assert live_map.draws - before <= 1 + (time.monotonic() - started) / FOLLOW_S
 
         def drawn_where_it_is() -> bool:
-            app.publish_views()  # the UI tick, as the live console runs it
+            app.sample_frame()  # the UI tick, as the live console runs it
             return live_map.view.pose[0] == 0.25
 
         assert await until(pilot, drawn_where_it_is, timeout=3 * FOLLOW_S)
@@ -186,9 +188,9 @@ def from_input_thread(app, *keys: str) -> None:
     from textual import events
     from textual.drivers.headless_driver import HeadlessDriver
 
-    from arbiter_tui.shell.app import direct_keys
+    from arbiter_tui.shell.keys import direct_keys
 
-    driver = direct_keys(HeadlessDriver)(app)
+    driver = direct_keys(HeadlessDriver, lambda: app.keys)(app)
 
     def deliver() -> None:
         for key in keys:
@@ -203,16 +205,21 @@ async def test_a_teleop_key_reaches_the_robot_without_waiting_for_the_ui_and_is_
     app = still_app()
     async with app.run_test(size=(100, 30)) as pilot:
         await pilot.pause()
-        speed = app.teleop.speed
+        speed = app.session.teleop.speed
         # The UI's loop does not run while this test holds it: the command goes out all the same.
         from_input_thread(app, "i")
-        assert app.link.sent and app.link.sent[-1] == (speed, 0.0)
+        assert app.session.link.sent and app.session.link.sent[-1] == (speed, 0.0)
         from_input_thread(app, "q")  # a scale key: answered twice it would scale twice
-        assert app.teleop.speed == round(speed * 1.1, 6) or abs(app.teleop.speed - speed * 1.1) < 1e-9
+        assert (
+            app.session.teleop.speed == round(speed * 1.1, 6)
+            or abs(app.session.teleop.speed - speed * 1.1) < 1e-9
+        )
         await pilot.pause()
         await pilot.pause()
-        assert abs(app.teleop.speed - speed * 1.1) < 1e-9  # the UI showed it and did not answer it again
-        assert await until(pilot, lambda: app.robot.speed == round(speed * 1.1, 2))
+        assert (
+            abs(app.session.teleop.speed - speed * 1.1) < 1e-9
+        )  # the UI showed it and did not answer it again
+        assert await until(pilot, lambda: app.frame.robot.speed == round(speed * 1.1, 2))
 
 
 async def test_a_teleop_key_waits_behind_a_key_the_ui_answers():
@@ -221,16 +228,16 @@ async def test_a_teleop_key_waits_behind_a_key_the_ui_answers():
     app = still_app()
     async with app.run_test(size=(100, 30)) as pilot:
         await pilot.pause()
-        sent = len(app.link.sent)
+        sent = len(app.session.link.sent)
         from_input_thread(app, "a", "i")
-        assert len(app.link.sent) == sent  # nothing went direct: i is queued behind a
-        assert await until(pilot, lambda: len(app.link.sent) > sent)  # the UI answered i
-        assert await until(pilot, lambda: app._keys_queued == 0 and app._keys_direct)
+        assert len(app.session.link.sent) == sent  # nothing went direct: i is queued behind a
+        assert await until(pilot, lambda: len(app.session.link.sent) > sent)  # the UI answered i
+        assert await until(pilot, lambda: app.keys._queued == 0 and app.keys._direct)
         # each answered on the input thread, before the UI runs again: the zero at once, then the move
         from_input_thread(app, "space")
-        assert not app.teleop.moving and app.link.sent[-1] == (0.0, 0.0)
+        assert not app.session.teleop.moving and app.session.link.sent[-1] == (0.0, 0.0)
         from_input_thread(app, "i")
-        assert app.teleop.moving and app.link.sent[-1] == (app.teleop.speed, 0.0)
+        assert app.session.teleop.moving and app.session.link.sent[-1] == (app.session.teleop.speed, 0.0)
 
 
 async def test_no_key_goes_direct_while_a_dialog_is_open_or_another_screen_shows():
@@ -238,12 +245,12 @@ async def test_no_key_goes_direct_while_a_dialog_is_open_or_another_screen_shows
     async with app.run_test(size=(100, 30)) as pilot:
         await pilot.press("t")  # the goal prompt: "." is a digit's neighbour there, not a movement key
         assert await until(pilot, lambda: app.screen.__class__.__name__ == "GoalPrompt")
-        sent = len(app.link.sent)
+        sent = len(app.session.link.sent)
         from_input_thread(app, ".", "i")
-        assert len(app.link.sent) == sent
+        assert len(app.session.link.sent) == sent
         await pilot.press("escape")
         await pilot.press("3")
         assert await until(pilot, lambda: app.current_mode == "latency")
         from_input_thread(app, "i")
         await pilot.pause()
-        assert len(app.link.sent) == sent and not app.teleop.moving
+        assert len(app.session.link.sent) == sent and not app.session.teleop.moving

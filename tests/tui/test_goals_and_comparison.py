@@ -23,8 +23,8 @@ def sim_app(tmp_path):
     store = AnalyticsStore()
     store.start_collection()
     app = still_app(tmp_path, link=SimLink(clock=clock), store=store)
-    app.fake_clock = app.clock = clock  # the control loop and the simulator share one fake clock
-    app.link.step()
+    app.fake_clock = app.session.clock = clock  # the control loop and the simulator share one fake clock
+    app.session.link.step()
     return app, clock
 
 
@@ -32,7 +32,7 @@ def drive(app, clock, seconds: float) -> None:
     """Simulated time: the simulator at 50 Hz, the control loop at 10 Hz, as the live console."""
     for n in range(round(seconds * 50)):
         clock.t = round(clock.t + 0.02, 6)
-        app.link.step()
+        app.session.link.step()
         if n % 5 == 4:
             app.session.tick_control()
             app.session.sample()
@@ -41,7 +41,7 @@ def drive(app, clock, seconds: float) -> None:
 async def test_a_click_on_the_map_drives_to_that_point(tmp_path):
     app, clock = sim_app(tmp_path)
     async with app.run_test(size=SIZE) as pilot:
-        app.publish_views(force=True)
+        app.refresh_frame(force=True)
         await pilot.pause()
         the_map = app.screen.query_one(LiveMap)
         assert await until(pilot, lambda: the_map._scale_rectangle.area > 0)
@@ -50,15 +50,17 @@ async def test_a_click_on_the_map_drives_to_that_point(tmp_path):
         at = (canvas.x - the_map.region.x + px, canvas.y - the_map.region.y + py)
         await pilot.click(LiveMap, offset=at)
         goal = tuple(round(v, 2) for v in the_map.get_coordinate_from_pixel(px, py))
-        assert await until(pilot, lambda: app.loop.running)
-        run = app.store.active_run
-        assert app.loop.algorithm == "go_to_goal" and app.loop.mission.waypoints == [goal]
+        assert await until(pilot, lambda: app.session.loop.running)
+        run = app.session.store.active_run
+        assert app.session.loop.algorithm == "go_to_goal" and app.session.loop.mission.waypoints == [goal]
         assert abs(goal[0] - 1.0) < 0.2 and abs(goal[1] - 0.6) < 0.3  # within a cell of where we aimed
         drive(app, clock, 15.0)
-        pose = app.link.telemetry.snapshot()[0]
-        assert ((pose.x - goal[0]) ** 2 + (pose.y - goal[1]) ** 2) ** 0.5 <= app.loop.mission.tolerance
-        assert not app.loop.running
-        assert app.store.run(run).outcome == COMPLETED and app.store.active_run is None
+        pose = app.session.link.telemetry.snapshot()[0]
+        assert (
+            (pose.x - goal[0]) ** 2 + (pose.y - goal[1]) ** 2
+        ) ** 0.5 <= app.session.loop.mission.tolerance
+        assert not app.session.loop.running
+        assert app.session.store.run(run).outcome == COMPLETED and app.session.store.active_run is None
 
 
 async def test_a_typed_goal_and_its_errors(tmp_path):
@@ -73,11 +75,11 @@ async def test_a_typed_goal_and_its_errors(tmp_path):
             await pilot.press("backspace")
         await pilot.press(*"0.5 -0.5", "enter")
         assert not isinstance(app.screen, GoalPrompt)
-        assert app.loop.running and app.loop.mission.waypoints == [(0.5, -0.5)]
-        assert app.loop.mission_label == "goal (+0.50, -0.50)"
+        assert app.session.loop.running and app.session.loop.mission.waypoints == [(0.5, -0.5)]
+        assert app.session.loop.mission_label == "goal (+0.50, -0.50)"
         await pilot.press("space")
         await pilot.press("t", "escape")
-        assert not isinstance(app.screen, GoalPrompt) and not app.loop.running
+        assert not isinstance(app.screen, GoalPrompt) and not app.session.loop.running
 
 
 async def test_the_hints_name_the_controller_that_will_drive_from_the_registry(tmp_path):
@@ -86,17 +88,20 @@ async def test_the_hints_name_the_controller_that_will_drive_from_the_registry(t
     app, _clock = sim_app(tmp_path)
     async with app.run_test(size=SIZE) as pilot:
         await pilot.press("g")  # manual selected: g starts nothing and says how to choose
-        assert not app.loop.running
+        assert not app.session.loop.running
         hint = next(n.message for n in app._notifications if "Select a controller" in n.message)
         assert all(name in hint for name in CONTROLLERS)
         for _ in range(3):  # manual -> go_to_goal -> pure_pursuit -> stanley
             await pilot.press("a")
-        assert app.loop.algorithm == "stanley"
+        assert app.session.loop.algorithm == "stanley"
         await pilot.press("t")
         assert isinstance(app.screen, GoalPrompt)
         assert "drive there with stanley" in str(app.screen.query_one(Static).render())
         await pilot.press(*"0.5 0", "enter")
-        assert app.loop.running and app.store.run(app.store.active_run).algorithm == "stanley"
+        assert (
+            app.session.loop.running
+            and app.session.store.run(app.session.store.active_run).algorithm == "stanley"
+        )
 
 
 async def test_a_finished_run_stays_on_the_panel_until_the_next_key(tmp_path):
@@ -106,19 +111,21 @@ async def test_a_finished_run_stays_on_the_panel_until_the_next_key(tmp_path):
     async with app.run_test(size=SIZE) as pilot:
 
         def panel() -> str:
-            app.publish_views(force=True)
+            app.refresh_frame(force=True)
             return str(app.screen.query_one(RobotPanel).render())
 
         await pilot.press("t", *"0.6 0", "enter")
-        assert app.loop.running
-        run = app.store.active_run
+        assert app.session.loop.running
+        run = app.session.store.active_run
         drive(app, clock, 10.0)
-        assert not app.loop.running
+        assert not app.session.loop.running
         await pilot.pause()
         first = panel()
         assert "goal (+0.60, +0.00) done: 1/1 in " in first
         seconds = first.split("done: 1/1 in ")[1].split(" s")[0]
-        assert seconds == f"{app.store.run(run).time_s:.1f}"  # the run's time, as the analytics table has it
+        assert (
+            seconds == f"{app.session.store.run(run).time_s:.1f}"
+        )  # the run's time, as the analytics table has it
         drive(app, clock, 5.0)  # it lasts (no 4 s toast)
         await pilot.pause()
         assert "done: 1/1 in" in panel()
@@ -137,13 +144,13 @@ async def test_a_manual_samples_errors_are_those_the_panel_shows(tmp_path):
     async with app.run_test(size=SIZE) as pilot:
 
         def panel() -> str:
-            app.publish_views(force=True)
+            app.refresh_frame(force=True)
             return str(app.screen.query_one(RobotPanel).render())
 
         for _ in range(5):
             await pilot.press("i")
             drive(app, clock, 0.2)
-        manual = [p for p in app.store.points() if p.algorithm == "manual"]
+        manual = [p for p in app.session.store.points() if p.algorithm == "manual"]
         assert manual and all(p.distanceError == 0.0 and p.headingError == 0.0 for p in manual)
         assert "Goal     none (manual)" in panel() and "Errors   —" in panel()
         drive(app, clock, 2.0)
@@ -151,11 +158,11 @@ async def test_a_manual_samples_errors_are_those_the_panel_shows(tmp_path):
         drive(app, clock, 2.0)
         await pilot.press("j")  # a movement key overrides: manual, the mission interrupted
         drive(app, clock, 0.4)
-        assert app.loop.algorithm == "manual" and app.loop.interrupted is not None
-        last = app.store.points()[-1]
+        assert app.session.loop.algorithm == "manual" and app.session.loop.interrupted is not None
+        last = app.session.store.points()[-1]
         assert last.algorithm == "manual"
-        goal = app.loop.interrupted.goal
-        pose = app.link.telemetry.snapshot()[0]
+        goal = app.session.loop.interrupted.goal
+        pose = app.session.link.telemetry.snapshot()[0]
         assert last.distanceError == pytest.approx(distance_error(pose, goal), abs=0.05)
         assert f"e_d {last.distanceError:.2f} m" in panel()
 
@@ -164,9 +171,9 @@ async def test_the_palette_selects_algorithm_and_mission_and_goes(tmp_path):
     app, _clock = sim_app(tmp_path)
     async with app.run_test(size=SIZE) as pilot:
         for text, check in (
-            ("Algorithm: pure_pursuit", lambda: app.loop.algorithm == "pure_pursuit"),
-            ("Mission: figure_eight", lambda: app.loop.mission_name == "figure_eight"),
-            ("Go", lambda: app.loop.running and app.loop.mission_label == "figure_eight"),
+            ("Algorithm: pure_pursuit", lambda: app.session.loop.algorithm == "pure_pursuit"),
+            ("Mission: figure_eight", lambda: app.session.loop.mission_name == "figure_eight"),
+            ("Go", lambda: app.session.loop.running and app.session.loop.mission_label == "figure_eight"),
         ):
             await pilot.press("ctrl+p")
             await pilot.press(*text)
@@ -179,18 +186,24 @@ async def test_g_after_an_override_resumes_and_capital_g_restarts(tmp_path):
     app, clock = sim_app(tmp_path)
     async with app.run_test(size=SIZE) as pilot:
         await pilot.press("a", "g")  # go_to_goal on the square
-        run = app.store.active_run
+        run = app.session.store.active_run
         drive(app, clock, 9.0)
-        reached = app.loop.mission.index
+        reached = app.session.loop.mission.index
         assert reached >= 1
         await pilot.press("i")  # a movement key takes over
-        assert app.loop.algorithm == "manual" and app.store.run(run).outcome == OVERRIDDEN
+        assert app.session.loop.algorithm == "manual" and app.session.store.run(run).outcome == OVERRIDDEN
         await pilot.press("space")
         await pilot.press("g")
-        assert app.loop.running and app.loop.algorithm == "go_to_goal"
-        assert app.loop.mission.index == reached and app.loop.mission_label == "square, resumed"
+        assert app.session.loop.running and app.session.loop.algorithm == "go_to_goal"
+        assert (
+            app.session.loop.mission.index == reached and app.session.loop.mission_label == "square, resumed"
+        )
         await pilot.press("G")
-        assert app.loop.running and app.loop.mission.index == 0 and app.loop.mission_label == "square"
+        assert (
+            app.session.loop.running
+            and app.session.loop.mission.index == 0
+            and app.session.loop.mission_label == "square"
+        )
 
 
 async def test_the_comparison_ranks_marks_sorts_and_warns(tmp_path):
@@ -232,23 +245,23 @@ async def test_unchanged_data_redraws_nothing(tmp_path):
         plots = [app.screen.query_one(TrajectoryPlot), app.screen.query_one(ErrorPlot)]
         before = (table.fills, [p.draws for p in plots])
         for _ in range(5):
-            app.publish_views(force=True)
+            app.refresh_frame(force=True)
             await pilot.pause()
         assert (table.fills, [p.draws for p in plots]) == before
-        app.store.start_collection()
-        app.publish_views(force=True)
+        app.session.store.start_collection()
+        app.refresh_frame(force=True)
         await pilot.pause()
         before = (table.fills, [p.draws for p in plots])
-        stats = app.analytics.stats
-        app.loop.sample()  # one new sample: the numbers follow at once, the plots within PLOT_PERIOD_S
-        app.publish_views(force=True)
+        stats = app.frame.analytics.stats
+        app.session.loop.sample()  # one new sample: the numbers follow at once, the plots in PLOT_PERIOD_S
+        app.refresh_frame(force=True)
         await pilot.pause()
-        assert app.analytics.stats != stats  # the ring is full: the oldest sample gave way to the new
+        assert app.frame.analytics.stats != stats  # the ring is full: the oldest sample gave way to the new
         assert table.fills == before[0]  # the run rows have not changed
         assert [p.draws for p in plots] == before[1]  # plotted less than PLOT_PERIOD_S ago
 
         def published_and_redrawn() -> bool:
-            app.publish_views(force=True)
+            app.refresh_frame(force=True)
             return [p.draws for p in plots] != before[1]
 
         assert await until(pilot, published_and_redrawn, timeout=PLOT_PERIOD_S + 2, step=0.1)
@@ -263,14 +276,14 @@ async def test_a_running_mission_updates_its_row_in_place(tmp_path):
         for _ in range(3):
             drive(app, clock, 1.0)
             for _ in range(10):
-                app.loop.sample()
-            app.publish_views(force=True)
+                app.session.loop.sample()
+            app.refresh_frame(force=True)
             await pilot.pause()
         fills, shown = table.fills, table.table.rows
         drive(app, clock, 2.0)
         for _ in range(20):
-            app.loop.sample()
-        app.publish_views(force=True)
+            app.session.loop.sample()
+        app.refresh_frame(force=True)
         await pilot.pause()
         assert table.table.rows != shown and table.fills == fills  # new figures, no rebuild
         on_screen = [str(c) for c in table.get_row("0")]

@@ -6,7 +6,7 @@ import pytest
 
 from arbiter_tui.link.base import RECONNECTING
 
-from ..support.tui import RecordingLink, seeded_store, still_app
+from ..support.tui import RecordingLink, seeded_store, show_frame, still_app
 
 SIZES = [(100, 30), (80, 24)]
 
@@ -83,7 +83,7 @@ def test_analytics_empty_state(snap_compare, paused):
 
     app = still_app(store=AnalyticsStore())
     if paused:
-        app.store.stop_collection()
+        app.session.store.stop_collection()
     assert snap_compare(app, terminal_size=(80, 24), press=["2"])
 
 
@@ -107,7 +107,7 @@ def test_dashboard(snap_compare):
     from .test_topics_screen import QUIET, STATE
 
     app = still_app()
-    app.topics = replace(STATE, topics=(*STATE.topics, QUIET))
+    app.sampler.topics_polled(replace(STATE, topics=(*STATE.topics, QUIET)))
     assert snap_compare(app, terminal_size=(200, 60))
 
 
@@ -130,7 +130,7 @@ def test_analytics_marks_the_measured_latency_on_the_error_vs_latency_curve(snap
     app = still_app(store=seeded_store(latency_ms=lambda i: 40.0 + (i % 20) * 5.0))  # p95: 135 ms
 
     def swept(pilot) -> None:
-        pilot.app.link_sweep = LinkSweepView(READY, "square", curve, None)
+        show_frame(pilot.app, link_sweep=LinkSweepView(READY, "square", curve, None))
 
     assert snap_compare(app, terminal_size=(130, 36), press=["2"], run_before=swept)
 

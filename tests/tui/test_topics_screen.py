@@ -35,7 +35,7 @@ STATE = TopicsState(polls=60, window_s=5.0, topics=TOPICS)
 
 def topics_app(state: TopicsState = STATE):
     app = still_app()
-    app.topics = state
+    app.sampler.topics_polled(state)
     return app
 
 
@@ -81,7 +81,8 @@ async def test_filter_sort_and_select_with_the_keys_a_user_presses():
         assert "QoS: a reliable subscriber cannot match a best-effort publisher" in text
         assert "rate 4.30 Hz" in text and "usual 10.0 Hz" in text
         # a new answer without the selected topic: the selection moves to the first row
-        app.topics = TopicsState(polls=61, window_s=5.0, topics=TOPICS[:2])
+        app.sampler.topics_polled(TopicsState(polls=61, window_s=5.0, topics=TOPICS[:2]))
+        app.sample_frame()
         await pilot.pause()
         assert table.selected in {"/camera/image_raw", "/cmd_vel"}
         # teleop keys do nothing here, and 1 goes back to driving
@@ -157,7 +158,7 @@ async def test_the_rate_plot_covers_the_last_minute_the_moment_the_screen_opens(
         assert plot._user_x_min <= -59.0 and plot._user_x_max >= 0.0
         x = plot._datasets[0].x
         assert len(x) == 60 and x[0] == -59.0 and x[-1] == 0.0
-        assert app.topics.rates("/camera/image_raw")[:2] == (15.0, 15.0)
+        assert app.frame.topics.rates("/camera/image_raw")[:2] == (15.0, 15.0)
 
 
 def test_a_late_message_of_the_last_topic_never_takes_the_new_topics_echo():
@@ -186,10 +187,10 @@ def test_a_late_message_of_the_last_topic_never_takes_the_new_topics_echo():
 
     link = EchoLink()
     app = still_app(link=link)
-    app.topics = STATE
-    app.echo_topic("/odom")
-    app.echo_topic("/scan")  # the user moved on
+    figures = {t.name: t for t in STATE.topics}
+    app.session.echo_topic(figures["/odom"])
+    app.session.echo_topic(figures["/scan"])  # the user moved on
     link.echoes["/odom"]({"header": {"frame_id": "odom"}})  # /odom's last message, late
-    assert app._echo == ("/scan", "waiting for a message ...")
+    assert app.session.echo.current == ("/scan", "waiting for a message ...")
     link.echoes["/scan"]({"ranges": [1.0]})
-    assert app._echo[0] == "/scan" and "ranges" in app._echo[1]
+    assert app.session.echo.current[0] == "/scan" and "ranges" in app.session.echo.current[1]

@@ -14,7 +14,7 @@ from arbiter_tui.shell.plots import ErrorPlot, LatencyHistogram, LatencyPlot
 from arbiter_tui.shell.screens.analytics import CompareTable, EmptyState, RingWarning
 from arbiter_tui.shell.widgets import TrackerCards, TrackerLine
 
-from ..support.tui import still_app, until
+from ..support.tui import show_frame, still_app, until
 
 # a skewed window: 563 commands near 0.3 ms and a few slow ones (what the issue saw, 12 bins)
 SKEWED = [0.30 + 0.001 * (i % 20) for i in range(563)] + [0.6, 0.6, 0.6, 0.6, 0.6, 0.6, 0.6, 1.4, 1.4, 2.9]
@@ -54,12 +54,12 @@ def rows_of(plot, ticks):
 async def test_recording_is_on_from_the_start_and_the_empty_screen_says_so(tmp_path):
     app = still_app(tmp_path, store=AnalyticsStore())
     async with app.run_test(size=(100, 30)) as pilot:
-        assert app.store.is_collecting and "● REC 0" in app.status_text()
+        assert app.session.store.is_collecting and "● REC 0" in app.sampler.status().text()
         await pilot.press("2")
         empty = app.screen.query_one(EmptyState)
         assert await until(pilot, lambda: empty.display and "Recording" in str(empty.render()))
         await pilot.press("r")
-        assert not app.store.is_collecting and "paused 0 — r to record" in app.status_text()
+        assert not app.session.store.is_collecting and "paused 0 — r to record" in app.sampler.status().text()
         assert await until(pilot, lambda: "press r to record" in str(empty.render()))
 
 
@@ -102,7 +102,7 @@ async def test_one_window_one_p95_each_number_labelled():
         await pilot.press("3")
         plot = app.screen.query_one(LatencyPlot)
         assert await until(pilot, lambda: plot._datasets)
-        window = app.latency.summary
+        window = app.frame.latency.summary
         assert window is not None and window.count == len(SKEWED)
         cards = str(app.screen.query_one(TrackerCards).render())
         assert f"last {len(SKEWED)} commands" in cards and f"{window.p95:.3f} ms" in cards
@@ -153,9 +153,9 @@ async def test_at_80x24_the_comparison_shows_every_column_and_the_warning_says_w
         assert table.virtual_size.width <= table.size.width  # nothing cut off, nothing to scroll to
         assert {"e_xt", "p95xt", "e_d", "p95", "|e_θ|", "n"} <= set(table.table.headers)
         warning = app.screen.query_one(RingWarning)
-        view: AnalyticsView = app.analytics
+        view: AnalyticsView = app.frame.analytics
         lost = replace(view.runs[0], in_ring=0)
-        app.analytics = replace(view, version=view.version + 1, runs=(lost, *view.runs[1:]))
+        show_frame(app, analytics=replace(view, version=view.version + 1, runs=(lost, *view.runs[1:])))
         said = f"run {lost.id} all of {lost.stats.sampleCount}"
         assert await until(pilot, lambda: said in str(warning.render()))
 
@@ -184,7 +184,7 @@ async def test_a_mission_that_cannot_move_says_why():
     app = still_app(link=RecordingLink(state=DISCONNECTED))
     async with app.run_test(size=(100, 30)) as pilot:
         await pilot.press("a", "g")
-        assert not app.loop.running and app.store.active_run is None
+        assert not app.session.loop.running and app.session.store.active_run is None
         assert any("link to the robot is down" in n.message for n in app._notifications)
 
 
@@ -214,7 +214,7 @@ async def test_the_status_line_at_80_columns_shows_whole_parts_and_marks_what_it
     app = still_app()
     async with app.run_test(size=(80, 24)) as pilot:
         await pilot.pause()
-        assert len(app.status_text()) > 78  # what a wide terminal shows
+        assert len(app.sampler.status().text()) > 78  # what a wide terminal shows
 
         def line() -> str:
             return str(app.screen.query_one(StatusLine).render())
@@ -224,4 +224,4 @@ async def test_the_status_line_at_80_columns_shows_whole_parts_and_marks_what_it
             await pilot.pause()
             assert line() == "CONNECTED · embedded 9090/8085 · … · manual · paused 300 — r to record", key
         await pilot.resize_terminal(120, 30)
-        assert await until(pilot, lambda: line() == app.status_text())
+        assert await until(pilot, lambda: line() == app.sampler.status().text())

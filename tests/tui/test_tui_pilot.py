@@ -22,7 +22,7 @@ SIZE = (100, 30)
 
 async def test_teleop_keys_send_the_right_twists_and_stop_by_themselves():
     app = still_app()
-    link = app.link
+    link = app.session.link
     async with app.run_test(size=SIZE) as pilot:
         await pilot.press("i")
         assert link.sent[-1] == (0.5, 0.0)  # sent on the press, not at the next tick
@@ -55,12 +55,12 @@ async def test_space_and_k_stop_at_once():
         await pilot.press("i")
         await pilot.press("space")
         app.session.tick_control()
-        assert app.link.sent[-1] == (0.0, 0.0)
+        assert app.session.link.sent[-1] == (0.0, 0.0)
         await pilot.press("j")
-        assert app.link.sent[-1] == (0.0, 1.0)
+        assert app.session.link.sent[-1] == (0.0, 1.0)
         await pilot.press("k")
         app.session.tick_control()
-        assert app.link.sent[-1] == (0.0, 0.0)
+        assert app.session.link.sent[-1] == (0.0, 0.0)
 
 
 async def test_leaving_the_control_screen_ends_a_held_key():
@@ -69,9 +69,9 @@ async def test_leaving_the_control_screen_ends_a_held_key():
         await pilot.press("i")
         await pilot.press("2")
         assert isinstance(app.screen, AnalyticsScreen)
-        assert app.link.sent[-1] == (0.0, 0.0)
-        assert app.stop_reason == "left the control screen"
-        assert not app.teleop.moving
+        assert app.session.link.sent[-1] == (0.0, 0.0)
+        assert app.session.stop_reason == "left the control screen"
+        assert not app.session.teleop.moving
 
 
 async def test_ctrl_c_stops_then_quits():
@@ -79,7 +79,7 @@ async def test_ctrl_c_stops_then_quits():
     async with app.run_test(size=SIZE) as pilot:
         await pilot.press("i")
         await pilot.press("ctrl+c")
-    assert app.link.sent[-1] == (0.0, 0.0)
+    assert app.session.link.sent[-1] == (0.0, 0.0)
     assert app.return_code in (0, None)
 
 
@@ -91,7 +91,7 @@ async def test_focus_loss_stops_the_robot():
         await pilot.press("i")
         app.post_message(events.AppBlur())
         await pilot.pause()
-        assert app.link.sent[-1] == (0.0, 0.0)
+        assert app.session.link.sent[-1] == (0.0, 0.0)
 
 
 async def test_nothing_is_sent_while_disconnected():
@@ -103,8 +103,8 @@ async def test_nothing_is_sent_while_disconnected():
             app.fake_clock.t += 0.1
         app.session.tick_control()
         assert link.sent == []
-        assert app.loop.unsent >= 3
-        assert "DISCONNECTED" in app.status_text()
+        assert app.session.loop.unsent >= 3
+        assert "DISCONNECTED" in app.sampler.status().text()
 
 
 async def test_screens_switch_and_keep_collected_data(tmp_path):
@@ -116,7 +116,7 @@ async def test_screens_switch_and_keep_collected_data(tmp_path):
         await pilot.press("1")
         assert isinstance(app.screen, ControlScreen)
         for _ in range(7):
-            app.loop.sample()
+            app.session.loop.sample()
         await pilot.press("3")
         assert isinstance(app.screen, LatencyScreen)
         await pilot.press("2")
@@ -166,7 +166,7 @@ async def test_export_failure_is_shown_and_data_kept(tmp_path):
         await pilot.press("2", "ctrl+s", "c")
         await pilot.pause()
         assert app.last_export.error is not None
-        assert len(app.store) == SEEDED_POINTS
+        assert len(app.session.store) == SEEDED_POINTS
         failed = [n for n in app._notifications if "EXPORT FAILED" in n.message]
         assert failed and "collected data kept" in failed[0].message and failed[0].severity == "error"
 
@@ -177,12 +177,12 @@ async def test_clearing_asks_first_and_keep_is_the_default(tmp_path):
         await pilot.press("2", "delete")
         assert isinstance(app.screen, ConfirmClear)
         await pilot.press("enter")  # the focused button keeps the data
-        assert isinstance(app.screen, AnalyticsScreen) and len(app.store) == SEEDED_POINTS
+        assert isinstance(app.screen, AnalyticsScreen) and len(app.session.store) == SEEDED_POINTS
         await pilot.press("delete", "n")
-        assert len(app.store) == SEEDED_POINTS
+        assert len(app.session.store) == SEEDED_POINTS
         await pilot.press("delete", "y")
         await pilot.pause()
-        assert len(app.store) == 0
+        assert len(app.session.store) == 0
         assert any(f"cleared {SEEDED_POINTS} samples" in n.message for n in app._notifications)
 
 
@@ -201,10 +201,10 @@ async def test_no_teleop_letter_is_destructive_on_any_screen(tmp_path, screen):
         for key in keys:
             await pilot.press(key)
             assert type(app.screen) is kind, key  # no dialog, no screen change
-        assert len(app.store) == SEEDED_POINTS and not app.store.is_collecting
+        assert len(app.session.store) == SEEDED_POINTS and not app.session.store.is_collecting
         assert list(tmp_path.iterdir()) == []
         if screen != "1":  # off the control screen, movement letters move nothing
-            assert all(cmd == (0.0, 0.0) for cmd in app.link.sent)
+            assert all(cmd == (0.0, 0.0) for cmd in app.session.link.sent)
 
 
 async def test_an_autonomous_run_keeps_driving_on_screens_2_and_3_and_space_stops_it_there():
@@ -213,16 +213,16 @@ async def test_an_autonomous_run_keeps_driving_on_screens_2_and_3_and_space_stop
         await pilot.press("a", "g")
         for screen in ("2", "3"):
             await pilot.press(screen)
-            n = len(app.link.sent)
+            n = len(app.session.link.sent)
             app.session.tick_control()
-            assert app.loop.running and len(app.link.sent) == n + 1
-            assert app.link.sent[-1] != (0.0, 0.0)
+            assert app.session.loop.running and len(app.session.link.sent) == n + 1
+            assert app.session.link.sent[-1] != (0.0, 0.0)
             await pilot.press("space")
-            assert not app.loop.running and app.link.sent[-1] == (0.0, 0.0)
-            assert app.stop_reason == "stop key"
+            assert not app.session.loop.running and app.session.link.sent[-1] == (0.0, 0.0)
+            assert app.session.stop_reason == "stop key"
             await pilot.press("1", "g")  # start again for the next screen
         await pilot.press("3", "k")  # k stops too
-        assert not app.loop.running and app.link.sent[-1] == (0.0, 0.0)
+        assert not app.session.loop.running and app.session.link.sent[-1] == (0.0, 0.0)
 
 
 async def test_a_terminal_too_small_stops_the_robot_and_ignores_movement_keys():
@@ -230,19 +230,21 @@ async def test_a_terminal_too_small_stops_the_robot_and_ignores_movement_keys():
     async with app.run_test(size=SIZE) as pilot:
         await pilot.press("a", "g")
         app.session.tick_control()
-        assert app.loop.running
+        assert app.session.loop.running
         await pilot.resize_terminal(60, 20)
         await pilot.pause()
-        assert not app.loop.running and app.link.sent[-1] == (0.0, 0.0)
-        assert app.stop_reason == "terminal too small"
-        n = len(app.link.sent)
+        assert not app.session.loop.running and app.session.link.sent[-1] == (0.0, 0.0)
+        assert app.session.stop_reason == "terminal too small"
+        n = len(app.session.link.sent)
         await pilot.press("i", "i", "u", "g")
         app.session.tick_control()
-        assert app.link.sent[n:] == [] and not app.teleop.moving and not app.loop.running
+        assert (
+            app.session.link.sent[n:] == [] and not app.session.teleop.moving and not app.session.loop.running
+        )
         await pilot.resize_terminal(*SIZE)
         await pilot.pause()
         await pilot.press("i")
-        assert app.link.sent[-1] == (0.5, 0.0)  # back to normal once it fits
+        assert app.session.link.sent[-1] == (0.5, 0.0)  # back to normal once it fits
 
 
 async def test_widgets_do_no_work_when_their_data_did_not_change():
@@ -252,32 +254,32 @@ async def test_widgets_do_no_work_when_their_data_did_not_change():
         status_line, panel, live_map = (app.screen.query_one(q) for q in ("#status", "#robot", "#map"))
         before = (status_line.renders, panel.renders, live_map.draws)
         for _ in range(20):
-            app.publish_views()
+            app.sample_frame()
             await pilot.pause()
         assert (status_line.renders, panel.renders, live_map.draws) == before  # nothing changed: no work
-        app.link.telemetry.pose = Pose(1.26, -0.5, 0.6)  # a centimetre: the panel says so, the map's
-        app.publish_views()  # arrow stays in its cell and is not redrawn
+        app.session.link.telemetry.pose = Pose(1.26, -0.5, 0.6)  # a centimetre: the panel says so, the map's
+        app.sample_frame()  # arrow stays in its cell and is not redrawn
         await pilot.pause()
         assert panel.renders > before[1] and live_map.draws == before[2]
-        app.link.telemetry.pose = Pose(1.5, -0.5, 0.6)  # the robot moved by a cell and more
-        app.publish_views()
+        app.session.link.telemetry.pose = Pose(1.5, -0.5, 0.6)  # the robot moved by a cell and more
+        app.sample_frame()
         await pilot.pause()
         assert status_line.renders == before[0]  # the status line did not change
-        assert await until(pilot, lambda: app.publish_views() or live_map.draws > before[2], timeout=2)
+        assert await until(pilot, lambda: app.sample_frame() or live_map.draws > before[2], timeout=2)
 
 
 async def test_autonomous_controller_sends_commands_and_manual_keys_take_over():
     app = still_app()
     async with app.run_test(size=SIZE) as pilot:
         await pilot.press("a")
-        assert app.loop.algorithm == "go_to_goal"
+        assert app.session.loop.algorithm == "go_to_goal"
         await pilot.press("g")
         app.session.tick_control()
-        v, w = app.link.sent[-1]
+        v, w = app.session.link.sent[-1]
         assert v >= 0 and (v, w) != (0.0, 0.0)
         await pilot.press("i")
-        assert app.loop.algorithm == "manual" and not app.loop.running
-        assert app.link.sent[-1] == (0.5, 0.0)
+        assert app.session.loop.algorithm == "manual" and not app.session.loop.running
+        assert app.session.link.sent[-1] == (0.5, 0.0)
 
 
 async def test_one_store_per_session_outlives_screen_switches():
@@ -288,12 +290,12 @@ async def test_one_store_per_session_outlives_screen_switches():
 
     app = make_app(Settings(live=False, handle_signals=False), RecordingLink())
     other = make_app(Settings(live=False, handle_signals=False), RecordingLink())
-    assert app.store is app.session.store and other.store is not app.store
+    assert app.session.store is app.session.store and other.session.store is not app.session.store
     async with app.run_test(size=(100, 30)) as pilot:
-        store = app.store
+        store = app.session.store
         for key in ("2", "3", "1", "2"):
             await pilot.press(key)
-            assert app.store is store
+            assert app.session.store is store
 
 
 async def test_the_first_frame_comes_before_the_link_and_the_link_is_attached_when_ready():
@@ -319,10 +321,10 @@ async def test_the_first_frame_comes_before_the_link_and_the_link_is_attached_wh
         await pilot.press("i")
         assert link.sent == []  # nothing is sent before the link exists
         release.set()
-        assert await until(pilot, lambda: app.link is link)
+        assert await until(pilot, lambda: app.session.link is link)
         await pilot.press("i")
         assert link.sent[-1] == (0.5, 0.0)
-        assert await until(pilot, lambda: "CONNECTED · embedded ros 9090/8085" in app.status_text())
+        assert await until(pilot, lambda: "CONNECTED · embedded ros 9090/8085" in app.sampler.status().text())
     app.close_link()
     assert closed == [True]
 
@@ -336,7 +338,7 @@ async def test_a_backend_that_cannot_start_is_said_on_screen():
 
     app = make_app(Settings(handle_signals=False), store=AnalyticsStore(), connector=connector)
     async with app.run_test(size=SIZE) as pilot:
-        assert await until(pilot, lambda: app.start_error is not None)
+        assert await until(pilot, lambda: app.sampler.start_error is not None)
         await pilot.pause()
         status = app.screen.query_one("#status")
         assert "address already in use" in status.render().plain and status.has_class("alarm")

@@ -18,6 +18,7 @@ from textual.widgets import DataTable
 
 from ...analytics import table as T
 from ...analytics.linkcurve import LinkSweepView
+from ...session.frames import Frame
 from ...session.views import AnalyticsView
 from ..plots import ErrorPlot, LinkPlot, TrajectoryPlot
 from ..widgets import Bound, StatsCards
@@ -46,13 +47,17 @@ class CompareTable(DataTable[Text]):
     compact: reactive[bool] = reactive(False)
     sort: reactive[str] = reactive(T.RANK)
     descending: reactive[bool] = reactive(False)
+    frame: reactive[Frame] = reactive(Frame, repaint=False, init=False)  # bound to the screen's
     fills = 0  # tests: how often the table was rebuilt (a changed cell is updated in place)
 
     def on_mount(self) -> None:
         self._shown: tuple[object, ...] | None = None
         self.table = T.build(self.mode, (), ())
-        self.watch(self.app, "analytics", self._refill, init=False)
         self.call_after_refresh(self._refill)  # filled once mounted (the dashboard mounts it late)
+
+    def watch_frame(self, old: Frame, new: Frame) -> None:
+        if new.analytics != old.analytics:
+            self._refill(new.analytics)
 
     def watch_mode(self) -> None:
         self._refill()
@@ -74,7 +79,7 @@ class CompareTable(DataTable[Text]):
     def _refill(self, view: AnalyticsView | None = None) -> None:
         if not self.is_mounted:
             return
-        view = view or self.app.analytics  # type: ignore[attr-defined]
+        view = view or self.frame.analytics
         # built each time (a few rows), shown only when what it prints changed: a run whose samples the
         # ring drops, or one sample more outside every run, changes nothing here
         table = T.build(self.mode, view.runs, view.by_algorithm, self.sort, self.descending, self.compact)
@@ -113,24 +118,28 @@ class CompareTable(DataTable[Text]):
         self.sort_by(str(event.column_key.value))
 
 
-class RuleLine(Bound):
+class RuleLine(Bound[AnalyticsView]):
     """The rule that names the best, and the best it names."""
 
-    SOURCE = "analytics"
     view: reactive[AnalyticsView] = reactive(AnalyticsView)
+
+    def pick(self, frame: Frame) -> AnalyticsView:
+        return frame.analytics
 
     def draw(self) -> Text:
         table = self.screen.query_one(CompareTable).table if self.is_mounted else None
         return Text(T.legend(table) if table else "")
 
 
-class RingWarning(Bound):
+class RingWarning(Bound[AnalyticsView]):
     """Says when the ring buffer has dropped samples of a run: the cards and plots no longer show all of
     it, the run and algorithm rows still do."""
 
-    SOURCE = "analytics"
     DEFAULT_CSS = "RingWarning { height: auto; color: $warning; text-style: bold; padding: 0 1; }"
     view: reactive[AnalyticsView] = reactive(AnalyticsView)
+
+    def pick(self, frame: Frame) -> AnalyticsView:
+        return frame.analytics
 
     def watch_view(self, view: AnalyticsView) -> None:
         self.display = bool(view.dropped_runs)
@@ -149,13 +158,15 @@ class RingWarning(Bound):
         )
 
 
-class EmptyState(Bound):
+class EmptyState(Bound[AnalyticsView]):
     """Says why there is nothing to show, and what to do: recording is on and nothing moved yet, or it is
     paused."""
 
-    SOURCE = "analytics"
     DEFAULT_CSS = "EmptyState { height: auto; padding: 0 1; color: $text-muted; }"
     view: reactive[AnalyticsView] = reactive(AnalyticsView)
+
+    def pick(self, frame: Frame) -> AnalyticsView:
+        return frame.analytics
 
     def watch_view(self, view: AnalyticsView) -> None:
         self.display = view.points == 0 and not view.runs
@@ -170,13 +181,15 @@ class EmptyState(Bound):
         )
 
 
-class LinkLine(Bound):
+class LinkLine(Bound[LinkSweepView]):
     """Where the latency this console measures falls on the error-vs-latency curve, in words."""
 
-    SOURCE = "link_sweep"
     DEFAULT_CSS = "LinkLine { height: auto; padding: 0 1; }"
     ROWS = 2  # its max-height in analytics.tcss
     view: reactive[LinkSweepView] = reactive(LinkSweepView)
+
+    def pick(self, frame: Frame) -> LinkSweepView:
+        return frame.link_sweep
 
     def draw(self) -> Text:
         # whole controllers only: the ones that do not fit in two lines are left out, with an ellipsis
@@ -194,16 +207,16 @@ class AnalyticsScreen(BaseScreen):
     ]
 
     def compose_body(self) -> ComposeResult:
-        yield StatsCards(id="cards")
-        yield EmptyState(id="empty")
-        yield RingWarning(id="ring-warning")
-        yield CompareTable(id="compare", show_cursor=False, zebra_stripes=True)
-        yield RuleLine(id="rule")
+        yield StatsCards(id="cards").data_bind(BaseScreen.frame)
+        yield EmptyState(id="empty").data_bind(BaseScreen.frame)
+        yield RingWarning(id="ring-warning").data_bind(BaseScreen.frame)
+        yield CompareTable(id="compare", show_cursor=False, zebra_stripes=True).data_bind(BaseScreen.frame)
+        yield RuleLine(id="rule").data_bind(BaseScreen.frame)
         with Horizontal(id="plots"):
-            yield TrajectoryPlot("trajectory (m)", id="traj")
-            yield ErrorPlot("e_d (m) vs time (s)", id="err-plot")
-            yield LinkPlot("avg e_xt (m) vs latency (ms)", id="link-plot")
-        yield LinkLine(id="link-line")
+            yield TrajectoryPlot("trajectory (m)", id="traj").data_bind(BaseScreen.frame)
+            yield ErrorPlot("e_d (m) vs time (s)", id="err-plot").data_bind(BaseScreen.frame)
+            yield LinkPlot("avg e_xt (m) vs latency (ms)", id="link-plot").data_bind(BaseScreen.frame)
+        yield LinkLine(id="link-line").data_bind(BaseScreen.frame)
 
     def _check_size(self, size: Size) -> None:
         super()._check_size(size)
@@ -212,7 +225,8 @@ class AnalyticsScreen(BaseScreen):
         self.set_class(size.width < LINK_PLOT_WIDTH, "no-link-plot")
 
     def action_toggle_collect(self) -> None:
-        self.arbiter.toggle_collection()
+        self.console.session.toggle_collection()
+        self.console.refresh_frame(force=True)
 
     def action_toggle_view(self) -> None:
         table = self.query_one(CompareTable)
@@ -225,13 +239,13 @@ class AnalyticsScreen(BaseScreen):
         table.descending = False
 
     def action_clear(self) -> None:
-        self.arbiter.ask_clear()
+        self.console.ask_clear()
 
     def action_export(self) -> None:
         from .export import ExportChooser
 
         def chosen(formats: tuple[str, ...] | None) -> None:
             if formats:
-                self.arbiter.export(*formats)
+                self.console.export(*formats)
 
-        self.app.push_screen(ExportChooser(len(self.arbiter.store)), chosen)
+        self.app.push_screen(ExportChooser(len(self.console.session.store)), chosen)

@@ -1,62 +1,46 @@
-"""What every screen shares: the status line on top, the footer, and the "terminal too small" guard."""
+"""What every screen shares: the status line on top, the footer, the "terminal too small" guard, and
+the frame every widget on it shows (``frame``: widgets take it with ``data_bind`` and pick their part).
+"""
 
 from __future__ import annotations
 
-from typing import Protocol, cast
+from typing import Protocol, runtime_checkable
 
 from textual import events
 from textual.app import ComposeResult
 from textual.containers import Container
 from textual.geometry import Size
+from textual.reactive import reactive
 from textual.screen import Screen
 from textual.widgets import Footer, Static
 
-from ...analytics.store import AnalyticsStore
-from ...control.loop import ControlLoop
-from ...session.robot import ExportResult
+from ...session.frames import Frame
+from ...session.robot import ExportResult, RobotSession
 from ..widgets import StatusLine
 
 
+@runtime_checkable
 class Console(Protocol):
-    """What the screens ask of the console (the app implements it): session commands that also refresh
-    what is shown, and the dialogs. Screens never reach into the concrete app."""
+    """What the screens ask of the console (the app implements it): the robot session, which they call
+    directly, a fresh frame after they did, and what needs the app (dialogs, notices, the key router)."""
 
     @property
-    def loop(self) -> ControlLoop: ...
+    def session(self) -> RobotSession: ...
 
-    @property
-    def store(self) -> AnalyticsStore: ...
-
-    @property
-    def too_small(self) -> bool: ...
-
-    def publish_views(self, force: bool = False) -> None: ...
+    def refresh_frame(self, force: bool = False) -> None:
+        """Show what just changed: a new frame now (``force``: past every rate gate)."""
 
     def screen_shown(self, name: str | None = None) -> None: ...
 
-    def set_too_small(self, small: bool) -> None: ...
-
-    def teleop_key(self, key: str) -> bool: ...
-
     def set_keys_direct(self, direct: bool) -> None: ...
-
-    def end_manual_hold(self, reason: str) -> None: ...
-
-    def select_algorithm(self, name: str) -> None: ...
-
-    def cycle_mission(self) -> None: ...
 
     def go(self, restart: bool = False) -> bool: ...
 
     def ask_goal(self) -> None: ...
 
-    def toggle_collection(self) -> None: ...
-
     def ask_clear(self) -> None: ...
 
     def export(self, *formats: str) -> list[ExportResult]: ...
-
-    def echo_topic(self, name: str | None) -> None: ...
 
 
 MIN_WIDTH, MIN_HEIGHT = 80, 24
@@ -68,13 +52,21 @@ TOO_SMALL = (
 
 class BaseScreen(Screen[None]):
     CSS_PATH = "base.tcss"
+    # the latest frame: set by the app for the screens it shows, bound (data_bind) into every widget
+    frame: reactive[Frame] = reactive(Frame, repaint=False, always_update=True)
+    _console: Console | None = None
 
     @property
-    def arbiter(self) -> Console:
-        return cast(Console, self.app)
+    def console(self) -> Console:
+        if self._console is None:
+            app = self.app
+            if not isinstance(app, Console):
+                raise TypeError(f"{type(self).__name__} needs a console app, not {type(app).__name__}")
+            self._console = app
+        return self._console
 
     def compose(self) -> ComposeResult:
-        yield StatusLine(id="status")
+        yield StatusLine(id="status").data_bind(BaseScreen.frame)
         yield Static(TOO_SMALL, id="too-small")
         with Container(id="body"):
             yield from self.compose_body()
@@ -89,8 +81,8 @@ class BaseScreen(Screen[None]):
 
     def on_screen_resume(self) -> None:
         self._check_size(self.app.size)
-        self.arbiter.publish_views(force=True)  # what it shows may not have been sampled meanwhile
-        self.arbiter.screen_shown()
+        self.console.refresh_frame(force=True)  # what it shows may not have been sampled meanwhile
+        self.console.screen_shown()
 
     def on_resize(self, event: events.Resize) -> None:
         self._check_size(event.size)
@@ -98,5 +90,7 @@ class BaseScreen(Screen[None]):
     def _check_size(self, size: Size) -> None:
         small = size.width < MIN_WIDTH or size.height < MIN_HEIGHT
         self.set_class(small, "too-small")
-        if small != self.arbiter.too_small:
-            self.arbiter.set_too_small(small)
+        session = self.console.session
+        if small != session.too_small:
+            session.set_too_small(small)
+            self.console.refresh_frame()

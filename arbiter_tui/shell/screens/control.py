@@ -36,25 +36,32 @@ class ControlScreen(BaseScreen):
     def compose_body(self) -> ComposeResult:
         with Horizontal(id="drive"):
             with Vertical(id="panel"):
-                yield RobotPanel(id="robot")
+                yield RobotPanel(id="robot").data_bind(BaseScreen.frame)
                 yield Static(KEY_HELP, id="keys")  # painted once: the legend never changes
-            yield LiveMap("map (m)", id="map")
+            yield LiveMap("map (m)", id="map").data_bind(BaseScreen.frame)
 
     @staticmethod
     def dashboard_panes() -> Horizontal:
-        """What the dashboard adds below the panel and the map: the same widgets as screens 2, 3 and 4."""
-        table = CompareTable(id="dash-table", show_cursor=False, zebra_stripes=True)
+        """What the dashboard adds below the panel and the map: the same widgets as screens 2, 3 and 4,
+        each bound to this screen's frame (called from the screen's own handler)."""
+        frame = BaseScreen.frame
+        table = CompareTable(id="dash-table", show_cursor=False, zebra_stripes=True).data_bind(frame)
         table.can_focus = False  # the arrow keys drive here: they must never scroll a table
         compare = Vertical(
-            StatsCards(id="dash-cards"), table, RuleLine(id="dash-rule"),
-            ErrorPlot("e_d (m) vs time (s)", id="dash-err"), id="dash-compare",
-        )  # fmt: skip
+            StatsCards(id="dash-cards").data_bind(frame),
+            table,
+            RuleLine(id="dash-rule").data_bind(frame),
+            ErrorPlot("e_d (m) vs time (s)", id="dash-err").data_bind(frame),
+            id="dash-compare",
+        )
         latency = Vertical(
-            TrackerLine(id="dash-lat-state"), TrackerCards(id="dash-lat-cards"),
-            ClientLine(id="dash-lat-client"), LatencyPlot("one-way (ms) vs time (s)", id="dash-lat-plot"),
+            TrackerLine(id="dash-lat-state").data_bind(frame),
+            TrackerCards(id="dash-lat-cards").data_bind(frame),
+            ClientLine(id="dash-lat-client").data_bind(frame),
+            LatencyPlot("one-way (ms) vs time (s)", id="dash-lat-plot").data_bind(frame),
             id="dash-latency",
-        )  # fmt: skip
-        return Horizontal(compare, latency, TopicsPane(id="dash-topics"), id="dash")
+        )
+        return Horizontal(compare, latency, TopicsPane(id="dash-topics").data_bind(frame), id="dash")
 
     def on_resize(self, event: events.Resize) -> None:
         # (Textual calls BaseScreen.on_resize too, after this: handlers run for each class)
@@ -65,35 +72,38 @@ class ControlScreen(BaseScreen):
         if dashboard != self.dashboard:
             self.dashboard = dashboard
             self.set_class(dashboard, "dashboard")
-            self.arbiter.publish_views(force=True)  # its panes show what was not sampled before
-            self.arbiter.screen_shown("dashboard")  # its widgets, once made, live as long as the console
+            self.console.refresh_frame(force=True)  # its panes show what was not sampled before
+            self.console.screen_shown("dashboard")  # its widgets, once made, live as long as the console
 
     def on_key(self, event: events.Key) -> None:
-        if self.arbiter.teleop_key(key_name(event.character, event.key)):
-            event.stop()
+        if self.console.session.key(key_name(event.character, event.key)):
+            self.console.refresh_frame()  # a new command or limit shows at once; a held key's repeats
+            event.stop()  # ...wait for the UI tick
             event.prevent_default()
 
     def on_screen_resume(self) -> None:
-        self.arbiter.set_keys_direct(True)  # teleop keys may go to the session from the input thread
+        self.console.set_keys_direct(True)  # teleop keys may go to the session from the input thread
 
     def on_screen_suspend(self) -> None:
-        self.arbiter.set_keys_direct(False)
+        self.console.set_keys_direct(False)
         # A held key must not keep the robot moving unseen; an autonomous run goes on (watch it live).
-        self.arbiter.end_manual_hold("left the control screen")
+        self.console.session.end_manual_hold("left the control screen")
 
     def action_cycle_algorithm(self) -> None:
-        loop = self.arbiter.loop
-        self.arbiter.select_algorithm(ALGORITHMS[(ALGORITHMS.index(loop.algorithm) + 1) % len(ALGORITHMS)])
+        session = self.console.session
+        session.select_algorithm(ALGORITHMS[(ALGORITHMS.index(session.loop.algorithm) + 1) % len(ALGORITHMS)])
+        self.console.refresh_frame(force=True)
 
     def action_cycle_mission(self) -> None:
-        self.arbiter.cycle_mission()
+        self.console.session.cycle_mission()
+        self.console.refresh_frame()
 
     def action_go(self) -> None:
-        self.arbiter.go()
+        self.console.go()
 
     def action_restart(self) -> None:
-        self.arbiter.go(restart=True)
+        self.console.go(restart=True)
 
     def action_goal(self) -> None:
-        if not self.arbiter.too_small:
-            self.arbiter.ask_goal()
+        if not self.console.session.too_small:
+            self.console.ask_goal()

@@ -8,18 +8,22 @@ from textual.app import ComposeResult
 from textual.containers import Horizontal
 from textual.reactive import reactive
 
+from ...session.frames import Frame
 from ...session.views import LatencySnapshot
 from ..plots import LatencyHistogram, LatencyPlot
 from ..widgets import Bound, ClientLine, TrackerCards, TrackerLine, fmt_ms
 from .base import BaseScreen
 
 
-class RecordsList(Bound):
+class RecordsList(Bound[LatencySnapshot]):
     """The newest records, as many as fit: plain lines, repainted only when a poll brought new ones.
     (A DataTable refilled at every poll was a third of this screen's CPU: bench/pi.py, py-spy.)"""
 
-    SOURCE = "latency"
     view: reactive[LatencySnapshot] = reactive(LatencySnapshot)
+
+    def pick(self, frame: Frame) -> LatencySnapshot:
+        return frame.latency
+
     HEAD = f"{'seq':>8}  {'latency':>10}  {'linear_x':>8}  {'angular_z':>9}  mode"
 
     def draw(self) -> Text:
@@ -36,10 +40,10 @@ class LatencyScreen(BaseScreen):
     CSS_PATH = ["base.tcss", "latency.tcss"]
 
     def compose_body(self) -> ComposeResult:
-        yield TrackerLine(id="lat-state")
-        yield TrackerCards(id="lat-cards")
-        yield ClientLine(id="lat-client")
+        yield TrackerLine(id="lat-state").data_bind(BaseScreen.frame)
+        yield TrackerCards(id="lat-cards").data_bind(BaseScreen.frame)
+        yield ClientLine(id="lat-client").data_bind(BaseScreen.frame)
         with Horizontal(id="lat-plots"):
-            yield LatencyPlot("one-way (ms) vs time (s)", id="lat-plot")
-            yield LatencyHistogram("one-way (ms) histogram", id="lat-hist")
-        yield RecordsList(id="lat-records")
+            yield LatencyPlot("one-way (ms) vs time (s)", id="lat-plot").data_bind(BaseScreen.frame)
+            yield LatencyHistogram("one-way (ms) histogram", id="lat-hist").data_bind(BaseScreen.frame)
+        yield RecordsList(id="lat-records").data_bind(BaseScreen.frame)

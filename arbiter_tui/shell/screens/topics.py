@@ -4,6 +4,8 @@ over the last minute."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from rich.text import Text
 from textual import on
@@ -20,6 +22,7 @@ from arbiter_core.topicstats import SAMPLE_S
 from ...analytics import axes
 from ...latency.topics_client import TopicsState
 from ...latency.topics_table import COLUMNS, SORT_ORDER, aligned, cells, detail, headers, select
+from ...session.frames import Frame
 from ...session.views import PLOT_PERIOD_S
 from ..plots import MIN_GAP_X, MIN_GAP_Y, Plot
 from .base import BaseScreen
@@ -126,11 +129,10 @@ class TopicsPane(TopicsList, can_focus=False):
     """Screen 4's table on the dashboard: the app's latest answer, sorted by name, never focused (the
     arrow keys drive there)."""
 
-    def on_mount(self) -> None:
-        self.watch(self.app, "topics", self._receive, init=True)
+    frame: reactive[Frame] = reactive(Frame, repaint=False)  # bound to the screen's
 
-    def _receive(self, state: TopicsState) -> None:
-        self.state = state
+    def watch_frame(self, frame: Frame) -> None:
+        self.state = frame.topics
 
 
 def _line(values: tuple[str, ...], widths: list[int], columns: tuple[str, ...]) -> str:
@@ -167,26 +169,32 @@ class TopicDetail(Widget):
         return out
 
 
-class RatePlot(Plot):
+@dataclass(frozen=True)
+class RatesKey:
+    topic: str | None
+    rates: tuple[float | None, ...] | None  # None: no rate at all (nothing to redraw)
+
+
+class RatePlot(Plot[TopicsState, RatesKey]):
     """The selected topic's rate over the last minute, once a second, as the backend sampled it."""
 
-    SOURCE = "topics"
     selected: reactive[str | None] = reactive(None)
+
+    def pick(self, frame: Frame) -> TopicsState:
+        return frame.topics
 
     def watch_selected(self) -> None:
         if self.is_mounted:
             self._key = None
-            self._receive(getattr(self.app, self.SOURCE))
+            self._receive(self.pick(self.frame))
 
-    def data_key(self, view: TopicsState) -> object:
+    def data_key(self, view: TopicsState) -> RatesKey:
         rates = view.rates(self.selected or "")
-        return (self.selected, rates if any(r is not None for r in rates) else None)  # no rate: no redraw
+        return RatesKey(self.selected, rates if any(r is not None for r in rates) else None)
 
-    def follow_period(self, old: object, new: object) -> float:
+    def follow_period(self, old: RatesKey | None, new: RatesKey) -> float:
         """The same topic's rates: at most every ``PLOT_PERIOD_S`` (another topic: at once)."""
-        if isinstance(old, tuple) and isinstance(new, tuple) and old[0] == new[0]:
-            return PLOT_PERIOD_S
-        return 0.0
+        return PLOT_PERIOD_S if old is not None and old.topic == new.topic else 0.0
 
     def draw(self, view: TopicsState) -> None:
         rates = view.rates(self.selected or "")
@@ -219,11 +227,15 @@ class TopicsScreen(BaseScreen):
         yield TopicsList(id="topics-list").data_bind(TopicsScreen.state, TopicsScreen.sort)
         with Horizontal(id="topics-side"):
             yield TopicDetail(id="topics-detail").data_bind(TopicsScreen.state, TopicsScreen.selected)
-            yield RatePlot("rate (Hz) vs time (s)", id="topics-rate").data_bind(TopicsScreen.selected)
+            yield RatePlot("rate (Hz) vs time (s)", id="topics-rate").data_bind(
+                BaseScreen.frame, TopicsScreen.selected
+            )
+
+    def watch_frame(self, frame: Frame) -> None:
+        self.state = frame.topics
 
     def on_mount(self) -> None:
         super().on_mount()
-        self.watch(self.app, "topics", self._receive, init=True)
         table = self.query_one(TopicsList)
         self.watch(table, "selected", self._select, init=True)
         table.focus()
@@ -231,18 +243,21 @@ class TopicsScreen(BaseScreen):
     def _select(self, name: str | None) -> None:
         if name != self.selected:
             self.selected = name
-            self.arbiter.echo_topic(name)
+            self._echo(name)
+
+    def _echo(self, name: str | None) -> None:
+        """Echo ``name``'s latest message (None: stop), through the link's own subscription."""
+        figures = next((t for t in self.state.topics if t.name == name), None)
+        self.console.session.echo_topic(figures)
+        self.console.refresh_frame(force=True)
 
     def on_screen_suspend(self) -> None:
-        self.arbiter.echo_topic(None)  # nobody looks at it: unsubscribe
-
-    def _receive(self, state: TopicsState) -> None:
-        self.state = state
+        self._echo(None)  # nobody looks at it: unsubscribe
 
     def on_screen_resume(self) -> None:
         super().on_screen_resume()
-        self.arbiter.set_keys_direct(False)  # this screen's keys are typed: no teleop here
-        self.arbiter.echo_topic(self.selected)
+        self.console.set_keys_direct(False)  # this screen's keys are typed: no teleop here
+        self._echo(self.selected)
 
     @on(Input.Changed, "#topics-filter")
     def _filtered(self, event: Input.Changed) -> None:

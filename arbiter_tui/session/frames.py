@@ -1,0 +1,191 @@
+"""What the console shows, as one frozen ``Frame`` a frame, from one pure sampler (no Textual).
+
+The shell asks :class:`FrameSampler` for a frame at its UI rate (and at once after a user action) and
+hands it to the screen in front; every widget picks its own typed field of it. The sampler is the one
+place that decides how often each part changes: the robot panel and the map at the UI rate, the
+analytics and latency panels at ``analytics_rate`` (a user action or a screen shown: at once), and the
+status line's sample count at most every ``COUNT_PERIOD_S``. It reads the session's parts (link,
+control loop, store; written on other threads, each behind its own lock) and what the pollers last
+brought, and builds only what the screen shown will show; the rest keeps its last value, so an equal
+part is the *same* object and a widget that picks it does no work.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+
+from ..analytics.linkcurve import RUNNING, LinkSweepView, measured_p95
+from ..latency.topics_client import TopicsState
+from ..latency.tracker_client import LatencyView
+from ..link.base import STARTING
+from .robot import RobotSession
+from .settings import SIM, Settings
+from .views import (
+    AnalyticsView,
+    LatencySnapshot,
+    MapView,
+    RobotView,
+    StatusView,
+    analytics_view,
+    latency_snapshot,
+    map_view,
+    robot_view,
+    status_view,
+)
+
+COUNT_PERIOD_S = 1.0  # the status line's sample count follows at most this often
+
+CONTROL, ANALYTICS, LATENCY, TOPICS = "control", "analytics", "latency", "topics"
+
+
+@dataclass(frozen=True)
+class Frame:
+    """Everything the screens show, each part a frozen snapshot (``views.py``)."""
+
+    status: StatusView = field(default_factory=StatusView)
+    robot: RobotView = field(default_factory=RobotView)
+    map: MapView = field(default_factory=MapView)
+    analytics: AnalyticsView = field(default_factory=AnalyticsView)
+    latency: LatencySnapshot = field(default_factory=LatencySnapshot)
+    topics: TopicsState = field(default_factory=TopicsState)
+    link_sweep: LinkSweepView = field(default_factory=LinkSweepView)
+
+
+@dataclass(frozen=True)
+class Shown:
+    """What is on screen: the screen's name, and whether the control screen is the dashboard (which
+    shows every part)."""
+
+    screen: str = CONTROL
+    dashboard: bool = False
+
+    def shows(self, screen: str) -> bool:
+        return self.screen == screen or self.dashboard
+
+
+class FrameSampler:
+    """Samples a :class:`RobotSession` and the pollers' answers into one :class:`Frame`.
+
+    ``clock`` is injected (monotonic seconds) so tests step time by hand. Not thread-safe: the shell
+    calls it on its own thread; the sources it reads have their own locks."""
+
+    def __init__(
+        self, session: RobotSession, settings: Settings, clock: Callable[[], float] = time.monotonic
+    ):
+        self.session = session
+        self.settings = settings
+        self.clock = clock
+        self.frame = Frame()
+        self.tracker: LatencyView | None = None  # the tracker poller's view (None: simulated or none yet)
+        self.start_error: str | None = None
+        self._analytics_at = float("-inf")
+        self._latency_at = float("-inf")
+        self._count_at = float("-inf")
+        self._sweep_version = -1  # the store version the measured p95 is from
+
+    # -- what the pollers and workers bring -----------------------------------------------------------
+    def topics_polled(self, state: TopicsState) -> None:
+        self.frame = replace(self.frame, topics=replace(state, echo=self.session.echo.current))
+
+    def sweep_changed(self, view: LinkSweepView) -> None:
+        self.frame = replace(self.frame, link_sweep=view)
+
+    def sweep_wanted(self) -> str | None:
+        """The mission whose error-vs-latency sweep the analytics screen needs and has not (live only);
+        marks it running."""
+        view = self.frame.link_sweep
+        mission = self.session.loop.mission_name
+        if not self.settings.live or view.state == RUNNING or view.mission == mission:
+            return None
+        self.sweep_changed(replace(view, state=RUNNING, mission=mission, curve=None, error=""))
+        return mission
+
+    # -- one frame -----------------------------------------------------------------------------------------
+    def sample(self, shown: Shown, force: bool = False) -> Frame:
+        """The next frame: what ``shown`` shows, sampled now; ``force`` (a user action, a screen shown)
+        skips the rate gates."""
+        s = self.session
+        now = self.clock()
+        f = self.frame
+        status = self._status(f.status, now, force)
+        robot, trail, analytics, latency, sweep = f.robot, f.map, f.analytics, f.latency, f.link_sweep
+        if shown.screen == CONTROL:
+            robot = robot_view(s.link, s.loop, s.too_small)
+            trail = map_view(s.link, s.loop, f.map)
+        period = 1.0 / self.settings.analytics_rate
+        if shown.shows(ANALYTICS) and (force or now - self._analytics_at >= period):
+            self._analytics_at = now
+            analytics = analytics_view(s.store, f.analytics, s.loop)
+            sweep = self._measured_p95(sweep)
+        if shown.shows(LATENCY) and (force or now - self._latency_at >= period):
+            # at the analytics rate too: the console's own figures change with every round trip, and a
+            # line repainted at the UI rate made every frame span the screen below it (bench/pi.py)
+            self._latency_at = now
+            latency = self.latency()
+        topics = f.topics
+        if shown.shows(TOPICS) and topics.echo != s.echo.current:
+            topics = replace(topics, echo=s.echo.current)
+        self.frame = Frame(status, robot, trail, analytics, latency, topics, sweep)
+        return self.frame
+
+    def latency(self) -> LatencySnapshot:
+        st = self.settings
+        return latency_snapshot(
+            self.tracker, self.session.link, st.offset_warn_ms, st.mode == SIM, st.tracker_url or ""
+        )
+
+    def status(self) -> StatusView:
+        s = self.session
+        return status_view(
+            s.link, self.target(), s.loop, s.store, self.tracker, self.settings.mode == SIM, self.start_error
+        )
+
+    def _status(self, shown: StatusView, now: float, force: bool) -> StatusView:
+        """The status line; a change of the sample count alone shows at most every ``COUNT_PERIOD_S``.
+
+        While recording, the count changes with every sample (10 a second), and a status line repainted
+        that often made every repaint span the whole screen: Textual renders every widget inside the box
+        around all dirty regions, and the status line is the top row (py-spy and render counts at
+        200x60, bench/pi.py)."""
+        status = self.status()
+        if (
+            not force
+            and status != shown
+            and replace(status, points=shown.points) == shown
+            and now - self._count_at < COUNT_PERIOD_S
+        ):
+            return shown
+        if status.points != shown.points:
+            self._count_at = now
+        return status
+
+    def _measured_p95(self, view: LinkSweepView) -> LinkSweepView:
+        """The p95 of the latencies recorded, on the error-vs-latency plot (when the store changed)."""
+        store = self.session.store
+        if self._sweep_version == store.version:
+            return view
+        self._sweep_version = store.version
+        p95 = measured_p95(store.column("latencyMs"))
+        return view if p95 == view.p95_ms else replace(view, p95_ms=p95)
+
+    def target(self) -> str:
+        """What the console talks to, for the status line."""
+        st = self.settings
+        if st.mode == SIM:
+            return ""  # the link state already says SIMULATED
+        if st.mode == "embedded":
+            transport = " ros" if st.transport == "ros" else ""
+            if self.session.link.state == STARTING:
+                return f"embedded{transport}"
+            bridge = st.rosbridge_url.rsplit(":", 1)[-1]
+            api = (st.tracker_url or "").rsplit(":", 1)[-1]
+            return f"embedded{transport} {bridge}/{api}"
+        return f"connect {st.rosbridge_url}"
+
+    def user_state(self) -> tuple[object, ...]:
+        """What a key press may change that the user waits to see (a held key's repeats that change
+        none of it wait for the next UI tick)."""
+        s = self.session
+        return (s.loop.command, s.teleop.speed, s.teleop.turn, s.too_small, s.loop.mission_name)

@@ -1,0 +1,94 @@
+"""Teleop keys that do not wait for a paint: taken on Textual's input thread, in order.
+
+Under a Pi-class CPU quota a paint in progress held a key 20-45 ms (bench/pi.py, key-to-wire), and the
+robot should not wait for the screen. A teleop key (movement, scale, stop) on the control screen goes to
+the session at once, on the driver's input thread; it still goes on to the UI, marked as answered, so
+the screen shows it and nothing answers it twice. Keys keep their order: while a key the UI must answer
+(g, a, 1, ...) is queued and not yet handled, the keys after it queue behind it.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+from collections.abc import Callable
+
+from textual import events
+from textual.driver import Driver
+from textual.message import Message
+
+from ..control.teleop import TELEOP_KEYS, key_name
+
+log = logging.getLogger(__name__)
+
+
+class KeyRouter:
+    """Which keys the session answers on the input thread, and which the UI answers (thread-safe)."""
+
+    def __init__(self, answer: Callable[[str], bool]) -> None:
+        self._answer = answer  # the session's key handler: True if it used the key
+        self._lock = threading.Lock()
+        self._direct = False  # the control screen is in front, no dialog over it, no key queued
+        self._queued = 0  # keys passed to the UI that it has not answered yet
+        self._taken: set[int] = set()  # ids of key events the session already answered
+
+    def set_direct(self, direct: bool) -> None:
+        """The control screen came to the front (True) or went behind a screen or dialog (False)."""
+        with self._lock:
+            self._direct = direct
+
+    def on_input_thread(self, event: events.Key) -> None:
+        """A key on Textual's input thread, before it joins the UI's queue."""
+        key = key_name(event.character, event.key)
+        with self._lock:
+            take = self._direct and self._queued == 0 and key in TELEOP_KEYS
+            if not take:
+                self._queue()
+        if not take:
+            return
+        try:
+            used = self._answer(key)
+        except Exception:  # never let a key take the input thread down: the UI gets it instead
+            log.exception("a key on the input thread failed")
+            used = False
+        with self._lock:
+            if used:
+                self._taken.add(id(event))
+            else:
+                self._queue()
+
+    def _queue(self) -> None:
+        """A key goes to the UI (under the lock): the keys after it wait for it, and until the UI has
+        answered it nothing goes direct (it may open a dialog, or leave the control screen)."""
+        self._queued += 1
+        self._direct = False
+
+    def taken(self, event: events.Key) -> bool:
+        """The UI's thread: was ``event`` already answered on the input thread? (Asked once per key.)"""
+        with self._lock:
+            taken = id(event) in self._taken
+            self._taken.discard(id(event))
+        return taken
+
+    def handled(self, control_in_front: bool) -> None:
+        """The UI answered a key it was passed; ``control_in_front``: the control screen is still in
+        front with no dialog over it."""
+        with self._lock:
+            self._queued = max(0, self._queued - 1)
+            if self._queued == 0 and control_in_front:
+                self._direct = True
+
+
+def direct_keys(base: type[Driver], router: Callable[[], KeyRouter | None]) -> type[Driver]:
+    """``base`` (the terminal driver Textual chose) with keys offered to ``router()`` on the driver's
+    input thread, before they join the UI's queue."""
+
+    class DirectKeysDriver(base):  # type: ignore[misc, valid-type]
+        def process_message(self, message: Message) -> None:
+            keys = router()
+            if isinstance(message, events.Key) and keys is not None:
+                keys.on_input_thread(message)
+            super().process_message(message)
+
+    DirectKeysDriver.__name__ = f"DirectKeys{base.__name__}"
+    return DirectKeysDriver

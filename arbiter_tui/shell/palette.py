@@ -1,0 +1,56 @@
+"""The command palette's commands (ctrl+p): screens, stop, controllers, missions, go, goal, collection,
+clear and export, each the same call its key makes."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable
+
+from textual.app import SystemCommand
+
+from ..analytics.files import FORMATS
+from ..control.algorithms import ALGORITHMS, MISSIONS
+from .screens.base import Console
+
+SCREENS = ("control", "analytics", "latency", "topics")
+
+
+def commands(console: Console, switch: Callable[[str], None]) -> Iterable[SystemCommand]:
+    session = console.session
+
+    def then_show(action: Callable[[], object]) -> Callable[[], None]:
+        def run() -> None:
+            action()
+            console.refresh_frame(force=True)
+
+        return run
+
+    for name in SCREENS:
+        yield SystemCommand(f"Screen: {name}", f"Switch to the {name} screen", lambda n=name: switch(n))
+    yield SystemCommand("Stop the robot", "Zero velocity now", then_show(lambda: session.stop("palette")))
+    for algo in ALGORITHMS:
+        yield SystemCommand(
+            f"Algorithm: {algo}",
+            "Select the controller (g runs it)",
+            then_show(lambda a=algo: session.select_algorithm(a)),
+        )
+    for mission in MISSIONS:
+        yield SystemCommand(
+            f"Mission: {mission}",
+            "Select the mission (g runs it)",
+            then_show(lambda m=mission: session.select_mission(m)),
+        )
+    yield SystemCommand(
+        "Go", "Resume the interrupted mission, or start the selected one (g)", lambda: console.go()
+    )
+    yield SystemCommand(
+        "Restart the mission", "From its first waypoint (G)", lambda: console.go(restart=True)
+    )
+    yield SystemCommand("Set a goal x y…", "Type a go-to-goal target in metres (t)", console.ask_goal)
+    yield SystemCommand(
+        "Start/pause collection", "Toggle analytics collection", then_show(session.toggle_collection)
+    )
+    yield SystemCommand("Clear collected data", "Asks first", console.ask_clear)
+    for fmt in FORMATS:
+        yield SystemCommand(
+            f"Export {fmt.upper()}", f"Write the collected data as {fmt}", lambda f=fmt: console.export(f)
+        )
