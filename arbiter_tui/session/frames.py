@@ -18,7 +18,7 @@ from dataclasses import dataclass, field, replace
 
 from ..analytics.linkcurve import RUNNING, LinkSweepView, measured_p95
 from ..latency.topics_client import TopicsState
-from ..latency.tracker_client import LatencyView
+from ..latency.tracker_client import LatencyView, TrackerClient
 from ..link.base import STARTING
 from .robot import RobotSession
 from .settings import SIM, Settings
@@ -78,7 +78,7 @@ class FrameSampler:
         self.settings = settings
         self.clock = clock
         self.frame = Frame()
-        self.tracker: LatencyView | None = None  # the tracker poller's view (None: simulated or none yet)
+        self.tracker: TrackerClient | None = None  # the tracker the pollers ask (None: none yet)
         self.start_error: str | None = None
         self._analytics_at = float("-inf")
         self._latency_at = float("-inf")
@@ -130,16 +130,21 @@ class FrameSampler:
         self.frame = Frame(status, robot, trail, analytics, latency, topics, sweep)
         return self.frame
 
+    def tracker_view(self) -> LatencyView | None:
+        """What the tracker's poller last brought (None: simulated, or no tracker)."""
+        return None if self.settings.mode == SIM or self.tracker is None else self.tracker.view
+
     def latency(self) -> LatencySnapshot:
         st = self.settings
         return latency_snapshot(
-            self.tracker, self.session.link, st.offset_warn_ms, st.mode == SIM, st.tracker_url or ""
+            self.tracker_view(), self.session.link, st.offset_warn_ms, st.mode == SIM, st.tracker_url or ""
         )
 
     def status(self) -> StatusView:
         s = self.session
+        simulated = self.settings.mode == SIM
         return status_view(
-            s.link, self.target(), s.loop, s.store, self.tracker, self.settings.mode == SIM, self.start_error
+            s.link, self.target(), s.loop, s.store, self.tracker_view(), simulated, self.start_error
         )
 
     def _status(self, shown: StatusView, now: float, force: bool) -> StatusView:

@@ -93,6 +93,7 @@ class RobotSession:
         self._unobserve: Callable[[], None] | None = None
         self._observe(link)
         self.echo = TopicEcho()  # the topics screen's echo of one topic
+        self.last_export: ExportResult | None = None
         self.too_small = False
         self.stop_reason: str | None = None
         self.on_event: Callable[[object], None] = lambda event: None
@@ -308,4 +309,6 @@ class RobotSession:
                 results.append(ExportResult(fmt, None, n, str(exc)))
             else:
                 results.append(ExportResult(fmt, path, n))
+        if results:
+            self.last_export = results[-1]
         return results

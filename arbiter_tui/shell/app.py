@@ -11,17 +11,13 @@ says ``STARTING``.
 
 from __future__ import annotations
 
-import asyncio
 import contextlib
-import gc
 import logging
-import os
 import signal
-import threading
 import time
 from collections.abc import Callable, Iterable
 from dataclasses import replace
-from pathlib import Path
+from functools import partial
 
 from textual import events, on, work
 from textual.app import App, SystemCommand
@@ -39,18 +35,15 @@ from ..session.config import save_theme
 from ..session.frames import CONTROL, TOPICS, Frame, FrameSampler, Shown
 from ..session.link_sweep import sweep_curve
 from ..session.pollers import poll_forever
-from ..session.robot import ExportResult, MissionFinished, RobotSession
-from ..session.settings import SIM, Settings
-from . import palette
+from ..session.robot import MissionFinished, RobotSession
+from ..session.settings import Settings
+from . import lifecycle, palette
+from .heap import FREEZE_AFTER_S, freeze_heap
 from .keys import KeyRouter, direct_keys
 from .messages import (
     BackendFailed,
     BackendStarted,
-    DataCleared,
-    ExportFailed,
-    ExportWritten,
     GoalPicked,
-    LinkStateChanged,
     LinkSweepFailed,
     RunFinished,
 )
@@ -62,24 +55,28 @@ from .screens.latency import LatencyScreen
 from .screens.topics import TopicsScreen
 
 log = logging.getLogger(__name__)
-FREEZE_AFTER_S = 2.0
 NOTICE_AFTER_STOP_S = 0.1  # a run's end is told once its stop command has reached the robot
 EXIT_DEADLINE_S = 2.0  # after SIGHUP/SIGTERM the process is gone by then, whatever the terminal does
 
 
-def freeze_heap() -> None:
-    """Move every object alive now into the garbage collector's permanent generation.
-
-    A full (generation 2) collection walks every tracked object while holding the GIL; the console's
-    heap (Textual's widgets, styles, caches) made that 100-500 ms on a Pi-class CPU (bench/pi.py, gc
-    callbacks), during which the session thread could not send a command. The widgets and caches made
-    at start and on each screen's first showing live as long as the console, so they need never be walked
-    again: a full collection then only walks what was made since. Cheap (a list splice) and called a
-    handful of times, so the garbage frozen with them stays a one-off."""
-    gc.freeze()
-
-
-Connector = Callable[[], tuple[Link, "TrackerClient | None", Callable[[], None]]]
+SCREENS = {
+    "control": ControlScreen,
+    "analytics": AnalyticsScreen,
+    "latency": LatencyScreen,
+    "topics": TopicsScreen,
+}
+KEYS = [
+    Binding("ctrl+c", "stop_and_quit", "Quit", priority=True, show=False),
+    Binding("ctrl+q", "stop_and_quit", "Quit", priority=True),
+    # short labels: the footer fits in 80 columns on every screen (full names in ? help and ctrl+p)
+    Binding("1", "mode('control')", "Drive", tooltip="The control screen"),
+    Binding("2", "mode('analytics')", "Stats", tooltip="The analytics screen"),
+    Binding("3", "mode('latency')", "Link", tooltip="The latency screen: the link's latency"),
+    Binding("4", "mode('topics')", "Topics", tooltip="The topics screen: is every topic alive?"),
+    Binding("space", "stop", "Stop"),
+    Binding("k", "stop", "Stop", show=False),
+    Binding("question_mark", "help", "Help"),
+]
 
 
 class ArbiterApp(App[None]):
@@ -90,25 +87,9 @@ class ArbiterApp(App[None]):
     keeps driving while another screen is shown, and space or k stop it anywhere."""
 
     TITLE = "arbiter-tui"
-    MODES = {
-        "control": ControlScreen,
-        "analytics": AnalyticsScreen,
-        "latency": LatencyScreen,
-        "topics": TopicsScreen,
-    }
+    MODES = SCREENS
     DEFAULT_MODE = "control"
-    BINDINGS = [
-        Binding("ctrl+c", "stop_and_quit", "Quit", priority=True, show=False),
-        Binding("ctrl+q", "stop_and_quit", "Quit", priority=True),
-        # short labels: the footer fits in 80 columns on every screen (full names in ? help and ctrl+p)
-        Binding("1", "mode('control')", "Drive", tooltip="The control screen"),
-        Binding("2", "mode('analytics')", "Stats", tooltip="The analytics screen"),
-        Binding("3", "mode('latency')", "Link", tooltip="The latency screen: the link's latency"),
-        Binding("4", "mode('topics')", "Topics", tooltip="The topics screen: is every topic alive?"),
-        Binding("space", "stop", "Stop"),
-        Binding("k", "stop", "Stop", show=False),
-        Binding("question_mark", "help", "Help"),
-    ]
+    BINDINGS = KEYS
 
     def __init__(
         self,
@@ -117,7 +98,7 @@ class ArbiterApp(App[None]):
         tracker: TrackerClient | None = None,
         store: AnalyticsStore | None = None,
         clock: Callable[[], float] = time.monotonic,
-        connector: Connector | None = None,
+        connector: lifecycle.Connector | None = None,
     ) -> None:
         super().__init__()
         self.settings = settings
@@ -127,12 +108,9 @@ class ArbiterApp(App[None]):
         self.session = RobotSession(settings, link, store, clock)
         self.session.on_event = self._session_event  # from the session's thread: post_message is safe
         self.sampler = FrameSampler(self.session, settings)
-        self.sampler.tracker = None if settings.mode == SIM or tracker is None else tracker.view
+        self.sampler.tracker = tracker
         self.keys = KeyRouter(self.session.key)
-        self.last_export: ExportResult | None = None
-        self._link_state: str | None = None
         self._shown_state: tuple[object, ...] = ()
-        self._frozen_modes: set[str] = set()
         self._theme_loaded = False
 
     @property
@@ -152,19 +130,17 @@ class ArbiterApp(App[None]):
         for note in self.settings.notes:
             self.notify(note, severity="warning", timeout=8)
         self.refresh_frame(force=True)
-        self.set_timer(FREEZE_AFTER_S, freeze_heap)
+        self.set_timer(FREEZE_AFTER_S, freeze_heap)  # what start made
         if self.settings.live:
             self.session.start()  # the robot's clock: control, sampling, simulation on their own thread
             self.set_interval(1.0 / self.settings.ui_rate, self.sample_frame)
-            if self._connector is not None:
-                self._connect()
+            if self._connector is not None:  # the link (and the backend) start after the first frame
+                connect = partial(lifecycle.connect, self._connector, self)
+                self.run_worker(connect, thread=True, group="connect", exclusive=True, exit_on_error=False)
             else:
                 self._poll()
         if self.settings.handle_signals:
-            loop = asyncio.get_running_loop()
-            for sig in (signal.SIGHUP, signal.SIGTERM):
-                with contextlib.suppress(NotImplementedError, RuntimeError, ValueError):
-                    loop.add_signal_handler(sig, self._on_signal, sig)
+            lifecycle.on_hangup(self._on_signal)
 
     def watch_theme(self, theme: str) -> None:
         """A theme chosen in the palette is kept in the config file for next time."""
@@ -176,29 +152,10 @@ class ArbiterApp(App[None]):
         except OSError as exc:
             self.notify(f"could not save the theme in {self.settings.config_path}: {exc}", severity="warning")
 
-    @work(thread=True, exclusive=True, group="connect", exit_on_error=False)
-    def _connect(self) -> None:
-        """Start the embedded backend (when there is one) and the link, after the first frame."""
-        assert self._connector is not None
-        try:
-            link, tracker, cleanup = self._connector()
-        except Exception as exc:  # a one-line reason on screen, never a traceback
-            log.exception("starting the link failed")
-            self.post_message(BackendFailed(str(exc) or type(exc).__name__))
-            return
-        if not self.is_running:  # the user quit while it was starting
-            link.close()
-            cleanup()
-            return
-        self.post_message(BackendStarted(link, tracker, cleanup))
-
     @on(BackendStarted)
     def _attach(self, event: BackendStarted) -> None:
         self.session.attach(event.link)
-        self.tracker = event.tracker
-        self.sampler.tracker = (
-            None if self.settings.mode == SIM or self.tracker is None else self.tracker.view
-        )
+        self.tracker = self.sampler.tracker = event.tracker
         self._cleanup = event.cleanup
         self._poll()
         self.refresh_frame(force=True)
@@ -219,18 +176,16 @@ class ArbiterApp(App[None]):
             group="poll", exclusive=True,
         )  # fmt: skip
         topics = poll_forever(
-            TopicsPoller(tracker).poll, TOPICS_PERIOD_S, self.sampler.topics_polled, self._shows_topics
+            TopicsPoller(tracker).poll,
+            TOPICS_PERIOD_S,
+            self.sampler.topics_polled,
+            lambda: self._shown().shows(TOPICS),
         )
         self.run_worker(topics, group="topics", exclusive=True)
 
     def _on_signal(self, sig: int) -> None:
         self.session.stop(f"signal {signal.Signals(sig).name}")
-        # After a hang-up the terminal may be gone: Textual's writer thread then dies on EIO and its
-        # shutdown can block forever on a full queue. The zero is already on its way (the link writes
-        # it on its own thread); if the orderly exit has not finished in time, leave without it.
-        watchdog = threading.Timer(EXIT_DEADLINE_S, os._exit, args=(0,))
-        watchdog.daemon = True
-        watchdog.start()
+        lifecycle.exit_within(EXIT_DEADLINE_S)
         self.exit()
 
     async def on_unmount(self) -> None:
@@ -255,9 +210,6 @@ class ArbiterApp(App[None]):
         dashboard = self.current_mode == CONTROL and isinstance(screen, ControlScreen) and screen.dashboard
         return Shown(self.current_mode, dashboard)
 
-    def _shows_topics(self) -> bool:
-        return self._shown().shows(TOPICS)
-
     def refresh_frame(self, force: bool = False) -> None:
         """After a user action: a new frame now if what the user waits to see changed (a new command or
         limit shows at once; a held key's repeats that change nothing wait for the UI tick), or
@@ -275,10 +227,6 @@ class ArbiterApp(App[None]):
             return
         state = self.sampler.user_state()
         self._shown_state = state
-        link_state = self.session.link.state
-        if self._link_state is not None and link_state != self._link_state:
-            self.post_message(LinkStateChanged(self._link_state, link_state))
-        self._link_state = link_state
         shown = self._shown()
         frame = self.sampler.sample(shown, force)
         for screen in stack:
@@ -288,13 +236,6 @@ class ArbiterApp(App[None]):
             mission = self.sampler.sweep_wanted()
             if mission is not None:
                 self._sweep(mission)
-
-    def screen_shown(self, name: str | None = None) -> None:
-        """A screen (or the dashboard's panes, ``name``) came to the front for the first time or again."""
-        name = name or self.current_mode
-        if name not in self._frozen_modes:  # its widgets, made once, kept for good
-            self._frozen_modes.add(name)
-            self.set_timer(FREEZE_AFTER_S, freeze_heap)
 
     @work(exclusive=True, group="link-sweep", exit_on_error=False)
     async def _sweep(self, mission: str) -> None:
@@ -311,9 +252,6 @@ class ArbiterApp(App[None]):
     # -- keys --------------------------------------------------------------------------------------------
     def get_driver_class(self) -> type[Driver]:
         return direct_keys(super().get_driver_class(), lambda: self.keys)
-
-    def set_keys_direct(self, direct: bool) -> None:
-        self.keys.set_direct(direct)
 
     async def on_event(self, event: events.Event) -> None:
         if isinstance(event, events.Key) and not event.is_forwarded:
@@ -335,7 +273,7 @@ class ArbiterApp(App[None]):
 
     def get_system_commands(self, screen: Screen[object]) -> Iterable[SystemCommand]:
         yield from super().get_system_commands(screen)
-        yield from palette.commands(self, self.action_mode)
+        yield from palette.commands(self, self, self.action_mode)
 
     # -- what needs the app: notices and dialogs -------------------------------------------------------
     def go(self, restart: bool = False) -> bool:
@@ -345,18 +283,6 @@ class ArbiterApp(App[None]):
             self.notify(why, severity="warning")
         self.refresh_frame(force=True)
         return why is None
-
-    def ask_goal(self) -> None:
-        from ..control.algorithms import goal_driver
-        from .screens.goal import GoalPrompt
-
-        pose = self.session.link.telemetry.snapshot()[0]
-
-        def chosen(goal: tuple[float, float] | None) -> None:
-            if goal is not None:
-                self.post_message(GoalPicked(*goal))
-
-        self.push_screen(GoalPrompt((pose.x, pose.y), goal_driver(self.session.loop.algorithm)), chosen)
 
     @on(GoalPicked)
     def _goal_picked(self, event: GoalPicked) -> None:
@@ -371,53 +297,9 @@ class ArbiterApp(App[None]):
         self.notify(f"{self.session.loop.algorithm} driving to ({event.x:+.2f}, {event.y:+.2f})", timeout=3)
         self.refresh_frame(force=True)
 
-    def ask_clear(self) -> None:
-        from .screens.confirm import ConfirmClear
-
-        def done(confirmed: bool | None) -> None:
-            if confirmed:
-                self.post_message(DataCleared(self.session.clear()))
-
-        self.push_screen(ConfirmClear(len(self.session.store)), done)
-
-    @on(DataCleared)
-    def _cleared(self, event: DataCleared) -> None:
-        self.notify(f"cleared {event.points} samples", timeout=3)
-        self.refresh_frame(force=True)
-
-    def export(self, *formats: str) -> list[ExportResult]:
-        """Write the collected data in each format, all under one file stem; nothing when there is none."""
-        results = self.session.export(*formats)
-        for result in results:
-            if result.path is not None:
-                self.post_message(ExportWritten(result))
-            elif result.nothing:
-                self.notify(result.error or "", severity="warning", timeout=6)
-            else:
-                self.post_message(ExportFailed(result))
-        if results:
-            self.last_export = results[-1]
-        return results
-
-    @on(ExportWritten)
-    def _export_written(self, event: ExportWritten) -> None:
-        r = event.result
-        where = Path(r.path).resolve() if r.path is not None else r.path  # the whole path: no guessing where
-        self.notify(f"wrote {where} ({r.points} points)", timeout=4, markup=False)  # a path is no markup
-
-    @on(ExportFailed)
-    def _export_failed(self, event: ExportFailed) -> None:
-        r = event.result
-        text = f"EXPORT FAILED ({r.fmt}): {r.error} — collected data kept"
-        self.notify(text, severity="error", timeout=8, markup=False)
-
     @on(LinkSweepFailed)
     def _link_sweep_failed(self, event: LinkSweepFailed) -> None:
         self.notify(f"latency sweep failed: {event.error}", severity="warning", timeout=8)
-
-    @on(LinkStateChanged)
-    def _link_changed(self, event: LinkStateChanged) -> None:
-        log.info("link %s -> %s", event.old, event.new)
 
     @on(RunFinished)
     def _run_finished(self, event: RunFinished) -> None:
@@ -451,7 +333,7 @@ def make_app(
     tracker: TrackerClient | None = None,
     store: AnalyticsStore | None = None,
     clock: Callable[[], float] = time.monotonic,
-    connector: Connector | None = None,
+    connector: lifecycle.Connector | None = None,
 ) -> ArbiterApp:
     """Build the app for the CLI and for tests alike: with a link injected, or a ``connector`` that
     makes one in a worker once the first frame is on screen."""

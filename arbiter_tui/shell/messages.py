@@ -1,7 +1,7 @@
 """Everything that happens in the console, as past-tense Textual messages (one place to read them all).
 
-Data that changes continuously (pose, link state, stats) reaches widgets as frozen snapshots in the
-app's reactive attributes (``views.py``), sampled at the UI rate. Messages are for events: something
+Data that changes continuously (pose, link state, stats) reaches widgets as one frozen frame
+(``session/frames.py``) sampled at the UI rate. Messages are for events: something
 finished, failed or was decided.
 """
 
@@ -13,9 +13,6 @@ from textual.message import Message
 
 from ..latency.tracker_client import TrackerClient
 from ..link.base import Link
-from ..session.robot import ExportResult
-
-__all__ = ["ExportResult"]  # the session's; the messages below carry it
 
 
 class BackendStarted(Message):
@@ -36,19 +33,6 @@ class BackendFailed(Message):
         self.error = error
 
 
-class LinkStateChanged(Message):
-    """The rosbridge link went up, down or is reconnecting (sampled from the link's thread)."""
-
-    def __init__(self, old: str, new: str) -> None:
-        super().__init__()
-        self.old = old
-        self.new = new
-
-
-class LatencyPolled(Message):
-    """One poll of the tracker's API finished (a good answer or a failure; see the view)."""
-
-
 class RunFinished(Message):
     """An autonomous mission run reached its last waypoint."""
 
@@ -56,26 +40,6 @@ class RunFinished(Message):
         super().__init__()
         self.algorithm = algorithm
         self.mission = mission
-
-
-class ExportWritten(Message):
-    def __init__(self, result: ExportResult) -> None:
-        super().__init__()
-        self.result = result
-
-
-class ExportFailed(Message):
-    def __init__(self, result: ExportResult) -> None:
-        super().__init__()
-        self.result = result
-
-
-class DataCleared(Message):
-    """The user confirmed clearing the collected samples."""
-
-    def __init__(self, points: int) -> None:
-        super().__init__()
-        self.points = points
 
 
 class GoalPicked(Message):

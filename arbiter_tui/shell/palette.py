@@ -5,16 +5,17 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable
 
-from textual.app import SystemCommand
+from textual.app import App, SystemCommand
 
 from ..analytics.files import FORMATS
 from ..control.algorithms import ALGORITHMS, MISSIONS
+from . import dialogs
 from .screens.base import Console
 
 SCREENS = ("control", "analytics", "latency", "topics")
 
 
-def commands(console: Console, switch: Callable[[str], None]) -> Iterable[SystemCommand]:
+def commands(app: App[object], console: Console, switch: Callable[[str], None]) -> Iterable[SystemCommand]:
     session = console.session
 
     def then_show(action: Callable[[], object]) -> Callable[[], None]:
@@ -45,12 +46,16 @@ def commands(console: Console, switch: Callable[[str], None]) -> Iterable[System
     yield SystemCommand(
         "Restart the mission", "From its first waypoint (G)", lambda: console.go(restart=True)
     )
-    yield SystemCommand("Set a goal x y…", "Type a go-to-goal target in metres (t)", console.ask_goal)
+    yield SystemCommand(
+        "Set a goal x y…", "Type a go-to-goal target in metres (t)", lambda: dialogs.ask_goal(app, console)
+    )
     yield SystemCommand(
         "Start/pause collection", "Toggle analytics collection", then_show(session.toggle_collection)
     )
-    yield SystemCommand("Clear collected data", "Asks first", console.ask_clear)
+    yield SystemCommand("Clear collected data", "Asks first", lambda: dialogs.ask_clear(app, console))
     for fmt in FORMATS:
         yield SystemCommand(
-            f"Export {fmt.upper()}", f"Write the collected data as {fmt}", lambda f=fmt: console.export(f)
+            f"Export {fmt.upper()}",
+            f"Write the collected data as {fmt}",
+            lambda f=fmt: dialogs.export(app, console, f),
         )

@@ -160,8 +160,8 @@ async def test_export_to_a_directory_that_cannot_be_written(tmp_path):
         for key in ("c", "j", "m"):
             await pilot.press("ctrl+s", key)
             await pilot.pause(0.05)
-            assert app.last_export.fmt == {"c": "csv", "j": "json", "m": "mcap"}[key]
-            assert app.last_export.error is not None
+            assert app.session.last_export.fmt == {"c": "csv", "j": "json", "m": "mcap"}[key]
+            assert app.session.last_export.error is not None
             msg = [n.message for n in app._notifications][-1]
             assert msg.startswith("EXPORT FAILED") and "collected data kept" in msg, msg
         assert store.points() == before

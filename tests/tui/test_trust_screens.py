@@ -10,6 +10,7 @@ from textual_plot.plot_widget import BarPlot, LinePlot
 from arbiter_tui.analytics.runs import COMPLETED
 from arbiter_tui.analytics.store import AnalyticsStore, DataPoint
 from arbiter_tui.session.views import AnalyticsView
+from arbiter_tui.shell import dialogs
 from arbiter_tui.shell.plots import ErrorPlot, LatencyHistogram, LatencyPlot
 from arbiter_tui.shell.screens.analytics import CompareTable, EmptyState, RingWarning
 from arbiter_tui.shell.widgets import TrackerCards, TrackerLine
@@ -163,7 +164,7 @@ async def test_at_80x24_the_comparison_shows_every_column_and_the_warning_says_w
 async def test_export_all_writes_one_stem_and_nothing_when_empty(tmp_path):
     app = still_app(tmp_path)
     async with app.run_test(size=(100, 30)):
-        results = app.export("csv", "json", "mcap")
+        results = dialogs.export(app, app, "csv", "json", "mcap")
         assert all(r.error is None for r in results)
         assert len({r.path.stem for r in results}) == 1
         assert sorted(p.suffix for p in tmp_path.iterdir()) == [".csv", ".json", ".mcap"]
@@ -171,7 +172,7 @@ async def test_export_all_writes_one_stem_and_nothing_when_empty(tmp_path):
     empty.mkdir()
     app = still_app(empty, store=AnalyticsStore())
     async with app.run_test(size=(100, 30)):
-        (result,) = app.export("csv", "json", "mcap")
+        (result,) = dialogs.export(app, app, "csv", "json", "mcap")
         assert result.path is None and "0 samples" in result.error
         assert list(empty.iterdir()) == []
 

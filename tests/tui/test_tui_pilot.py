@@ -147,7 +147,7 @@ async def test_export_chooser_writes_files_with_the_data(tmp_path, monkeypatch):
     assert lines[0] == CSV_HEADER and len(lines) == SEEDED_POINTS + 1
     doc = json.loads(next(tmp_path.glob("*.json")).read_text())
     assert doc["stats"]["sampleCount"] == SEEDED_POINTS
-    assert app.last_export is not None and app.last_export.error is None
+    assert app.session.last_export is not None and app.session.last_export.error is None
 
 
 async def test_export_all_and_escape(tmp_path):
@@ -165,7 +165,7 @@ async def test_export_failure_is_shown_and_data_kept(tmp_path):
     async with app.run_test(size=SIZE) as pilot:
         await pilot.press("2", "ctrl+s", "c")
         await pilot.pause()
-        assert app.last_export.error is not None
+        assert app.session.last_export.error is not None
         assert len(app.session.store) == SEEDED_POINTS
         failed = [n for n in app._notifications if "EXPORT FAILED" in n.message]
         assert failed and "collected data kept" in failed[0].message and failed[0].severity == "error"

@@ -20,6 +20,7 @@ from ...analytics import table as T
 from ...analytics.linkcurve import LinkSweepView
 from ...session.frames import Frame
 from ...session.views import AnalyticsView
+from .. import dialogs
 from ..plots import ErrorPlot, LinkPlot, TrajectoryPlot
 from ..widgets import Bound, StatsCards
 from .base import BaseScreen
@@ -239,13 +240,13 @@ class AnalyticsScreen(BaseScreen):
         table.descending = False
 
     def action_clear(self) -> None:
-        self.console.ask_clear()
+        dialogs.ask_clear(self.app, self.console)
 
     def action_export(self) -> None:
         from .export import ExportChooser
 
         def chosen(formats: tuple[str, ...] | None) -> None:
             if formats:
-                self.console.export(*formats)
+                dialogs.export(self.app, self.console, *formats)
 
         self.app.push_screen(ExportChooser(len(self.console.session.store)), chosen)

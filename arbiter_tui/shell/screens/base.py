@@ -15,7 +15,9 @@ from textual.screen import Screen
 from textual.widgets import Footer, Static
 
 from ...session.frames import Frame
-from ...session.robot import ExportResult, RobotSession
+from ...session.robot import RobotSession
+from ..heap import FREEZE_AFTER_S, freeze_heap
+from ..keys import KeyRouter
 from ..widgets import StatusLine
 
 
@@ -27,20 +29,15 @@ class Console(Protocol):
     @property
     def session(self) -> RobotSession: ...
 
+    @property
+    def keys(self) -> KeyRouter: ...
+
     def refresh_frame(self, force: bool = False) -> None:
         """Show what just changed: a new frame now (``force``: past every rate gate)."""
 
-    def screen_shown(self, name: str | None = None) -> None: ...
-
-    def set_keys_direct(self, direct: bool) -> None: ...
-
-    def go(self, restart: bool = False) -> bool: ...
-
-    def ask_goal(self) -> None: ...
-
-    def ask_clear(self) -> None: ...
-
-    def export(self, *formats: str) -> list[ExportResult]: ...
+    def go(self, restart: bool = False) -> bool:
+        """Resume or start the selected mission (``restart``: from its first waypoint); False, with a
+        notice saying why, if it cannot."""
 
 
 MIN_WIDTH, MIN_HEIGHT = 80, 24
@@ -55,6 +52,7 @@ class BaseScreen(Screen[None]):
     # the latest frame: set by the app for the screens it shows, bound (data_bind) into every widget
     frame: reactive[Frame] = reactive(Frame, repaint=False, always_update=True)
     _console: Console | None = None
+    _frozen = False  # its widgets, made on its first showing, are out of the collector's way
 
     @property
     def console(self) -> Console:
@@ -82,7 +80,13 @@ class BaseScreen(Screen[None]):
     def on_screen_resume(self) -> None:
         self._check_size(self.app.size)
         self.console.refresh_frame(force=True)  # what it shows may not have been sampled meanwhile
-        self.console.screen_shown()
+        self.freeze_once()
+
+    def freeze_once(self) -> None:
+        """After this screen's first showing, its widgets (kept for good) leave the collector's walks."""
+        if not self._frozen:
+            self._frozen = True
+            self.set_timer(FREEZE_AFTER_S, freeze_heap)
 
     def on_resize(self, event: events.Resize) -> None:
         self._check_size(event.size)

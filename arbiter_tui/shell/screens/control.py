@@ -13,6 +13,8 @@ from textual.widgets import Static
 
 from ...control.algorithms import ALGORITHMS
 from ...control.teleop import key_name
+from .. import dialogs
+from ..heap import FREEZE_AFTER_S, freeze_heap
 from ..plots import ErrorPlot, LatencyPlot, LiveMap
 from ..widgets import KEY_HELP, ClientLine, RobotPanel, StatsCards, TrackerCards, TrackerLine
 from .analytics import CompareTable, RuleLine
@@ -32,6 +34,7 @@ class ControlScreen(BaseScreen):
         Binding("t", "goal", "Goal", show=False),  # in ? help and README: the footer fits in 80 columns
     ]
     dashboard = False  # the terminal is large enough for the dashboard (set on every resize)
+    _dashboard_frozen = False
 
     def compose_body(self) -> ComposeResult:
         with Horizontal(id="drive"):
@@ -73,7 +76,9 @@ class ControlScreen(BaseScreen):
             self.dashboard = dashboard
             self.set_class(dashboard, "dashboard")
             self.console.refresh_frame(force=True)  # its panes show what was not sampled before
-            self.console.screen_shown("dashboard")  # its widgets, once made, live as long as the console
+            if dashboard and not self._dashboard_frozen:  # its widgets, once made, live for good
+                self._dashboard_frozen = True
+                self.set_timer(FREEZE_AFTER_S, freeze_heap)
 
     def on_key(self, event: events.Key) -> None:
         if self.console.session.key(key_name(event.character, event.key)):
@@ -82,10 +87,10 @@ class ControlScreen(BaseScreen):
             event.prevent_default()
 
     def on_screen_resume(self) -> None:
-        self.console.set_keys_direct(True)  # teleop keys may go to the session from the input thread
+        self.console.keys.set_direct(True)  # teleop keys may go to the session from the input thread
 
     def on_screen_suspend(self) -> None:
-        self.console.set_keys_direct(False)
+        self.console.keys.set_direct(False)
         # A held key must not keep the robot moving unseen; an autonomous run goes on (watch it live).
         self.console.session.end_manual_hold("left the control screen")
 
@@ -106,4 +111,4 @@ class ControlScreen(BaseScreen):
 
     def action_goal(self) -> None:
         if not self.console.session.too_small:
-            self.console.ask_goal()
+            dialogs.ask_goal(self.app, self.console)

@@ -256,7 +256,7 @@ class TopicsScreen(BaseScreen):
 
     def on_screen_resume(self) -> None:
         super().on_screen_resume()
-        self.console.set_keys_direct(False)  # this screen's keys are typed: no teleop here
+        self.console.keys.set_direct(False)  # this screen's keys are typed: no teleop here
         self._echo(self.selected)
 
     @on(Input.Changed, "#topics-filter")

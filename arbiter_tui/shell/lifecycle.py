@@ -1,0 +1,56 @@
+"""Starting and ending the console's process: the link made in a worker after the first frame, and a
+hang-up or termination signal that always ends the process."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+import os
+import signal
+import threading
+from collections.abc import Callable
+
+from textual.app import App
+
+from ..latency.tracker_client import TrackerClient
+from ..link.base import Link
+from .messages import BackendFailed, BackendStarted
+
+log = logging.getLogger(__name__)
+
+Connector = Callable[[], tuple[Link, "TrackerClient | None", Callable[[], None]]]
+
+
+def connect(connector: Connector, app: App[object]) -> None:
+    """A worker's thread: start the embedded backend (when there is one) and the link, then tell the app
+    (``BackendStarted``), or why not (``BackendFailed``: one line on screen, never a traceback)."""
+    try:
+        link, tracker, cleanup = connector()
+    except Exception as exc:
+        log.exception("starting the link failed")
+        app.post_message(BackendFailed(str(exc) or type(exc).__name__))
+        return
+    if not app.is_running:  # the user quit while it was starting
+        link.close()
+        cleanup()
+        return
+    app.post_message(BackendStarted(link, tracker, cleanup))
+
+
+def on_hangup(handler: Callable[[int], None]) -> None:
+    """``handler(signal)`` on SIGHUP and SIGTERM, on the running event loop (where it can be set)."""
+    loop = asyncio.get_running_loop()
+    for sig in (signal.SIGHUP, signal.SIGTERM):
+        with contextlib.suppress(NotImplementedError, RuntimeError, ValueError):
+            loop.add_signal_handler(sig, handler, sig)
+
+
+def exit_within(seconds: float) -> None:
+    """The process ends within ``seconds`` whatever happens. After a hang-up the terminal may be gone:
+    Textual's writer thread then dies on EIO and its shutdown can block forever on a full queue. The
+    robot's zero is already on its way (the link writes it on its own thread); if the orderly exit has
+    not finished in time, leave without it."""
+    watchdog = threading.Timer(seconds, os._exit, args=(0,))
+    watchdog.daemon = True
+    watchdog.start()
