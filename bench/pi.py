@@ -4,8 +4,9 @@
 A Pi 4 core runs Python 3-4x slower than a core of a desktop; a CPU quota of 25 % of one core stands in
 for one. The backend and the console each run in a cgroup of their own held to ``--quota`` (cgroup v1
 ``cpu`` controller, ``cpu.cfs_period_us`` 10 ms, or cgroup v2 ``cpu.max``; root needed), the console in
-tmux at ``--size``. For each screen (control, analytics, latency) a go_to_goal mission is (re)started with
-``G`` and measured for ``--seconds``:
+tmux at ``--size``. For each screen (``--screens``: control, analytics, latency, topics; the control screen
+is the dashboard at 160x45 and more) a go_to_goal mission is (re)started with ``G`` and measured for
+``--seconds``:
 
 * the time between consecutive commands as the tracker received them (its records' receive times,
   paged by ``rx_seq``): p50 / p95 / max; the mission sends every 100 ms (10 Hz), and the backend stops
@@ -15,7 +16,7 @@ tmux at ``--size``. For each screen (control, analytics, latency) a go_to_goal m
 The **floor**, measured in the same run and the same cgroup: a plain roslibpy script that publishes a
 stamped command every 100 ms on a monotonic schedule. And **key to wire**: ``i`` sent to the console's
 terminal (tmux) until the tracker received the command, against a raw-tty roslibpy script that publishes
-on each key it reads, both typed the same way. Last line: JSON.
+on each key it reads, both typed the same way (``--no-key-to-wire`` skips it). Last line: JSON.
 
     sudo python bench/pi.py --seconds 15            # the defaults: 25 % quota, 100x30
     python bench/pi.py --size 200x60 --pythonpath /path/to/another/checkout   # the same bench, other code
@@ -200,6 +201,12 @@ def main() -> int:
     p.add_argument("--size", default="100x30", help="terminal size, COLSxROWS")
     p.add_argument("--presses", type=int, default=40, help="key presses for key-to-wire")
     p.add_argument("--pythonpath", help="measure the code of another checkout (its root)")
+    p.add_argument(
+        "--screens",
+        default="control,analytics,latency,topics",
+        help="screens measured, in order (control is the dashboard at 160x45 and more)",
+    )
+    p.add_argument("--no-key-to-wire", action="store_true", help="skip the key-to-wire comparison")
     a = p.parse_args()
     if os.geteuid() != 0:
         print("pi: needs root (cgroups)", file=sys.stderr)
@@ -242,7 +249,9 @@ def main() -> int:
         tmux("send-keys", "-t", session, "a")  # go_to_goal
         time.sleep(0.5)
         screens = {}
-        for name, key in (("control", "1"), ("analytics", "2"), ("latency", "3")):
+        keys = {"control": "1", "analytics": "2", "latency": "3", "topics": "4"}
+        for name in a.screens.split(","):
+            key = keys[name]
             tmux("send-keys", "-t", session, "1")
             time.sleep(0.3)
             tmux("send-keys", "-t", session, "G")  # the square from its first waypoint, from here
@@ -269,28 +278,29 @@ def main() -> int:
             tmux("send-keys", "-t", session, "space")
         result["console"] = screens
 
-        # key to wire: the console (control screen) against a raw-tty roslibpy script, typed alike
-        tmux("send-keys", "-t", session, "1")
-        time.sleep(1.0)
-        k = key_to_wire(session, api, since, a.presses, 1.0)
-        result["key_to_wire_console"] = {"n": len(k), "p50_ms": pct(k, 0.5), "p95_ms": pct(k, 0.95)}
-        tmux("send-keys", "-t", session, "C-q")
-        time.sleep(1.0)
-        raw_session = f"arbiter-pi-raw-{tag}"
-        script = tmp / "raw.py"
-        script.write_text(RAW_TTY)
-        tmux("new-session", "-d", "-s", raw_session, "-x", cols, "-y", rows,
-             f"env PYTHONPATH={env.get('PYTHONPATH', '')} {python} {script} {bridge}")  # fmt: skip
-        raw_pane = int(tmux("display-message", "-p", "-t", raw_session, "#{pane_pid}").strip())
-        for pid in tree(raw_pane):
-            console_group.add(pid)
-        wait_screen(raw_session, "raw ready", 30)
-        _, since = records_since(api, None)
-        k = key_to_wire(raw_session, api, since, a.presses, 0.3)
-        result["key_to_wire_raw_tty"] = {"n": len(k), "p50_ms": pct(k, 0.5), "p95_ms": pct(k, 0.95)}
-        tmux("send-keys", "-t", raw_session, "q")
-        con, raw = result["key_to_wire_console"]["p95_ms"], result["key_to_wire_raw_tty"]["p95_ms"]
-        result["key_to_wire_p95_ratio"] = round(con / raw, 2) if con and raw else None
+        if not a.no_key_to_wire:
+            # key to wire: the console (control screen) against a raw-tty roslibpy script, typed alike
+            tmux("send-keys", "-t", session, "1")
+            time.sleep(1.0)
+            k = key_to_wire(session, api, since, a.presses, 1.0)
+            result["key_to_wire_console"] = {"n": len(k), "p50_ms": pct(k, 0.5), "p95_ms": pct(k, 0.95)}
+            tmux("send-keys", "-t", session, "C-q")
+            time.sleep(1.0)
+            raw_session = f"arbiter-pi-raw-{tag}"
+            script = tmp / "raw.py"
+            script.write_text(RAW_TTY)
+            tmux("new-session", "-d", "-s", raw_session, "-x", cols, "-y", rows,
+                 f"env PYTHONPATH={env.get('PYTHONPATH', '')} {python} {script} {bridge}")  # fmt: skip
+            raw_pane = int(tmux("display-message", "-p", "-t", raw_session, "#{pane_pid}").strip())
+            for pid in tree(raw_pane):
+                console_group.add(pid)
+            wait_screen(raw_session, "raw ready", 30)
+            _, since = records_since(api, None)
+            k = key_to_wire(raw_session, api, since, a.presses, 0.3)
+            result["key_to_wire_raw_tty"] = {"n": len(k), "p50_ms": pct(k, 0.5), "p95_ms": pct(k, 0.95)}
+            tmux("send-keys", "-t", raw_session, "q")
+            con, raw = result["key_to_wire_console"]["p95_ms"], result["key_to_wire_raw_tty"]["p95_ms"]
+            result["key_to_wire_p95_ratio"] = round(con / raw, 2) if con and raw else None
     finally:
         for s in (f"arbiter-pi-{tag}", f"arbiter-pi-raw-{tag}"):
             tmux("kill-session", "-t", s)
