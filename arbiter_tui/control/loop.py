@@ -22,14 +22,15 @@ from ..analytics.runs import ABORTED, COMPLETED, ENDED, MANUAL, MANUAL_IDLE_S, O
 from ..analytics.store import AnalyticsStore, DataPoint
 from ..analytics.tracking import reference_path
 from ..link.base import Link
+from . import mission as M
 from .algorithms import (
     ALGORITHMS,
-    DEFAULT_CONTROLLER,
     MISSIONS,
     MissionProgress,
     goal_driver,
     make_controller,
 )
+from .mission import MissionState, Resumable
 from .teleop import Teleop
 
 TRAIL_POINTS = 2000
@@ -57,18 +58,9 @@ class ControlLoop:
         self.store = store
         self.teleop = teleop
         self._wall_ms = wall_ms
-        self.algorithm = MANUAL
-        self.mission_name = "square"  # the named mission ``n`` selects and ``g`` starts
-        self.mission = MissionProgress.named(self.mission_name)
-        self.mission_label = self.mission_name  # what the current (or last) run drives: a name or a goal
-        self.interrupted: MissionProgress | None = None  # a mission stopped before its end: ``g`` resumes it
-        self._interrupted_algorithm = DEFAULT_CONTROLLER  # the controller and label it ran with
-        self._interrupted_label = ""
+        self.state = MissionState()  # the mission's lifecycle, one immutable value (control/mission.py)
         self._manual_at: tuple[float, float] | None = None  # (monotonic, wall ms) of the last manual move
-        self.controller = make_controller(self.algorithm)
-        self.running = False  # an autonomous controller is driving
-        self.finished: str | None = None  # "done: 4/4 in 20.7 s" until the next run or key
-        self._run_started_ms = 0.0
+        self.controller = make_controller(self.state.algorithm)
         self.command = (0.0, 0.0)  # the last command sent
         self.unsent = 0  # commands refused by the link (disconnected)
         self.trail: deque[tuple[float, float]] = deque(maxlen=TRAIL_POINTS)
@@ -81,21 +73,48 @@ class ControlLoop:
         self.held_back = 0  # moving commands the ceiling did not send
         self._still_sampled = False  # one sample of a robot standing still outside a run, then none
 
+    # -- the mission's state, read -------------------------------------------------------
+    @property
+    def algorithm(self) -> str:
+        return self.state.algorithm
+
+    @property
+    def mission_name(self) -> str:
+        return self.state.selected
+
+    @property
+    def mission(self) -> MissionProgress:
+        return self.state.progress
+
+    @property
+    def mission_label(self) -> str:
+        return self.state.label
+
+    @property
+    def running(self) -> bool:
+        return self.state.running
+
+    @property
+    def interrupted(self) -> Resumable | None:
+        return self.state.interrupted
+
+    @property
+    def finished(self) -> str | None:
+        return self.state.finished
+
     # -- selection ----------------------------------------------------------------------
     def set_algorithm(self, name: str) -> None:
         if name not in ALGORITHMS:
             raise ValueError(f"unknown algorithm {name!r}; choose from {', '.join(ALGORITHMS)}")
         self.stop()
-        self.algorithm = name
+        self.state = M.selecting_algorithm(self.state, name)
         self.controller = make_controller(name)
 
     def set_mission(self, name: str) -> None:
         if name not in MISSIONS:
             raise ValueError(f"unknown mission {name!r}; choose from {', '.join(MISSIONS)}")
         self.stop()
-        self.mission_name = self.mission_label = name
-        self.mission = MissionProgress.named(name)
-        self.interrupted = None
+        self.state = M.selecting_mission(self.state, name)
 
     def cycle_mission(self) -> str:
         names = list(MISSIONS)
@@ -109,14 +128,9 @@ class ControlLoop:
 
     def _run(self, mission: MissionProgress, label: str) -> None:
         self.stop()
-        self.mission = mission
-        self.mission_label = label
-        self.interrupted = None
-        self.running = True
-        self.finished = None
-        self._run_started_ms = self._wall_ms()
+        self.state = M.starting(self.state, mission, label, self._wall_ms())
         path = reference_path(mission.start, mission.waypoints[mission.index :])
-        self.store.begin_run(self.algorithm, label, self._run_started_ms, path)
+        self.store.begin_run(self.algorithm, label, self.state.started_ms, path)
 
     def start_autonomous(self) -> bool:
         """Start the selected controller on the named mission, from the robot's current pose."""
@@ -140,7 +154,7 @@ class ControlLoop:
         if self.running:
             return self.mission
         if self.interrupted is not None and not self.interrupted.done:
-            return self.interrupted
+            return self.interrupted.progress
         if self.algorithm == MANUAL:
             return None
         return self._named_from(pose)
@@ -160,18 +174,17 @@ class ControlLoop:
         if interrupted is None or interrupted.done:
             return self.start_autonomous()
         if self.algorithm == MANUAL:
-            self.set_algorithm(self._interrupted_algorithm)
+            self.set_algorithm(interrupted.algorithm)
         pose = self.link.telemetry.snapshot()[0]
-        interrupted.start = (pose.x, pose.y)  # pure pursuit follows the segment from here
-        label = f"{self._interrupted_label}, resumed"  # the panel shows which waypoint it is at
-        self._run(interrupted, label)
+        interrupted.progress.start = (pose.x, pose.y)  # pure pursuit follows the segment from here
+        self._run(interrupted.progress, interrupted.label + M.RESUMED)
         return True
 
     def restart(self) -> bool:
         """Start the named mission from its first waypoint (an interrupted one is forgotten)."""
         if self.algorithm == MANUAL and self.interrupted is not None:
-            self.set_algorithm(self._interrupted_algorithm)
-        self.interrupted = None
+            self.set_algorithm(self.interrupted.algorithm)
+        self.state = M.forgetting_interrupted(self.state)
         return self.start_autonomous()
 
     def go_to(self, x: float, y: float) -> None:
@@ -186,14 +199,14 @@ class ControlLoop:
     def stop(self, outcome: str = ABORTED) -> None:
         """Stop the robot: teleop and any autonomous run; the next tick sends exactly one zero."""
         if self.running:
-            self.running = False
-            if not self.mission.done:
-                self.interrupted = self.mission
-                self._interrupted_algorithm = self.algorithm
-                self._interrupted_label = self.mission_label.removesuffix(", resumed")
+            self.state = M.stopping(self.state)
             self.store.end_run(outcome, self._wall_ms(), self._final_error())
         self._end_manual_run()
         self.teleop.stop()
+
+    def acknowledge(self) -> None:
+        """A key was pressed: the last run's "done" line goes (it stays until the next run or key)."""
+        self.state = M.acknowledged(self.state)
 
     def override(self) -> None:
         """A movement key takes over from the controller: the run ends as overridden, manual selected."""
@@ -255,11 +268,9 @@ class ControlLoop:
         limits = self.teleop.limits
         if self.running:
             if self.mission.done:
-                self.running = False
                 t_ms = self._wall_ms()
+                self.state = M.completing(self.state, t_ms)
                 completed.append((t_ms, self._final_error()))
-                n = len(self.mission.waypoints)
-                self.finished = f"done: {n}/{n} in {(t_ms - self._run_started_ms) / 1000.0:.1f} s"
                 self.teleop.stop()
                 cmd = self.teleop.tick(now)
             else:

@@ -23,9 +23,9 @@ from ..analytics.runs import MANUAL, RunSummary
 from ..analytics.store import AnalyticsStats, AnalyticsStore, DataPoint
 from ..analytics.tracking import TrackingStats, reference_path, tracking_stats
 from ..control.algorithms import ALGORITHMS, MISSIONS
-from ..control.loop import ControlLoop
-from ..control.teleop import Teleop
 from ..link.modelled import ModelledLink
+from .robot import RobotSession
+from .settings import Settings
 
 AUTONOMOUS = tuple(a for a in ALGORITHMS if a != MANUAL)
 SIM_HZ = RATE_HZ  # the simulator's own rate (arbiter_core.simulator)
@@ -92,11 +92,18 @@ def run_one(
     clock = _Clock()
     link = ModelledLink(link_model or LinkModel(), clock, seed, cmd_timeout=cmd_timeout)
     store = AnalyticsStore(max_data_points=1_000_000, collection_rate=collection_rate)
-    loop = ControlLoop(link, store, Teleop(speed=speed, turn=turn), wall_ms=lambda: t0_ms + clock.t * 1000.0)
-    loop.set_algorithm(algorithm)
-    loop.set_mission(mission)
-    store.start_collection()
-    assert loop.start_autonomous()
+    # the console's own engine (RobotSession: mission lifecycle, stop and override, run boundaries),
+    # ticked here in simulated time at CONTROL_HZ, with no ceiling on the command rate
+    settings = Settings(
+        speed=speed, turn=turn, collection_rate=collection_rate, max_points=store.max_data_points,
+        repeat_rate=None, live=False, handle_signals=False,
+    )  # fmt: skip
+    session = RobotSession(settings, link, store, clock, wall_ms=lambda: t0_ms + clock.t * 1000.0)
+    loop = session.loop
+    session.select_algorithm(algorithm)
+    session.select_mission(mission)
+    if (why := session.go()) is not None:
+        raise CompareError(f"{algorithm} cannot drive {mission}: {why}")
     step = 1.0 / SIM_HZ
     control_every = round(SIM_HZ / CONTROL_HZ)
     sample_every = max(1, round(SIM_HZ / collection_rate))
@@ -109,16 +116,16 @@ def run_one(
         clock.t = n * step
         link.step()
         if n % control_every == 0:
-            loop.tick_control(clock.t)
+            session.tick_control()
             max_v = max(max_v, abs(loop.command[0]))
-        if n % sample_every == 0 and (point := loop.sample()) is not None and point.runId is not None:
+        if n % sample_every == 0 and (point := session.sample()) is not None and point.runId is not None:
             p = _true_pose(link)  # the run's samples, where the robot truly was
             truth.append((clock.t, p.x, p.y, point.angularVel))
     completed = loop.mission.done
     pose = _true_pose(link)
     last = loop.mission.waypoints[-1]
     if loop.running:  # out of time
-        loop.stop()
+        session.stop("out of time")
     (summary,) = store.runs()
     t, x, y, w = np.array(truth, dtype=np.float64).reshape(-1, 4).T
     tracking = tracking_stats(t, x, y, w, path, S.path_length(x, y),

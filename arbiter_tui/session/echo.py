@@ -7,7 +7,8 @@ import contextlib
 import threading
 from collections.abc import Callable
 
-from ..latency.topics_client import TopicFigures
+from arbiter_core.topicstats import TopicFigures
+
 from ..latency.topics_table import echo_refusal, echo_text
 from ..link.base import Link
 

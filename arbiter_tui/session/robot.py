@@ -25,15 +25,15 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from arbiter_core.simulator import RATE_HZ as SIM_HZ
+from arbiter_core.topicstats import TopicFigures
 
 from ..analytics.files import FORMATS, ExportError, NothingToExport, export_stem, export_store
 from ..analytics.observe import ObserveConfig, Observer
 from ..analytics.runs import MANUAL
-from ..analytics.store import AnalyticsStore
+from ..analytics.store import AnalyticsStore, DataPoint
 from ..control.algorithms import choose_controller_hint
 from ..control.loop import ControlLoop
 from ..control.teleop import MOVE_KEYS, SCALE_KEYS, STOP_KEYS, Teleop
-from ..latency.topics_client import TopicFigures
 from ..link.base import DISCONNECTED, RECONNECTING, STARTING, Link
 from ..link.sim import SimLink
 from .echo import TopicEcho
@@ -60,6 +60,7 @@ class MissionFinished:
 
 
 SWITCH_INTERVAL_S = 0.001
+DEFAULT_CONTROL_HZ = 10.0  # the control tick when no --repeat-rate ceiling is set
 NO_LINK_WORDS = "The link to the robot is down: nothing can be sent. Press g once it is back."
 
 
@@ -70,6 +71,7 @@ class RobotSession:
         link: Link,
         store: AnalyticsStore | None = None,
         clock: Callable[[], float] = time.monotonic,
+        wall_ms: Callable[[], float] = lambda: time.time_ns() / 1e6,
     ) -> None:
         self.config = config
         self.lock = threading.RLock()
@@ -83,7 +85,7 @@ class RobotSession:
         if not config.start_paused and not self.store.is_collecting and len(self.store) == 0:
             self.store.start_collection()  # recording is on unless asked otherwise (r pauses it)
         self.teleop = Teleop(speed=config.speed, turn=config.turn, key_timeout=config.key_timeout)
-        self.loop = ControlLoop(link, self.store, self.teleop, max_rate=config.repeat_rate)
+        self.loop = ControlLoop(link, self.store, self.teleop, wall_ms, max_rate=config.repeat_rate)
         # observe mode: the robot's own topics make the samples and runs (analytics/observe.py)
         self.observer = (
             Observer(self.store, ObserveConfig(label=config.observe_label, rate_hz=config.collection_rate))
@@ -145,14 +147,16 @@ class RobotSession:
         if event is not None:
             self.on_event(event)
 
-    def sample(self) -> None:
+    def sample(self) -> DataPoint | None:
+        """One sample of the robot into the store (at the collection rate); the point recorded, if any."""
         if self.observer is not None:
-            return  # observing: the robot's odometry makes the samples, on the link's thread
+            return None  # observing: the robot's odometry makes the samples, on the link's thread
         with self.lock:
             try:
-                self.loop.sample()
+                return self.loop.sample()
             except Exception:
                 log.exception("sampling failed")
+                return None
 
     def step_link(self) -> None:
         link = self.link
@@ -172,7 +176,7 @@ class RobotSession:
 
     def _run(self) -> None:
         periods = {
-            self.tick_control: 1.0 / self.config.repeat_rate,
+            self.tick_control: 1.0 / (self.config.repeat_rate or DEFAULT_CONTROL_HZ),
             self.sample: 1.0 / self.config.collection_rate,
             self.step_link: 1.0 / SIM_HZ,
         }
@@ -232,18 +236,16 @@ class RobotSession:
                 return key in MOVE_KEYS or key in SCALE_KEYS  # swallowed: nothing moves unseen
             if self.loop.running and key in STOP_KEYS:
                 self.loop.stop()
-            was_manual = self.loop.algorithm == MANUAL
+            if key in MOVE_KEYS and self.loop.algorithm != MANUAL:
+                # Manual keys take over from an autonomous controller (g resumes its mission): the run
+                # ends as overridden before the key is pressed, once.
+                self.loop.override()
             before = (self.teleop.moving, self.teleop.target)
             result = self.teleop.press(key, self.clock())
             if result is None:
                 return False
-            self.loop.finished = None  # the last run's "done" stays until the next mission or key
-            if result == "move" and not was_manual:
-                # Manual keys take over from an autonomous controller (g resumes its mission).
-                self.loop.override()
-                self.teleop.press(key, self.clock())
+            self.loop.acknowledge()  # the last run's "done" stays until the next mission or key
             if result == "move":
-                self.loop.running = False
                 if (self.teleop.moving, self.teleop.target) != before:
                     # a new key (or direction) is answered at once; a key's auto-repeats only keep it
                     # held, and the control tick sends at --repeat-rate

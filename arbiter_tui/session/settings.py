@@ -29,7 +29,7 @@ class Settings:
     max_points: int = 1000
     speed: float = 0.5
     turn: float = 1.0
-    repeat_rate: float = 10.0
+    repeat_rate: float | None = 10.0  # the ceiling on commands a second (None: none, as in `compare`)
     key_timeout: float = 0.6
     ui_rate: float = 5.0  # redraws per second, however fast data arrives
     analytics_rate: float = 2.0  # analytics and latency figures (screens 2, 3, the dashboard): no flicker

@@ -35,7 +35,7 @@ def drive(algorithm: str, mission: str, speed: float, turn: float, limit_s: floa
     link = CheckedSimLink(clock)
     loop = ControlLoop(link, AnalyticsStore(), Teleop(speed=speed, turn=turn))
     loop.set_algorithm(algorithm)
-    loop.mission_name = mission
+    loop.set_mission(mission)
     assert loop.start_autonomous()
     steps = 0
     while loop.running and clock.t < limit_s:
