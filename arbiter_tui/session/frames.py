@@ -65,6 +65,37 @@ class Shown:
         return self.screen == screen or self.dashboard
 
 
+class FrameClock:
+    """When the next frame is due, on the robot's clock: a frame starts just after a control tick, so
+    that painting it has a whole control period before the next command is due.
+
+    Under a CPU quota (a Pi-class core: 25 % of one) every thread of the console waits once the quota of
+    a scheduling period is spent, and a frame that takes 5 ms of CPU takes 20 ms of wall time. A frame
+    timer of its own drifts over the control ticks and, in a frame that covers one, delayed that command
+    (bench/pi.py, the dashboard at 200x60). Started from the tick instead, the frame is over long before
+    the next one. ``ticked`` runs on the session's thread after each control tick; ``drawn`` on the UI's
+    once the frame is sampled (until then no other frame is asked for: a slow UI never piles them up)."""
+
+    def __init__(self, frame_s: float, tick_s: float, clock: Callable[[], float] = time.monotonic) -> None:
+        self.frame_s = frame_s
+        self.tick_s = tick_s
+        self.clock = clock
+        self._due = float("-inf")
+        self._pending = False
+
+    def ticked(self) -> bool:
+        """A control tick just ended: True when a frame is due now (and none is pending)."""
+        now = self.clock()
+        if self._pending or now < self._due:
+            return False
+        self._pending = True
+        self._due = now + self.frame_s - self.tick_s / 2  # the tick nearest to one frame from now
+        return True
+
+    def drawn(self) -> None:
+        self._pending = False
+
+
 class FrameSampler:
     """Samples a :class:`RobotSession` and the pollers' answers into one :class:`Frame`.
 

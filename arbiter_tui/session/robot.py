@@ -99,6 +99,7 @@ class RobotSession:
         self.too_small = False
         self.stop_reason: str | None = None
         self.on_event: Callable[[object], None] = lambda event: None
+        self.on_tick: Callable[[], None] = lambda: None  # after each control tick, on the session's thread
         self.ticks = 0  # control ticks run (tests and the bench read it)
         self.late_ticks = 0  # ticks that ran more than one period late
         self._was_running = False
@@ -188,6 +189,8 @@ class RobotSession:
             if wait > 0 and self._stopping.wait(wait):
                 break
             job()
+            if job == self.tick_control:
+                self.on_tick()
             period = periods[job]
             due[job] += period
             behind = time.monotonic() - due[job]

@@ -32,7 +32,7 @@ from ..latency.topics_client import TopicsPoller
 from ..latency.tracker_client import TrackerClient
 from ..link.base import Link, PendingLink
 from ..session.config import save_theme
-from ..session.frames import CONTROL, TOPICS, Frame, FrameSampler, Shown
+from ..session.frames import CONTROL, TOPICS, Frame, FrameClock, FrameSampler, Shown
 from ..session.link_sweep import sweep_curve
 from ..session.pollers import poll_forever
 from ..session.robot import MissionFinished, RobotSession
@@ -43,6 +43,7 @@ from .keys import KeyRouter, direct_keys
 from .messages import (
     BackendFailed,
     BackendStarted,
+    FrameDue,
     GoalPicked,
     LinkSweepFailed,
     RunFinished,
@@ -132,8 +133,15 @@ class ArbiterApp(App[None]):
         self.refresh_frame(force=True)
         self.set_timer(FREEZE_AFTER_S, freeze_heap)  # what start made
         if self.settings.live:
-            self.session.start()  # the robot's clock: control, sampling, simulation on their own thread
-            self.set_interval(1.0 / self.settings.ui_rate, self.sample_frame)
+            # the robot's clock (control, sampling, simulation, on their own thread) says when to paint
+            frames = FrameClock(1.0 / self.settings.ui_rate, 1.0 / (self.settings.repeat_rate or 10.0))
+
+            def ticked() -> None:  # the session's thread: post_message is thread-safe
+                if frames.ticked():
+                    self.post_message(FrameDue(frames))
+
+            self.session.on_tick = ticked
+            self.session.start()
             if self._connector is not None:  # the link (and the backend) start after the first frame
                 connect = partial(lifecycle.connect, self._connector, self)
                 self.run_worker(connect, thread=True, group="connect", exclusive=True, exit_on_error=False)
@@ -205,6 +213,11 @@ class ArbiterApp(App[None]):
         self.session.stop("terminal lost focus")
 
     # -- frames ------------------------------------------------------------------------------------------
+    @on(FrameDue)
+    def _frame_due(self, event: FrameDue) -> None:
+        self.sample_frame()
+        event.clock.drawn()
+
     def _shown(self) -> Shown:
         screen = self.screen
         dashboard = self.current_mode == CONTROL and isinstance(screen, ControlScreen) and screen.dashboard
@@ -218,7 +231,8 @@ class ArbiterApp(App[None]):
             self.sample_frame(force)
 
     def sample_frame(self, force: bool = False) -> None:
-        """A new frame for the screens shown (the UI tick, at ``ui_rate``)."""
+        """A new frame for the screens shown (the UI tick: ``ui_rate`` frames a second, each just after a
+        control tick)."""
         try:
             stack = self.screen_stack
         except KeyError:  # the mode's stack is already gone: the app is closing

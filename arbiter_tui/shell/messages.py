@@ -13,6 +13,7 @@ from textual.message import Message
 
 from ..latency.tracker_client import TrackerClient
 from ..link.base import Link
+from ..session.frames import FrameClock
 
 
 class BackendStarted(Message):
@@ -57,3 +58,12 @@ class LinkSweepFailed(Message):
     def __init__(self, error: str) -> None:
         super().__init__()
         self.error = error
+
+
+class FrameDue(Message):
+    """A control tick just ended and a frame is due (``session.frames.FrameClock``): painted now, it is
+    done before the next command."""
+
+    def __init__(self, clock: FrameClock) -> None:
+        super().__init__()
+        self.clock = clock
