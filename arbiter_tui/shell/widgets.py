@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from typing import Any, ClassVar
 
+from rich.cells import cell_len
 from rich.text import Text
 from textual.reactive import reactive
 from textual.widget import Widget
@@ -26,6 +27,29 @@ LINK_DOWN = (  # two lines of the 36 columns inside the panel: the rows below st
 )
 STALE = "*"  # marks a value that is the last received, not live
 KEY_HELP = legend_compact()
+FIT = "fit"  # the dashboard's class for a widget that lays its figures out to its width, never wrapping one
+PART = " · "  # what separates the parts of a line of figures: where a line may break
+INDENT = "  "  # a line's continuation, when it was broken to fit
+
+
+def fit_lines(text: Text, width: int) -> Text:
+    """``text`` with each line wider than ``width`` broken where a part ends (``PART``), never inside one:
+    a figure stays beside its label. A part wider than ``width`` on its own is left to wrap."""
+    if width <= 0:
+        return text
+    out: list[Text] = []
+    for line in text.split("\n"):
+        plain, start, room = line.plain, 0, width
+        while cell_len(plain[start:]) > room:
+            ends = [i for i in range(start + 1, len(plain)) if plain.startswith(PART, i)]
+            fits = [i for i in ends if cell_len(plain[start:i]) <= room]
+            if not ends:
+                break
+            end = fits[-1] if fits else ends[0]
+            out.append(Text(INDENT) + line[start:end] if start else line[start:end])
+            start, room = end + len(PART), width - len(INDENT)
+        out.append(Text(INDENT) + line[start:] if start else line[start:])
+    return Text("\n").join(out)
 
 
 class Bound(Widget):
@@ -110,15 +134,40 @@ class RobotPanel(Bound):
 
 class StatsCards(Bound):
     SOURCE = "analytics"
+    VALUE = 11  # the fitted cards' value column at least: "0.341 rad/s"
     view: reactive[AnalyticsView] = reactive(AnalyticsView)
 
     def draw(self) -> Text:
+        if self.has_class(FIT):
+            return self.draw_fitted()
         stats = self.view.stats
         t = Text()
         for i, name in enumerate(STATS_FIELDS):
             t.append(f"{STAT_LABELS[name].short:>10} ", "bold")
             t.append(f"{format_stat(name, getattr(stats, name)):<16}")
             if i % 3 == 2 and i < len(STATS_FIELDS) - 1:
+                t.append("\n")
+        return t
+
+    def draw_fitted(self) -> Text:
+        """The dashboard's cards: as many to a row as fit the width (rows balanced), each label on the row
+        of its value, columns as wide as the longest label and value need (values: at least ``VALUE``, so
+        the cards do not move as the figures grow)."""
+        stats = self.view.stats
+        cards = [(STAT_LABELS[n].short, format_stat(n, getattr(stats, n))) for n in STATS_FIELDS]
+        label = max(cell_len(k) for k, _v in cards)
+        value = max(self.VALUE, *(cell_len(v) for _k, v in cards))
+        card = label + 1 + value + 2
+        width = self.content_size.width or 3 * card
+        per_row = max(1, min(len(cards), (width + 2) // card))
+        rows = -(-len(cards) // per_row)
+        per_row = -(-len(cards) // rows)
+        t = Text()
+        for i, (k, v) in enumerate(cards):
+            t.append(f"{k:>{label}} ", "bold")
+            last = i % per_row == per_row - 1 or i == len(cards) - 1
+            t.append(v if last else f"{v:<{value + 2}}")
+            if last and i < len(cards) - 1:
                 t.append("\n")
         return t
 
@@ -198,7 +247,7 @@ class TrackerLine(Bound):
                 state.append(f" · {v.rejected} rejected", "bold yellow")
             if v.stats_error:
                 state.append(f" · its stats block is malformed ({v.stats_error})", "bold yellow")
-        return state
+        return fit_lines(state, self.content_size.width) if self.has_class(FIT) else state
 
 
 class TrackerCards(Bound):
@@ -233,6 +282,10 @@ class ClientLine(Bound):
         self.display = not view.simulated
 
     def draw(self) -> Text:
+        out = self.draw_lines()
+        return fit_lines(out, self.content_size.width) if self.has_class(FIT) else out
+
+    def draw_lines(self) -> Text:
         v = self.view
         out = Text()
         if v.simulated:

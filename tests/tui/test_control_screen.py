@@ -105,6 +105,20 @@ async def test_a_large_terminal_shows_the_dashboard_and_the_arrows_still_drive()
         assert not small.screen.dashboard and not small.screen.query("#dash")  # not even made
 
 
+def test_a_line_of_figures_breaks_between_its_parts_never_inside_one():
+    from rich.text import Text
+
+    from arbiter_tui.shell.widgets import fit_lines
+
+    line = Text.assemble(("this console", "bold"), " · rtt p50 0.600 ms · jitter 0.032 ms\nclock +1.0 ms")
+    fitted = fit_lines(line, 31)
+    lines = ["this console · rtt p50 0.600 ms", "  jitter 0.032 ms", "clock +1.0 ms"]
+    assert fitted.plain.split("\n") == lines
+    assert fitted.spans[0].end == len("this console") and fitted.spans[0].style == "bold"  # styles kept
+    assert fit_lines(line, 200).plain == line.plain  # what fits is left alone
+    assert fit_lines(Text("one long part · b"), 5).plain == "one long part\n  b"  # too wide alone: wraps
+
+
 async def test_the_dashboard_comes_and_goes_with_the_terminal_size():
     app = still_app()
     async with app.run_test(size=(100, 30)) as pilot:
