@@ -4,12 +4,22 @@ marked stale, and a large terminal shows the dashboard (control, comparison and 
 import time
 
 from arbiter_core.kinematics import Pose
+from arbiter_tui.analytics.labels import STAT_LABELS, format_stat
+from arbiter_tui.analytics.store import STATS_FIELDS
 from arbiter_tui.control.algorithms import MISSIONS
 from arbiter_tui.link.base import CONNECTED, RECONNECTING
-from arbiter_tui.shell.plots import LatencyPlot, LiveMap
+from arbiter_tui.shell.plots import ErrorPlot, LatencyHistogram, LatencyPlot, LiveMap, TrajectoryPlot
 from arbiter_tui.shell.screens.analytics import CompareTable
 from arbiter_tui.shell.screens.control import ControlScreen
-from arbiter_tui.shell.widgets import RobotPanel, TrackerCards
+from arbiter_tui.shell.widgets import (
+    CARDS,
+    ClientLine,
+    RobotPanel,
+    StatsCards,
+    TrackerCards,
+    TrackerLine,
+    fmt_ms,
+)
 
 from ..support.tui import RecordingLink, still_app, until
 
@@ -103,6 +113,86 @@ async def test_a_large_terminal_shows_the_dashboard_and_the_arrows_still_drive()
     async with small.run_test(size=(159, 45)) as pilot:
         await pilot.pause()
         assert not small.screen.dashboard and not small.screen.query("#dash")  # not even made
+
+
+def shown_lines(widget) -> list[str]:
+    """The widget's lines as the terminal shows them: wrapped at its width, cut at its height."""
+    from textual.geometry import Region
+
+    return [strip.text.rstrip() for strip in widget.render_lines(Region(0, 0, *widget.size))]
+
+
+PANES = (("drive", "#drive"), ("err", ErrorPlot), ("lat", LatencyPlot), ("traj", TrajectoryPlot),
+         ("hist", LatencyHistogram))  # fmt: skip
+
+
+async def dashboard_at(size: tuple[int, int]) -> dict[str, object]:
+    """What the dashboard shows at ``size``: each figure's line, and the regions of its parts."""
+    app = still_app()
+    async with app.run_test(size=size) as pilot:
+        screen = app.screen
+
+        def ready() -> bool:
+            tables, plots = screen.query(CompareTable), screen.query(LatencyPlot)
+            return bool(tables and tables.first().row_count and plots and plots.first().draws)
+
+        assert await until(pilot, ready)
+        await pilot.pause()
+        table = screen.query_one(CompareTable)
+        live_map = screen.query_one(LiveMap)
+        x_axis, y_axis = live_map._axes(app.trajectory)
+        xs, ys = zip(*app.loop.trail, (0.0, 0.0), app.trajectory.pose[:2], strict=False)
+        return {
+            "cards": shown_lines(screen.query_one(StatsCards)),
+            "stats": app.analytics.stats,
+            "latency": [
+                line
+                for kind in (TrackerLine, TrackerCards, ClientLine)
+                for line in shown_lines(screen.query_one(kind))
+            ],
+            "summary": app.latency.summary,
+            "offset": app.latency.meter.offset,
+            "table": (table.max_scroll_x, table.max_scroll_y, len(table.columns), len(table.table.headers)),
+            "table_inside": screen.query_one("#dash-compare").region.contains_region(table.region),
+            # how much of the map's axes the drawn things span, across and up (1: all of it)
+            "map_fill": (
+                (max(xs) - min(xs)) / (x_axis.hi - x_axis.lo),
+                (max(ys) - min(ys)) / (y_axis.hi - y_axis.lo),
+            ),
+            "heights": {
+                name: max((w.region.height for w in screen.query(kind)), default=0) for name, kind in PANES
+            },
+        }
+
+
+async def test_every_figure_of_the_dashboard_reads_whole_at_160x45_and_200x60():
+    """At both sizes every card's label sits on the row of its value, the latency pane keeps its
+    max / p95 / stddev row and the clock-offset line, the comparison table shows every column and row
+    (nothing to scroll to), and the map spans its drawing rather than blank metres. At 200x60 the extra
+    rows go to the plots (a trajectory and a histogram join them); the control panel's rows stay."""
+    shown = {size: await dashboard_at(size) for size in ((160, 45), (200, 60))}
+    for size, d in shown.items():
+        for name in STATS_FIELDS:
+            card = f"{STAT_LABELS[name].short} {format_stat(name, getattr(d['stats'], name))}"
+            assert any(card in line for line in d["cards"]), (size, card, d["cards"])
+        summary = d["summary"]
+        for key, label in CARDS:
+            value = getattr(summary, key.removesuffix("_ms"))
+            card = f"{label} {value if key == 'count' else fmt_ms(value)}"
+            assert any(card in line for line in d["latency"]), (size, card, d["latency"])
+        row = [line for line in d["latency"] if "max " in line]
+        assert len(row) == 1 and "p95 " in row[0] and "stddev " in row[0], (size, d["latency"])
+        clock = f"clock {d['offset'].offset_ms:+.1f} ms ± {d['offset'].uncertainty_ms:.1f} ms"
+        assert any(line.strip().startswith(clock) for line in d["latency"]), (size, d["latency"])
+        assert any("CLOCK OFFSET" in line for line in d["latency"]), (size, d["latency"])
+        assert any("raw one-way p50 12.220 ms" in line for line in d["latency"]), (size, d["latency"])
+        scroll_x, scroll_y, columns, headers = d["table"]
+        assert (scroll_x, scroll_y) == (0, 0) and columns == headers and d["table_inside"], (size, d["table"])
+        assert min(d["map_fill"]) >= 0.5, (size, d["map_fill"])
+    small, big = shown[(160, 45)]["heights"], shown[(200, 60)]["heights"]
+    assert small["drive"] == big["drive"]
+    assert big["lat"] - small["lat"] >= 14 and big["err"] - small["err"] >= 14, (small, big)
+    assert small["traj"] == small["hist"] == 0 and big["traj"] == big["err"] and big["hist"] == big["lat"]
 
 
 def test_a_line_of_figures_breaks_between_its_parts_never_inside_one():

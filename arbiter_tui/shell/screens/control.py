@@ -1,7 +1,7 @@
 """Control screen: keyboard teleop, algorithm and mission selection, goals (t, or a click on the map),
 pose/errors and the live map. On a terminal of at least 160x45 it is the dashboard: the same control
-panel and map, with the live comparison and the link's latency below them, as the seed's web dashboard
-shows its performance cards beside control."""
+panel and map (and the topics table beside them), with the live comparison and the link's latency below,
+as the seed's web dashboard shows its performance cards beside control."""
 
 from __future__ import annotations
 
@@ -13,13 +13,14 @@ from textual.widgets import Static
 
 from ...control.algorithms import ALGORITHMS
 from ...control.teleop import key_name
-from ..plots import ErrorPlot, LatencyPlot, LiveMap
-from ..widgets import KEY_HELP, ClientLine, RobotPanel, StatsCards, TrackerCards, TrackerLine
+from ..plots import ErrorPlot, LatencyHistogram, LatencyPlot, LiveMap, TrajectoryPlot
+from ..widgets import FIT, KEY_HELP, ClientLine, RobotPanel, StatsCards, TrackerCards, TrackerLine
 from .analytics import CompareTable, RuleLine
 from .base import BaseScreen
 from .topics import TopicsPane
 
 DASHBOARD_WIDTH, DASHBOARD_HEIGHT = 160, 45
+WIDE_WIDTH = 180  # the dashboard shows the trajectory and the latency histogram from this width on
 
 
 class ControlScreen(BaseScreen):
@@ -41,27 +42,36 @@ class ControlScreen(BaseScreen):
             yield LiveMap("map (m)", id="map")
 
     @staticmethod
-    def dashboard_panes() -> Horizontal:
-        """What the dashboard adds below the panel and the map: the same widgets as screens 2, 3 and 4."""
+    def dashboard_panes() -> tuple[TopicsPane, Horizontal]:
+        """What the dashboard adds: the topics table beside the panel and the map, and below them the same
+        widgets as screens 2 and 3, their figures laid out to their width (``FIT``) and their plots taking
+        the rows left (two plots each from ``WIDE_WIDTH`` columns on)."""
         table = CompareTable(id="dash-table", show_cursor=False, zebra_stripes=True)
         table.can_focus = False  # the arrow keys drive here: they must never scroll a table
         compare = Vertical(
-            StatsCards(id="dash-cards"), table, RuleLine(id="dash-rule"),
-            ErrorPlot("e_d (m) vs time (s)", id="dash-err"), id="dash-compare",
+            StatsCards(id="dash-cards", classes=FIT), table, RuleLine(id="dash-rule"),
+            Horizontal(ErrorPlot("e_d (m) vs time (s)", id="dash-err"),
+                       TrajectoryPlot("trajectory (m)", id="dash-traj"), id="dash-compare-plots"),
+            id="dash-compare",
         )  # fmt: skip
         latency = Vertical(
-            TrackerLine(id="dash-lat-state"), TrackerCards(id="dash-lat-cards"),
-            ClientLine(id="dash-lat-client"), LatencyPlot("one-way (ms) vs time (s)", id="dash-lat-plot"),
+            TrackerLine(id="dash-lat-state", classes=FIT), TrackerCards(id="dash-lat-cards"),
+            ClientLine(id="dash-lat-client", classes=FIT),
+            Horizontal(LatencyPlot("one-way (ms) vs time (s)", id="dash-lat-plot"),
+                       LatencyHistogram("one-way (ms) histogram", id="dash-lat-hist"), id="dash-lat-plots"),
             id="dash-latency",
         )  # fmt: skip
-        return Horizontal(compare, latency, TopicsPane(id="dash-topics"), id="dash")
+        return TopicsPane(id="dash-topics"), Horizontal(compare, latency, id="dash")
 
     def on_resize(self, event: events.Resize) -> None:
         # (Textual calls BaseScreen.on_resize too, after this: handlers run for each class)
         dashboard = event.size.width >= DASHBOARD_WIDTH and event.size.height >= DASHBOARD_HEIGHT
         if dashboard and not self.query("#dash"):
             # made the first time it is needed: a small terminal does not pay for it at start
-            self.query_one("#body").mount(self.dashboard_panes())
+            topics, panes = self.dashboard_panes()
+            self.query_one("#drive").mount(topics)
+            self.query_one("#body").mount(panes)
+        self.set_class(dashboard and event.size.width >= WIDE_WIDTH, "dash-wide")
         if dashboard != self.dashboard:
             self.dashboard = dashboard
             self.set_class(dashboard, "dashboard")
