@@ -32,24 +32,54 @@ PART = " · "  # what separates the parts of a line of figures: where a line may
 INDENT = "  "  # a line's continuation, when it was broken to fit
 
 
+def _breaks(plain: str, start: int) -> tuple[list[tuple[int, int]], list[tuple[int, int]]]:
+    """Where a line may break after ``start``, as (end of this row, start of the next): between its parts
+    (``PART``), and after a comma outside brackets (never inside an interval like ``[0.000, 0.590]``)."""
+    parts = [(i, i + len(PART)) for i in range(start + 1, len(plain)) if plain.startswith(PART, i)]
+    commas, depth = [], 0
+    for i, ch in enumerate(plain):
+        depth += (ch in "[(") - (ch in "])")
+        if i > start and depth == 0 and plain.startswith(", ", i):
+            commas.append((i + 1, i + 2))
+    return parts, commas
+
+
 def fit_lines(text: Text, width: int) -> Text:
-    """``text`` with each line wider than ``width`` broken where a part ends (``PART``), never inside one:
-    a figure stays beside its label. A part wider than ``width`` on its own is left to wrap."""
+    """``text`` with each line wider than ``width`` broken where a part ends (``PART``), else after a
+    comma, never inside a part: a figure stays beside its label. A part wider than ``width`` on its own
+    is left to wrap. The rows after the first of a line are indented."""
     if width <= 0:
         return text
     out: list[Text] = []
     for line in text.split("\n"):
         plain, start, room = line.plain, 0, width
         while cell_len(plain[start:]) > room:
-            ends = [i for i in range(start + 1, len(plain)) if plain.startswith(PART, i)]
-            fits = [i for i in ends if cell_len(plain[start:i]) <= room]
-            if not ends:
+            parts, commas = _breaks(plain, start)
+            fit = [b for b in parts if cell_len(plain[start : b[0]]) <= room] or [
+                b for b in commas if cell_len(plain[start : b[0]]) <= room
+            ]
+            if fit:
+                end, after = fit[-1]
+            elif parts or commas:
+                end, after = (parts or commas)[0]
+            else:
                 break
-            end = fits[-1] if fits else ends[0]
             out.append(Text(INDENT) + line[start:end] if start else line[start:end])
-            start, room = end + len(PART), width - len(INDENT)
+            start, room = after, width - len(INDENT)
         out.append(Text(INDENT) + line[start:] if start else line[start:])
     return Text("\n").join(out)
+
+
+def fitted(widget: Widget, text: Text) -> Text:
+    """``text`` fitted to ``widget``'s width; when that takes another number of rows than the last time,
+    a new layout (a ``height: auto`` widget is sized when laid out, not when its figures change: a line
+    that came with the first round trip was otherwise cut until the next resize)."""
+    text = fit_lines(text, widget.content_size.width)
+    rows = text.plain.count("\n") + 1
+    if rows != getattr(widget, "_fit_rows", rows):
+        widget.refresh(layout=True)
+    widget._fit_rows = rows  # type: ignore[attr-defined]
+    return text
 
 
 class Bound(Widget):
@@ -247,7 +277,7 @@ class TrackerLine(Bound):
                 state.append(f" · {v.rejected} rejected", "bold yellow")
             if v.stats_error:
                 state.append(f" · its stats block is malformed ({v.stats_error})", "bold yellow")
-        return fit_lines(state, self.content_size.width) if self.has_class(FIT) else state
+        return fitted(self, state) if self.has_class(FIT) else state
 
 
 class TrackerCards(Bound):
@@ -283,7 +313,7 @@ class ClientLine(Bound):
 
     def draw(self) -> Text:
         out = self.draw_lines()
-        return fit_lines(out, self.content_size.width) if self.has_class(FIT) else out
+        return fitted(self, out) if self.has_class(FIT) else out
 
     def draw_lines(self) -> Text:
         v = self.view

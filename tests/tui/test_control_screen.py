@@ -195,6 +195,28 @@ async def test_every_figure_of_the_dashboard_reads_whole_at_160x45_and_200x60():
     assert small["traj"] == small["hist"] == 0 and big["traj"] == big["err"] and big["hist"] == big["lat"]
 
 
+async def test_the_dashboard_latency_lines_take_as_many_rows_as_they_have_whenever_they_change():
+    """The client line is sized to its lines when they change, not only when the terminal is resized: the
+    link going down leaves two rows, coming back shows every figure again, the clock line included."""
+    link = RecordingLink()
+    app = still_app(link=link)
+    async with app.run_test(size=(160, 45)) as pilot:
+        assert await until(pilot, lambda: bool(app.screen.query(ClientLine)))
+        client = app.screen.query_one(ClientLine)
+
+        def clock_shown() -> bool:
+            return any(line.strip().startswith("clock ") for line in shown_lines(client))
+
+        assert await until(pilot, clock_shown)
+        rows = client.region.height
+        link._state = RECONNECTING
+        app.publish_views(force=True)
+        assert await until(pilot, lambda: client.region.height == 2), shown_lines(client)
+        link._state = CONNECTED
+        app.publish_views(force=True)
+        assert await until(pilot, lambda: client.region.height == rows and clock_shown()), shown_lines(client)
+
+
 def test_a_line_of_figures_breaks_between_its_parts_never_inside_one():
     from rich.text import Text
 
@@ -207,6 +229,13 @@ def test_a_line_of_figures_breaks_between_its_parts_never_inside_one():
     assert fitted.spans[0].end == len("this console") and fitted.spans[0].style == "bold"  # styles kept
     assert fit_lines(line, 200).plain == line.plain  # what fits is left alone
     assert fit_lines(Text("one long part · b"), 5).plain == "one long part\n  b"  # too wide alone: wraps
+    sync = Text("time sync: this host adjtimex NOT synchronised, robot host chrony ±0.1 ms [0.0, 0.2]")
+    assert (
+        fit_lines(sync, 50).plain
+        == "time sync: this host adjtimex NOT synchronised,\n  robot host chrony ±0.1 ms [0.0, 0.2]"
+    )
+    intervals = Text("p50 [0.000, 0.590] p95 [0.019, 0.690]")
+    assert fit_lines(intervals, 20).plain == intervals.plain  # never inside [ ]: left to wrap
 
 
 async def test_the_dashboard_comes_and_goes_with_the_terminal_size():
