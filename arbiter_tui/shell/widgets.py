@@ -34,34 +34,35 @@ INDENT = "  "  # a line's continuation, when it was broken to fit
 
 def _breaks(plain: str, start: int) -> tuple[list[tuple[int, int]], list[tuple[int, int]]]:
     """Where a line may break after ``start``, as (end of this row, start of the next): between its parts
-    (``PART``), and after a comma outside brackets (never inside an interval like ``[0.000, 0.590]``)."""
+    (``PART``); else after a comma or a closing bracket outside brackets (never inside an interval like
+    ``[0.000, 0.590]``)."""
     parts = [(i, i + len(PART)) for i in range(start + 1, len(plain)) if plain.startswith(PART, i)]
-    commas, depth = [], 0
+    others, depth = [], 0
     for i, ch in enumerate(plain):
-        depth += (ch in "[(") - (ch in "])")
-        if i > start and depth == 0 and plain.startswith(", ", i):
-            commas.append((i + 1, i + 2))
-    return parts, commas
+        depth = max(0, depth + (ch in "[(") - (ch in "])"))
+        if i > start and depth == 0 and ch in ",])" and plain.startswith(" ", i + 1):
+            others.append((i + 1, i + 2))
+    return parts, others
 
 
 def fit_lines(text: Text, width: int) -> Text:
     """``text`` with each line wider than ``width`` broken where a part ends (``PART``), else after a
-    comma, never inside a part: a figure stays beside its label. A part wider than ``width`` on its own
-    is left to wrap. The rows after the first of a line are indented."""
+    comma or an interval: a figure stays beside its label. A part wider than ``width`` on its own is
+    left to wrap. The rows after the first of a line are indented."""
     if width <= 0:
         return text
     out: list[Text] = []
     for line in text.split("\n"):
         plain, start, room = line.plain, 0, width
         while cell_len(plain[start:]) > room:
-            parts, commas = _breaks(plain, start)
+            parts, others = _breaks(plain, start)
             fit = [b for b in parts if cell_len(plain[start : b[0]]) <= room] or [
-                b for b in commas if cell_len(plain[start : b[0]]) <= room
+                b for b in others if cell_len(plain[start : b[0]]) <= room
             ]
             if fit:
                 end, after = fit[-1]
-            elif parts or commas:
-                end, after = (parts or commas)[0]
+            elif parts or others:
+                end, after = (parts or others)[0]
             else:
                 break
             out.append(Text(INDENT) + line[start:end] if start else line[start:end])

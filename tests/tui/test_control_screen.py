@@ -3,6 +3,8 @@ marked stale, and a large terminal shows the dashboard (control, comparison and 
 
 import time
 
+import pytest
+
 from arbiter_core.kinematics import Pose
 from arbiter_tui.analytics.labels import STAT_LABELS, format_stat
 from arbiter_tui.analytics.store import STATS_FIELDS
@@ -119,7 +121,7 @@ def shown_lines(widget) -> list[str]:
     """The widget's lines as the terminal shows them: wrapped at its width, cut at its height."""
     from textual.geometry import Region
 
-    return [strip.text.rstrip() for strip in widget.render_lines(Region(0, 0, *widget.size))]
+    return [strip.text.rstrip() for strip in widget.render_lines(Region(0, 0, *widget.outer_size))]
 
 
 PANES = (("drive", "#drive"), ("err", ErrorPlot), ("lat", LatencyPlot), ("traj", TrajectoryPlot),
@@ -195,9 +197,53 @@ async def test_every_figure_of_the_dashboard_reads_whole_at_160x45_and_200x60():
     assert small["traj"] == small["hist"] == 0 and big["traj"] == big["err"] and big["hist"] == big["lat"]
 
 
+def every_controller_on_every_mission():
+    """A store of one run of each controller on each mission (the widest names, the most rows)."""
+    from dataclasses import replace
+
+    from arbiter_tui.analytics.runs import ABORTED, COMPLETED
+    from arbiter_tui.analytics.store import AnalyticsStore
+    from arbiter_tui.analytics.tracking import reference_path
+    from arbiter_tui.session.compare import AUTONOMOUS, run_one
+
+    store = AnalyticsStore(max_data_points=2000)
+    store.start_collection()
+    t0 = 1_800_000_000_000.0
+    for mission in MISSIONS:
+        for algorithm in AUTONOMOUS:
+            result = run_one(algorithm, mission)
+            points = result.points
+            path = reference_path((0.0, 0.0), MISSIONS[mission])
+            run = store.begin_run(algorithm, mission, t0 + points[0].timestamp - 100, path)
+            for p in points[::5]:
+                store.record(replace(p, timestamp=t0 + p.timestamp, runId=run))
+            outcome = COMPLETED if result.completed else ABORTED
+            store.end_run(outcome, t0 + points[-1].timestamp, result.final_error_m)
+            t0 += points[-1].timestamp + 1000
+    store.stop_collection()
+    return store
+
+
+@pytest.mark.parametrize("size", [(160, 45), (200, 60)], ids=["160x45", "200x60"])
+async def test_the_dashboard_table_keeps_every_column_with_every_controller_on_every_mission(size):
+    """The longest controller name in the table: still no column cut; the rows beyond its share of the
+    height scroll, the plots below keep their rows."""
+    app = still_app(store=every_controller_on_every_mission())
+    async with app.run_test(size=size) as pilot:
+        screen = app.screen
+        assert await until(pilot, lambda: bool(screen.query(CompareTable)))
+        table = screen.query_one(CompareTable)
+        assert await until(pilot, lambda: table.row_count > 20)
+        await pilot.pause()
+        assert any("regulated_pure_pursuit" in cell for row in table.table.rows for cell in row)
+        assert table.max_scroll_x == 0, (table.virtual_size, table.scrollable_content_region)
+        assert screen.query_one(ErrorPlot).region.height >= 6
+
+
 async def test_the_dashboard_latency_lines_take_as_many_rows_as_they_have_whenever_they_change():
     """The client line is sized to its lines when they change, not only when the terminal is resized: the
-    link going down leaves two rows, coming back shows every figure again, the clock line included."""
+    link going down leaves the rows of its one line, coming back shows every figure again, the clock line
+    included."""
     link = RecordingLink()
     app = still_app(link=link)
     async with app.run_test(size=(160, 45)) as pilot:
@@ -211,7 +257,19 @@ async def test_the_dashboard_latency_lines_take_as_many_rows_as_they_have_whenev
         rows = client.region.height
         link._state = RECONNECTING
         app.publish_views(force=True)
-        assert await until(pilot, lambda: client.region.height == 2), shown_lines(client)
+        down = [
+            "this console",
+            "ROSBRIDGE LINK RECONNECTING: no commands, no round trips",
+            "sent 20",
+            "lost 0",
+        ]
+
+        def down_shown() -> bool:  # every row of the link-down line, and no blank row under it
+            lines = [line.strip() for line in shown_lines(client)]
+            return all(part in " ".join(lines) for part in down) and all(lines)
+
+        assert await until(pilot, down_shown), shown_lines(client)
+        assert client.region.height < rows
         link._state = CONNECTED
         app.publish_views(force=True)
         assert await until(pilot, lambda: client.region.height == rows and clock_shown()), shown_lines(client)
@@ -235,7 +293,7 @@ def test_a_line_of_figures_breaks_between_its_parts_never_inside_one():
         == "time sync: this host adjtimex NOT synchronised,\n  robot host chrony ±0.1 ms [0.0, 0.2]"
     )
     intervals = Text("p50 [0.000, 0.590] p95 [0.019, 0.690]")
-    assert fit_lines(intervals, 20).plain == intervals.plain  # never inside [ ]: left to wrap
+    assert fit_lines(intervals, 20).plain == "p50 [0.000, 0.590]\n  p95 [0.019, 0.690]"  # never inside [ ]
 
 
 async def test_the_dashboard_comes_and_goes_with_the_terminal_size():
