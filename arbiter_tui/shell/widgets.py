@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from typing import Generic, TypeVar
 
+from rich.cells import cell_len
 from rich.text import Text
 from textual.reactive import reactive
 from textual.widget import Widget
@@ -28,6 +29,60 @@ LINK_DOWN = (  # two lines of the 36 columns inside the panel: the rows below st
 )
 STALE = "*"  # marks a value that is the last received, not live
 KEY_HELP = legend_compact()
+FIT = "fit"  # the dashboard's class for a widget that lays its figures out to its width, never wrapping one
+PART = " · "  # what separates the parts of a line of figures: where a line may break
+INDENT = "  "  # a line's continuation, when it was broken to fit
+
+
+def _breaks(plain: str, start: int) -> tuple[list[tuple[int, int]], list[tuple[int, int]]]:
+    """Where a line may break after ``start``, as (end of this row, start of the next): between its parts
+    (``PART``); else after a comma or a closing bracket outside brackets (never inside an interval like
+    ``[0.000, 0.590]``)."""
+    parts = [(i, i + len(PART)) for i in range(start + 1, len(plain)) if plain.startswith(PART, i)]
+    others, depth = [], 0
+    for i, ch in enumerate(plain):
+        depth = max(0, depth + (ch in "[(") - (ch in "])"))
+        if i > start and depth == 0 and ch in ",])" and plain.startswith(" ", i + 1):
+            others.append((i + 1, i + 2))
+    return parts, others
+
+
+def fit_lines(text: Text, width: int) -> Text:
+    """``text`` with each line wider than ``width`` broken where a part ends (``PART``), else after a
+    comma or an interval: a figure stays beside its label. A part wider than ``width`` on its own is
+    left to wrap. The rows after the first of a line are indented."""
+    if width <= 0:
+        return text
+    out: list[Text] = []
+    for line in text.split("\n"):
+        plain, start, room = line.plain, 0, width
+        while cell_len(plain[start:]) > room:
+            parts, others = _breaks(plain, start)
+            fit = [b for b in parts if cell_len(plain[start : b[0]]) <= room] or [
+                b for b in others if cell_len(plain[start : b[0]]) <= room
+            ]
+            if fit:
+                end, after = fit[-1]
+            elif parts or others:
+                end, after = (parts or others)[0]
+            else:
+                break
+            out.append(Text(INDENT) + line[start:end] if start else line[start:end])
+            start, room = after, width - len(INDENT)
+        out.append(Text(INDENT) + line[start:] if start else line[start:])
+    return Text("\n").join(out)
+
+
+def fitted(widget: Widget, text: Text) -> Text:
+    """``text`` fitted to ``widget``'s width; when that takes another number of rows than the last time,
+    a new layout (a ``height: auto`` widget is sized when laid out, not when its figures change: a line
+    that came with the first round trip was otherwise cut until the next resize)."""
+    text = fit_lines(text, widget.content_size.width)
+    rows = text.plain.count("\n") + 1
+    if rows != getattr(widget, "_fit_rows", rows):
+        widget.refresh(layout=True)
+    widget._fit_rows = rows  # type: ignore[attr-defined]
+    return text
 
 
 V = TypeVar("V")
@@ -118,18 +173,43 @@ class RobotPanel(Bound[RobotView]):
 
 
 class StatsCards(Bound[AnalyticsView]):
+    VALUE = 11  # the fitted cards' value column at least: "0.341 rad/s"
     view: reactive[AnalyticsView] = reactive(AnalyticsView)
 
     def pick(self, frame: Frame) -> AnalyticsView:
         return frame.analytics
 
     def draw(self) -> Text:
+        if self.has_class(FIT):
+            return self.draw_fitted()
         stats = self.view.stats
         t = Text()
         for i, name in enumerate(STATS_FIELDS):
             t.append(f"{STAT_LABELS[name].short:>10} ", "bold")
             t.append(f"{format_stat(name, getattr(stats, name)):<16}")
             if i % 3 == 2 and i < len(STATS_FIELDS) - 1:
+                t.append("\n")
+        return t
+
+    def draw_fitted(self) -> Text:
+        """The dashboard's cards: as many to a row as fit the width (rows balanced), each label on the row
+        of its value, columns as wide as the longest label and value need (values: at least ``VALUE``, so
+        the cards do not move as the figures grow)."""
+        stats = self.view.stats
+        cards = [(STAT_LABELS[n].short, format_stat(n, getattr(stats, n))) for n in STATS_FIELDS]
+        label = max(cell_len(k) for k, _v in cards)
+        value = max(self.VALUE, *(cell_len(v) for _k, v in cards))
+        card = label + 1 + value + 2
+        width = self.content_size.width or 3 * card
+        per_row = max(1, min(len(cards), (width + 2) // card))
+        rows = -(-len(cards) // per_row)
+        per_row = -(-len(cards) // rows)
+        t = Text()
+        for i, (k, v) in enumerate(cards):
+            t.append(f"{k:>{label}} ", "bold")
+            last = i % per_row == per_row - 1 or i == len(cards) - 1
+            t.append(v if last else f"{v:<{value + 2}}")
+            if last and i < len(cards) - 1:
                 t.append("\n")
         return t
 
@@ -211,7 +291,7 @@ class TrackerLine(Bound[LatencySnapshot]):
                 state.append(f" · {v.rejected} rejected", "bold yellow")
             if v.stats_error:
                 state.append(f" · its stats block is malformed ({v.stats_error})", "bold yellow")
-        return state
+        return fitted(self, state) if self.has_class(FIT) else state
 
 
 class TrackerCards(Bound[LatencySnapshot]):
@@ -250,6 +330,10 @@ class ClientLine(Bound[LatencySnapshot]):
         self.display = not view.simulated
 
     def draw(self) -> Text:
+        out = self.draw_lines()
+        return fitted(self, out) if self.has_class(FIT) else out
+
+    def draw_lines(self) -> Text:
         v = self.view
         out = Text()
         if v.simulated:

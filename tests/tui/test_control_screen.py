@@ -3,13 +3,25 @@ marked stale, and a large terminal shows the dashboard (control, comparison and 
 
 import time
 
+import pytest
+
 from arbiter_core.kinematics import Pose
+from arbiter_tui.analytics.labels import STAT_LABELS, format_stat
+from arbiter_tui.analytics.store import STATS_FIELDS
 from arbiter_tui.control.algorithms import MISSIONS
 from arbiter_tui.link.base import CONNECTED, RECONNECTING
-from arbiter_tui.shell.plots import LatencyPlot, LiveMap
+from arbiter_tui.shell.plots import ErrorPlot, LatencyHistogram, LatencyPlot, LiveMap, TrajectoryPlot
 from arbiter_tui.shell.screens.analytics import CompareTable
 from arbiter_tui.shell.screens.control import ControlScreen
-from arbiter_tui.shell.widgets import RobotPanel, TrackerCards
+from arbiter_tui.shell.widgets import (
+    CARDS,
+    ClientLine,
+    RobotPanel,
+    StatsCards,
+    TrackerCards,
+    TrackerLine,
+    fmt_ms,
+)
 
 from ..support.tui import RecordingLink, still_app, until
 
@@ -105,6 +117,185 @@ async def test_a_large_terminal_shows_the_dashboard_and_the_arrows_still_drive()
     async with small.run_test(size=(159, 45)) as pilot:
         await pilot.pause()
         assert not small.screen.dashboard and not small.screen.query("#dash")  # not even made
+
+
+def shown_lines(widget) -> list[str]:
+    """The widget's lines as the terminal shows them: wrapped at its width, cut at its height."""
+    from textual.geometry import Region
+
+    return [strip.text.rstrip() for strip in widget.render_lines(Region(0, 0, *widget.outer_size))]
+
+
+PANES = (("drive", "#drive"), ("err", ErrorPlot), ("lat", LatencyPlot), ("traj", TrajectoryPlot),
+         ("hist", LatencyHistogram))  # fmt: skip
+
+
+async def dashboard_at(size: tuple[int, int]) -> dict[str, object]:
+    """What the dashboard shows at ``size``: each figure's line, and the regions of its parts."""
+    app = still_app()
+    async with app.run_test(size=size) as pilot:
+        screen = app.screen
+
+        def ready() -> bool:
+            tables, plots = screen.query(CompareTable), screen.query(LatencyPlot)
+            return bool(tables and tables.first().row_count and plots and plots.first().draws)
+
+        assert await until(pilot, ready)
+        await pilot.pause()
+        table = screen.query_one(CompareTable)
+        live_map = screen.query_one(LiveMap)
+        x_axis, y_axis = live_map._axes(app.frame.map)
+        xs, ys = zip(*app.session.loop.trail, (0.0, 0.0), app.frame.map.pose[:2], strict=False)
+        return {
+            "cards": shown_lines(screen.query_one(StatsCards)),
+            "stats": app.frame.analytics.stats,
+            "latency": [
+                line
+                for kind in (TrackerLine, TrackerCards, ClientLine)
+                for line in shown_lines(screen.query_one(kind))
+            ],
+            "summary": app.frame.latency.summary,
+            "offset": app.frame.latency.meter.offset,
+            "table": (table.max_scroll_x, table.max_scroll_y, len(table.columns), len(table.table.headers)),
+            "table_inside": screen.query_one("#dash-compare").region.contains_region(table.region),
+            # how much of the map's axes the drawn things span, across and up (1: all of it)
+            "map_fill": (
+                (max(xs) - min(xs)) / (x_axis.hi - x_axis.lo),
+                (max(ys) - min(ys)) / (y_axis.hi - y_axis.lo),
+            ),
+            "heights": {
+                name: max((w.region.height for w in screen.query(kind)), default=0) for name, kind in PANES
+            },
+        }
+
+
+async def test_every_figure_of_the_dashboard_reads_whole_at_160x45_and_200x60():
+    """At both sizes every card's label sits on the row of its value, the latency pane keeps its
+    max / p95 / stddev row and the clock-offset line, the comparison table shows every column and row
+    (nothing to scroll to), and the map spans its drawing rather than blank metres. At 200x60 the extra
+    rows go to the plots (a trajectory and a histogram join them); the control panel's rows stay."""
+    shown = {size: await dashboard_at(size) for size in ((160, 45), (200, 60))}
+    for size, d in shown.items():
+        for name in STATS_FIELDS:
+            card = f"{STAT_LABELS[name].short} {format_stat(name, getattr(d['stats'], name))}"
+            assert any(card in line for line in d["cards"]), (size, card, d["cards"])
+        summary = d["summary"]
+        for key, label in CARDS:
+            value = getattr(summary, key.removesuffix("_ms"))
+            card = f"{label} {value if key == 'count' else fmt_ms(value)}"
+            assert any(card in line for line in d["latency"]), (size, card, d["latency"])
+        row = [line for line in d["latency"] if "max " in line]
+        assert len(row) == 1 and "p95 " in row[0] and "stddev " in row[0], (size, d["latency"])
+        clock = f"clock {d['offset'].offset_ms:+.1f} ms ± {d['offset'].uncertainty_ms:.1f} ms"
+        assert any(line.strip().startswith(clock) for line in d["latency"]), (size, d["latency"])
+        assert any("CLOCK OFFSET" in line for line in d["latency"]), (size, d["latency"])
+        assert any("raw one-way p50 12.220 ms" in line for line in d["latency"]), (size, d["latency"])
+        scroll_x, scroll_y, columns, headers = d["table"]
+        assert (scroll_x, scroll_y) == (0, 0) and columns == headers and d["table_inside"], (size, d["table"])
+        assert min(d["map_fill"]) >= 0.5, (size, d["map_fill"])
+    small, big = shown[(160, 45)]["heights"], shown[(200, 60)]["heights"]
+    assert small["drive"] == big["drive"]
+    assert big["lat"] - small["lat"] >= 14 and big["err"] - small["err"] >= 14, (small, big)
+    assert small["traj"] == small["hist"] == 0 and big["traj"] == big["err"] and big["hist"] == big["lat"]
+
+
+def every_controller_on_every_mission():
+    """A store of one run of each controller on each mission (the widest names, the most rows)."""
+    from dataclasses import replace
+
+    from arbiter_tui.analytics.runs import ABORTED, COMPLETED
+    from arbiter_tui.analytics.store import AnalyticsStore
+    from arbiter_tui.analytics.tracking import reference_path
+    from arbiter_tui.session.compare import AUTONOMOUS, run_one
+
+    store = AnalyticsStore(max_data_points=2000)
+    store.start_collection()
+    t0 = 1_800_000_000_000.0
+    for mission in MISSIONS:
+        for algorithm in AUTONOMOUS:
+            result = run_one(algorithm, mission)
+            points = result.points
+            path = reference_path((0.0, 0.0), MISSIONS[mission])
+            run = store.begin_run(algorithm, mission, t0 + points[0].timestamp - 100, path)
+            for p in points[::5]:
+                store.record(replace(p, timestamp=t0 + p.timestamp, runId=run))
+            outcome = COMPLETED if result.completed else ABORTED
+            store.end_run(outcome, t0 + points[-1].timestamp, result.final_error_m)
+            t0 += points[-1].timestamp + 1000
+    store.stop_collection()
+    return store
+
+
+@pytest.mark.parametrize("size", [(160, 45), (200, 60)], ids=["160x45", "200x60"])
+async def test_the_dashboard_table_keeps_every_column_with_every_controller_on_every_mission(size):
+    """The longest controller name in the table: still no column cut; the rows beyond its share of the
+    height scroll, the plots below keep their rows."""
+    app = still_app(store=every_controller_on_every_mission())
+    async with app.run_test(size=size) as pilot:
+        screen = app.screen
+        assert await until(pilot, lambda: bool(screen.query(CompareTable)))
+        table = screen.query_one(CompareTable)
+        assert await until(pilot, lambda: table.row_count > 20)
+        await pilot.pause()
+        assert any("regulated_pure_pursuit" in cell for row in table.table.rows for cell in row)
+        assert table.max_scroll_x == 0, (table.virtual_size, table.scrollable_content_region)
+        assert screen.query_one(ErrorPlot).region.height >= 6
+
+
+async def test_the_dashboard_latency_lines_take_as_many_rows_as_they_have_whenever_they_change():
+    """The client line is sized to its lines when they change, not only when the terminal is resized: the
+    link going down leaves the rows of its one line, coming back shows every figure again, the clock line
+    included."""
+    link = RecordingLink()
+    app = still_app(link=link)
+    async with app.run_test(size=(160, 45)) as pilot:
+        assert await until(pilot, lambda: bool(app.screen.query(ClientLine)))
+        client = app.screen.query_one(ClientLine)
+
+        def clock_shown() -> bool:
+            return any(line.strip().startswith("clock ") for line in shown_lines(client))
+
+        assert await until(pilot, clock_shown)
+        rows = client.region.height
+        link._state = RECONNECTING
+        app.refresh_frame(force=True)
+        down = [
+            "this console",
+            "ROSBRIDGE LINK RECONNECTING: no commands, no round trips",
+            "sent 20",
+            "lost 0",
+        ]
+
+        def down_shown() -> bool:  # every row of the link-down line, and no blank row under it
+            lines = [line.strip() for line in shown_lines(client)]
+            return all(part in " ".join(lines) for part in down) and all(lines)
+
+        assert await until(pilot, down_shown), shown_lines(client)
+        assert client.region.height < rows
+        link._state = CONNECTED
+        app.refresh_frame(force=True)
+        assert await until(pilot, lambda: client.region.height == rows and clock_shown()), shown_lines(client)
+
+
+def test_a_line_of_figures_breaks_between_its_parts_never_inside_one():
+    from rich.text import Text
+
+    from arbiter_tui.shell.widgets import fit_lines
+
+    line = Text.assemble(("this console", "bold"), " · rtt p50 0.600 ms · jitter 0.032 ms\nclock +1.0 ms")
+    fitted = fit_lines(line, 31)
+    lines = ["this console · rtt p50 0.600 ms", "  jitter 0.032 ms", "clock +1.0 ms"]
+    assert fitted.plain.split("\n") == lines
+    assert fitted.spans[0].end == len("this console") and fitted.spans[0].style == "bold"  # styles kept
+    assert fit_lines(line, 200).plain == line.plain  # what fits is left alone
+    assert fit_lines(Text("one long part · b"), 5).plain == "one long part\n  b"  # too wide alone: wraps
+    sync = Text("time sync: this host adjtimex NOT synchronised, robot host chrony ±0.1 ms [0.0, 0.2]")
+    assert (
+        fit_lines(sync, 50).plain
+        == "time sync: this host adjtimex NOT synchronised,\n  robot host chrony ±0.1 ms [0.0, 0.2]"
+    )
+    intervals = Text("p50 [0.000, 0.590] p95 [0.019, 0.690]")
+    assert fit_lines(intervals, 20).plain == "p50 [0.000, 0.590]\n  p95 [0.019, 0.690]"  # never inside [ ]
 
 
 async def test_the_dashboard_comes_and_goes_with_the_terminal_size():

@@ -99,22 +99,28 @@ def test_the_map_with_a_mission_selected(snap_compare):
     assert snap_compare(still_app(), terminal_size=(100, 30), press=["a"])
 
 
-def test_dashboard(snap_compare):
-    """200x60: control panel and map, the live comparison, the latency figures and plot, and the topics
-    table (slow, silent and quiet rows marked) at once."""
+DASHBOARD_SIZES = [(160, 45), (200, 60)]
+
+
+@pytest.mark.parametrize("size", DASHBOARD_SIZES, ids=["160x45", "200x60"])
+def test_dashboard(snap_compare, size):
+    """The control panel, the map (its drawing, not blank metres) and the topics table (slow, silent and
+    quiet rows marked) on top; below, the live comparison beside the link's latency, every figure whole,
+    and their plots. At 200x60 the extra rows are the plots', and a trajectory and a histogram join them."""
     from dataclasses import replace
 
     from .test_topics_screen import QUIET, STATE
 
     app = still_app()
     app.sampler.topics_polled(replace(STATE, topics=(*STATE.topics, QUIET)))
-    assert snap_compare(app, terminal_size=(200, 60))
+    assert snap_compare(app, terminal_size=size)
 
 
 def test_dashboard_with_the_link_down(snap_compare):
-    """Stale pose and odometry marked, the banner short, the latency pane saying the link is down."""
+    """Stale pose and odometry marked, the banner short, the latency pane saying the link is down: at the
+    smallest dashboard, where the banner must still leave every row of the panel in view."""
     app = still_app(link=RecordingLink(state=RECONNECTING))
-    assert snap_compare(app, terminal_size=(200, 60))
+    assert snap_compare(app, terminal_size=(160, 45))
 
 
 def test_analytics_marks_the_measured_latency_on_the_error_vs_latency_curve(snap_compare):

@@ -1,7 +1,7 @@
 """Control screen: keyboard teleop, algorithm and mission selection, goals (t, or a click on the map),
 pose/errors and the live map. On a terminal of at least 160x45 it is the dashboard: the same control
-panel and map, with the live comparison and the link's latency below them, as the seed's web dashboard
-shows its performance cards beside control."""
+panel and map (and the topics table beside them), with the live comparison and the link's latency below,
+as the seed's web dashboard shows its performance cards beside control."""
 
 from __future__ import annotations
 
@@ -15,13 +15,14 @@ from ...control.algorithms import ALGORITHMS
 from ...control.teleop import key_name
 from .. import dialogs
 from ..heap import FREEZE_AFTER_S, freeze_heap
-from ..plots import ErrorPlot, LatencyPlot, LiveMap
-from ..widgets import KEY_HELP, ClientLine, RobotPanel, StatsCards, TrackerCards, TrackerLine
+from ..plots import ErrorPlot, LatencyHistogram, LatencyPlot, LiveMap, TrajectoryPlot
+from ..widgets import FIT, KEY_HELP, ClientLine, RobotPanel, StatsCards, TrackerCards, TrackerLine
 from .analytics import CompareTable, RuleLine
 from .base import BaseScreen
 from .topics import TopicsPane
 
 DASHBOARD_WIDTH, DASHBOARD_HEIGHT = 160, 45
+WIDE_WIDTH = 180  # the dashboard shows the trajectory and the latency histogram from this width on
 
 
 class ControlScreen(BaseScreen):
@@ -44,34 +45,47 @@ class ControlScreen(BaseScreen):
             yield LiveMap("map (m)", id="map").data_bind(BaseScreen.frame)
 
     @staticmethod
-    def dashboard_panes() -> Horizontal:
-        """What the dashboard adds below the panel and the map: the same widgets as screens 2, 3 and 4,
-        each bound to this screen's frame (called from the screen's own handler)."""
+    def dashboard_panes() -> tuple[TopicsPane, Horizontal]:
+        """What the dashboard adds: the topics table beside the panel and the map, and below them the same
+        widgets as screens 2 and 3, their figures laid out to their width (``FIT``) and their plots taking
+        the rows left (two plots each from ``WIDE_WIDTH`` columns on). Each is bound to this screen's
+        frame (called from the screen's own handler)."""
         frame = BaseScreen.frame
         table = CompareTable(id="dash-table", show_cursor=False, zebra_stripes=True).data_bind(frame)
         table.can_focus = False  # the arrow keys drive here: they must never scroll a table
         compare = Vertical(
-            StatsCards(id="dash-cards").data_bind(frame),
+            StatsCards(id="dash-cards", classes=FIT).data_bind(frame),
             table,
             RuleLine(id="dash-rule").data_bind(frame),
-            ErrorPlot("e_d (m) vs time (s)", id="dash-err").data_bind(frame),
+            Horizontal(
+                ErrorPlot("e_d (m) vs time (s)", id="dash-err").data_bind(frame),
+                TrajectoryPlot("trajectory (m)", id="dash-traj").data_bind(frame),
+                id="dash-compare-plots",
+            ),
             id="dash-compare",
         )
         latency = Vertical(
-            TrackerLine(id="dash-lat-state").data_bind(frame),
+            TrackerLine(id="dash-lat-state", classes=FIT).data_bind(frame),
             TrackerCards(id="dash-lat-cards").data_bind(frame),
-            ClientLine(id="dash-lat-client").data_bind(frame),
-            LatencyPlot("one-way (ms) vs time (s)", id="dash-lat-plot").data_bind(frame),
+            ClientLine(id="dash-lat-client", classes=FIT).data_bind(frame),
+            Horizontal(
+                LatencyPlot("one-way (ms) vs time (s)", id="dash-lat-plot").data_bind(frame),
+                LatencyHistogram("one-way (ms) histogram", id="dash-lat-hist").data_bind(frame),
+                id="dash-lat-plots",
+            ),
             id="dash-latency",
         )
-        return Horizontal(compare, latency, TopicsPane(id="dash-topics").data_bind(frame), id="dash")
+        return TopicsPane(id="dash-topics").data_bind(frame), Horizontal(compare, latency, id="dash")
 
     def on_resize(self, event: events.Resize) -> None:
         # (Textual calls BaseScreen.on_resize too, after this: handlers run for each class)
         dashboard = event.size.width >= DASHBOARD_WIDTH and event.size.height >= DASHBOARD_HEIGHT
         if dashboard and not self.query("#dash"):
             # made the first time it is needed: a small terminal does not pay for it at start
-            self.query_one("#body").mount(self.dashboard_panes())
+            topics, panes = self.dashboard_panes()
+            self.query_one("#drive").mount(topics)
+            self.query_one("#body").mount(panes)
+        self.set_class(dashboard and event.size.width >= WIDE_WIDTH, "dash-wide")
         if dashboard != self.dashboard:
             self.dashboard = dashboard
             self.set_class(dashboard, "dashboard")
