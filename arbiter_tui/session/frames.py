@@ -111,14 +111,15 @@ class FrameSampler:
         self.frame = Frame()
         self.tracker: TrackerClient | None = None  # the tracker the pollers ask (None: none yet)
         self.start_error: str | None = None
-        self._analytics_at = float("-inf")
-        self._latency_at = float("-inf")
+        self._slow_at = {ANALYTICS: float("-inf"), LATENCY: float("-inf"), TOPICS: float("-inf")}
         self._count_at = float("-inf")
+        self._topics: TopicsState | None = None  # the last topics answer, for the next slow frame
         self._sweep_version = -1  # the store version the measured p95 is from
 
     # -- what the pollers and workers bring -----------------------------------------------------------
     def topics_polled(self, state: TopicsState) -> None:
-        self.frame = replace(self.frame, topics=replace(state, echo=self.session.echo.current))
+        """A topics answer: shown with the next frame that takes the slow parts."""
+        self._topics = state
 
     def sweep_changed(self, view: LinkSweepView) -> None:
         self.frame = replace(self.frame, link_sweep=view)
@@ -136,28 +137,41 @@ class FrameSampler:
     # -- one frame -----------------------------------------------------------------------------------------
     def sample(self, shown: Shown, force: bool = False) -> Frame:
         """The next frame: what ``shown`` shows, sampled now; ``force`` (a user action, a screen shown)
-        skips the rate gates."""
+        takes every part at once.
+
+        Fast parts (the robot panel, the map) change at every frame; each slow part (analytics, latency,
+        topics; the status line's sample count with any of them) at most ``analytics_rate`` times a
+        second, one slow part a frame, the one waiting longest. On the dashboard a frame with a slow part
+        leaves the fast ones as they were. Textual repaints every widget inside the box around all that
+        changed in a frame: parts far apart that change in one frame cost a whole-screen repaint, which
+        at 200x60 under a Pi-class quota took longer than a control period (bench/pi.py); one region a
+        frame costs that region."""
         s = self.session
         now = self.clock()
         f = self.frame
-        status = self._status(f.status, now, force)
+        period = 1.0 / self.settings.analytics_rate
+        due = [part for part, at in self._slow_at.items() if shown.shows(part) and now - at >= period]
+        slow = set(self._slow_at) if force else set(due and [min(due, key=self._slow_at.__getitem__)])
+        for part in slow:
+            self._slow_at[part] = now
+        status = self._status(f.status, now, bool(slow), force)
         robot, trail, analytics, latency, sweep = f.robot, f.map, f.analytics, f.latency, f.link_sweep
-        if shown.screen == CONTROL:
+        if shown.screen == CONTROL and (force or not (slow and shown.dashboard)):
             robot = robot_view(s.link, s.loop, s.too_small)
             trail = map_view(s.link, s.loop, f.map)
-        period = 1.0 / self.settings.analytics_rate
-        if shown.shows(ANALYTICS) and (force or now - self._analytics_at >= period):
-            self._analytics_at = now
+        if ANALYTICS in slow and shown.shows(ANALYTICS):
             analytics = analytics_view(s.store, f.analytics, s.loop)
             sweep = self._measured_p95(sweep)
-        if shown.shows(LATENCY) and (force or now - self._latency_at >= period):
-            # at the analytics rate too: the console's own figures change with every round trip, and a
-            # line repainted at the UI rate made every frame span the screen below it (bench/pi.py)
-            self._latency_at = now
+        if LATENCY in slow and shown.shows(LATENCY):
+            # not at the UI rate: the console's own figures change with every round trip, and a line
+            # repainted at the UI rate made every frame span the screen below it (bench/pi.py)
             latency = self.latency()
         topics = f.topics
-        if shown.shows(TOPICS) and topics.echo != s.echo.current:
-            topics = replace(topics, echo=s.echo.current)
+        if TOPICS in slow:
+            answer = self._topics if self._topics is not None else topics
+            self._topics = None
+            if answer is not topics or topics.echo != s.echo.current:
+                topics = replace(answer, echo=s.echo.current)
         self.frame = Frame(status, robot, trail, analytics, latency, topics, sweep)
         return self.frame
 
@@ -178,8 +192,9 @@ class FrameSampler:
             s.link, self.target(), s.loop, s.store, self.tracker_view(), simulated, self.start_error
         )
 
-    def _status(self, shown: StatusView, now: float, force: bool) -> StatusView:
-        """The status line; a change of the sample count alone shows at most every ``COUNT_PERIOD_S``.
+    def _status(self, shown: StatusView, now: float, slow: bool, force: bool) -> StatusView:
+        """The status line; a change of the sample count alone shows in a slow frame, at most every
+        ``COUNT_PERIOD_S`` (``force``: at once).
 
         While recording, the count changes with every sample (10 a second), and a status line repainted
         that often made every repaint span the whole screen: Textual renders every widget inside the box
@@ -187,10 +202,10 @@ class FrameSampler:
         200x60, bench/pi.py)."""
         status = self.status()
         if (
-            not force
-            and status != shown
+            status != shown
             and replace(status, points=shown.points) == shown
-            and now - self._count_at < COUNT_PERIOD_S
+            and not force
+            and (not slow or now - self._count_at < COUNT_PERIOD_S)
         ):
             return shown
         if status.points != shown.points:

@@ -82,7 +82,7 @@ async def test_filter_sort_and_select_with_the_keys_a_user_presses():
         assert "rate 4.30 Hz" in text and "usual 10.0 Hz" in text
         # a new answer without the selected topic: the selection moves to the first row
         app.sampler.topics_polled(TopicsState(polls=61, window_s=5.0, topics=TOPICS[:2]))
-        app.sample_frame()
+        app.refresh_frame(force=True)
         await pilot.pause()
         assert table.selected in {"/camera/image_raw", "/cmd_vel"}
         # teleop keys do nothing here, and 1 goes back to driving
