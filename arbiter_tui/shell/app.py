@@ -245,6 +245,7 @@ class ArbiterApp(App[None]):
         frame = self.sampler.sample(shown, force)
         for screen in stack:
             if isinstance(screen, BaseScreen):
+                screen.plot_draws = None if force else 1  # a tick's frame draws at most one plot
                 screen.frame = frame
         if shown.shows("analytics"):
             mission = self.sampler.sweep_wanted()

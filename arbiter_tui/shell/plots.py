@@ -109,15 +109,17 @@ class Plot(PlotWidget, Generic[V, K], can_focus=False):
 
     def watch_frame(self, frame: Frame) -> None:
         if self.is_mounted:
-            self._receive(self.pick(frame))
+            self._receive(self.pick(frame), budgeted=True)
 
-    def _receive(self, view: V) -> None:
+    def _receive(self, view: V, budgeted: bool = False) -> None:
         key = self.data_key(view)
         if key == self._key:
             return  # nothing this plot draws changed
         wait = self.follow_period(self._key, key) - (time.monotonic() - self._drawn_at)
         if wait > 0:  # drawn at the first frame after the period, with what is newest then
             return
+        if budgeted and not self._take_draw():
+            return  # another plot drew in this frame: this one in the next
         self._key = key
         self._drawn_at = time.monotonic()
         self.draws += 1
@@ -127,6 +129,18 @@ class Plot(PlotWidget, Generic[V, K], can_focus=False):
             # Draw onto the canvases now rather than in the next paint: textual-plot does it in render(),
             # during a frame, and the canvases it dirties then take a frame of their own.
             self.render()
+
+    def _take_draw(self) -> bool:
+        """One of the plot redraws this frame allows (the screen's ``plot_draws``), if one is left."""
+        from .screens.base import BaseScreen  # (the screens import the plots)
+
+        screen = self.screen
+        if not isinstance(screen, BaseScreen) or screen.plot_draws is None:
+            return True
+        if screen.plot_draws <= 0:
+            return False
+        screen.plot_draws -= 1
+        return True
 
     def follow_period(self, old: K | None, new: K) -> float:
         """How long after the last draw a change from ``old`` to ``new`` may wait (0: draw at once)."""

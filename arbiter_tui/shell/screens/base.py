@@ -53,6 +53,10 @@ class BaseScreen(Screen[None]):
     frame: reactive[Frame] = reactive(Frame, repaint=False, always_update=True)
     _console: Console | None = None
     _frozen = False  # its widgets, made on its first showing, are out of the collector's way
+    # plots this frame may still redraw (None: all): a plot redraw is the dearest paint, and several in
+    # one frame made it longer than a control period under a Pi-class quota; the others draw in the
+    # frames after (bench/pi.py)
+    plot_draws: int | None = None
 
     @property
     def console(self) -> Console:
