@@ -88,6 +88,7 @@ class TopicFigures:
     publisher_nodes: tuple[str, ...] = ()  # fully qualified node names, where the graph has them
     subscriber_nodes: tuple[str, ...] = ()
     rate_history: tuple[float | None, ...] = ()  # Hz once a second, oldest first (None: no rate then)
+    steady: bool = False  # its rhythm is steady now: if it stops, it is ``silent`` (else ``quiet``)
 
     def to_json(self) -> dict[str, Any]:
         return {k: list(v) if isinstance(v, tuple) else _finite(v) for k, v in self.__dict__.items()}
@@ -232,6 +233,7 @@ class TopicWindow:
             publisher_nodes=nodes[0],
             subscriber_nodes=nodes[1],
             rate_history=tuple(self.rate_history),
+            steady=self.rhythm.steady(),
         )
 
     def _usual(self, now: float, rate: float | None) -> float | None:
@@ -343,9 +345,10 @@ def _topic(obj: Any) -> TopicFigures:
     notes = {k: obj.get(k) if isinstance(obj.get(k), str) else None for k in ("qos_note", "note")}
     nodes = {k: _names(obj.get(k), name, k) for k in ("publisher_nodes", "subscriber_nodes")}
     stamped = obj.get("stamped") is True
+    steady = obj.get("steady") is True  # an older backend does not say: not known to be steady
     history = _history(obj.get("rate_history"), name)
     return TopicFigures(
-        name=name, type=type_name, state=state, stamped=stamped, rate_history=history,
+        name=name, type=type_name, state=state, stamped=stamped, steady=steady, rate_history=history,
         **values, **notes, **nodes,
     )  # fmt: skip
 
