@@ -163,6 +163,7 @@ class RosBus:
         self._local: dict[str, HandledLocally] = {}
         self.local_delivered = 0
         self.local_handlers: dict[str, Callable[[str], None]] = {}
+        self.interfaces: Any = None  # RosInterfaces: services and actions across the bridge (backend.py)
         self._clients: dict[
             str, tuple[type, Any]
         ] = {}  # service -> (its type's class, the rclpy client)  # topic -> a node's in-process handler

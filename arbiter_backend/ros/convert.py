@@ -76,6 +76,35 @@ def service_class(type_name: str) -> type:
     return cls
 
 
+def _interface_class(type_name: str, kind: str, marker: str) -> type:
+    """The generated class for ``pkg/<kind>/Name`` (or ``pkg/Name``); MessageError if it is not installed."""
+    parts = type_name.split("/") if isinstance(type_name, str) else []
+    if len(parts) == 3 and parts[1] == kind:
+        pkg, name = parts[0], parts[2]
+    elif len(parts) == 2:
+        pkg, name = parts
+    else:
+        raise MessageError(f"invalid {kind} type name {str(type_name)[:80]!r}")
+    try:
+        cls = getattr(importlib.import_module(f"{pkg}.{kind}"), name)
+    except (ImportError, AttributeError, ValueError):
+        raise MessageError(f"{kind} type {pkg}/{kind}/{name} is not installed here") from None
+    if not hasattr(cls, marker):
+        raise MessageError(f"{pkg}/{kind}/{name} is not a{'n' if kind == 'action' else ''} {kind} type")
+    return cls
+
+
+@lru_cache(maxsize=128)
+def action_class(type_name: str) -> type:
+    """The generated class for ``pkg/action/Name`` (or ``pkg/Name``); MessageError if not installed."""
+    return _interface_class(type_name, "action", "Goal")
+
+
+def interface_name(cls: type, kind: str) -> str:
+    """``std_srvs.srv.SetBool`` -> ``std_srvs/srv/SetBool`` (``kind``: srv or action)."""
+    return f"{cls.__module__.split('.')[0]}/{kind}/{cls.__name__}"
+
+
 def type_name_of(cls: type) -> str:
     """``geometry_msgs.msg.Twist`` -> ``geometry_msgs/msg/Twist``."""
     pkg = cls.__module__.split(".")[0]
