@@ -318,3 +318,40 @@ async def test_a_client_provides_an_action_to_another(clients):
         "result": False,
         "values": "Action /fib does not exist",
     }
+
+
+def test_roslibpy_provides_and_calls_a_service(backend):
+    """roslibpy's own Service.advertise and Service.call, on two connections, through the endpoint."""
+    import roslibpy
+
+    from ..support.backend import wait_for
+
+    provider, caller = roslibpy.Ros("127.0.0.1", backend.bridge_port), None
+    provider.run(timeout=10)
+    try:
+        caller = roslibpy.Ros("127.0.0.1", backend.bridge_port)
+        caller.run(timeout=10)
+
+        def handle(request, response):
+            response["success"] = request["data"]
+            response["message"] = "flipped" if request["data"] else "kept"
+            return True
+
+        roslibpy.Service(provider, "/arbiter/flip", "std_srvs/SetBool").advertise(handle)
+        service = roslibpy.Service(caller, "/arbiter/flip", "std_srvs/SetBool")
+        answers: list = []
+
+        def try_call() -> bool:  # until the advertisement has reached the endpoint
+            service.call(roslibpy.ServiceRequest({"data": True}), answers.append, lambda _e: None)
+            return bool(answers)
+
+        assert wait_for(lambda: answers or try_call() or wait_for(lambda: answers, 0.3), timeout=10)
+        assert dict(answers[0]) == {"success": True, "message": "flipped"}
+        assert dict(service.call(roslibpy.ServiceRequest({"data": False}), timeout=10)) == {
+            "success": False,
+            "message": "kept",
+        }
+    finally:
+        for ros in (provider, caller):
+            if ros is not None:
+                ros.close()
