@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import inspect
 import itertools
 import json
 import logging
@@ -903,10 +904,19 @@ class RosbridgeEndpoint:
         if handler is None:
             reply.update(result=False, values=f"Service {service} does not exist")
         else:
+            timeout = self._timeout(frame, SERVICE_TIMEOUT_S)
             try:
-                reply.update(result=True, values=handler(frame.get("args")))
+                values = handler(frame.get("args"))
             except (BadFrame, MessageError, ValueError) as exc:
                 reply.update(result=False, values=f"{service}: {exc}")
+            else:
+                if inspect.isawaitable(values):  # rosapi that asks the graph (parameters)
+                    self._track(
+                        client,
+                        self._call_remote(client, lambda _s, _a: values, service, None, timeout, reply),
+                    )
+                    return
+                reply.update(result=True, values=values)
         client.send(_dumps(reply))
 
     def _timeout(self, frame: dict[str, Any], default: float) -> float:

@@ -66,7 +66,8 @@ class BackendConfig:
         """The rosbridge endpoint of either transport (the embedded bus or the DDS relay)."""
         topics = TopicFilter.parse(self.topics_glob, None) if self.topics_glob else None
         services = TopicFilter.parse(self.services_glob, None) if self.services_glob else None
-        rosapi_services = None
+        # no graph on the embedded transport: its parameters live in a store in memory
+        rosapi_services = rosapi.ParamStore().handlers()
         if hasattr(bus, "node_names"):  # rosapi from the live graph where there is one (ROS mode)
             rosapi_services = rosapi.handlers(
                 bus,  # type: ignore[arg-type]
