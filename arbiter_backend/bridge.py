@@ -1,9 +1,17 @@
 """A rosbridge v2 WebSocket endpoint on the in-process topic bus (aiohttp).
 
-Ops: advertise, unadvertise, publish, subscribe (throttle_rate, queue_length),
-unsubscribe, call_service for the rosapi basics (/rosapi/topics,
-/rosapi/topic_type, /rosapi/topics_for_type), set_level. Unlike the real ROS 2
-server, every bad frame is answered with a ``status`` frame naming the problem
+Ops: advertise, unadvertise, publish, subscribe (throttle_rate, queue_length, compression
+cbor/cbor-raw, fragment_size), unsubscribe, call_service, set_level, auth, and services and actions
+both ways: advertise_service / service_response / unadvertise_service, advertise_action /
+action_feedback / action_result / unadvertise_action (a client provides; ``provided.py``), and
+send_action_goal / cancel_action_goal. ``call_service`` reaches, in this order: a service another
+client provides; the endpoint's rosapi (/rosapi/topics, topic_type, topics_for_type, and the parameter
+services, in memory on the embedded bus; in ROS mode ``rosapi.py`` from the live graph); in ROS mode any
+service on the graph (``RosBus.call_service``). In ROS mode a provided service or action is also an
+rclpy server on the graph, and a goal reaches any action server there (``ros/interfaces.py``). Calls
+and goals run beside the client's other frames, never holding them, and always end: a call within its
+``timeout`` (default 10 s), a goal when its server or provider ends it, cancels it, or goes away.
+Unlike the real ROS 2 server, every bad frame is answered with a ``status`` frame naming the problem
 (and the request's ``id``), and the connection stays open.
 
 Liveness (``--ws-ping``): a client that has sent nothing for ``WS_PING_S`` is pinged (again
