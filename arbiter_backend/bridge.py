@@ -1043,7 +1043,7 @@ class RosbridgeEndpoint:
     def _advertise_action(self, client: Client, frame: dict[str, Any]) -> None:
         name = self._topic(frame, "action")
         type_name = self._interface_type(frame, "type", "action")
-        act = ProvidedAction(name, type_name, client)
+        act = ProvidedAction(name, type_name, client, type_given=frame["type"])
         if self.interfaces is not None:
             act.withdraw = self.interfaces.advertise_action(name, type_name, act.start, act.cancel)
         old = self.provided_actions.get(name)

@@ -115,6 +115,7 @@ class ProvidedAction:
     name: str
     type_name: str
     provider: Sender
+    type_given: str = ""  # the type as the provider wrote it: goals carry it back so (as rosbridge's do)
     withdraw: Callable[[], None] | None = None
     goals: dict[str, Goal] = field(default_factory=dict)
     _ids: itertools.count[int] = field(default_factory=lambda: itertools.count(1))
@@ -132,7 +133,7 @@ class ProvidedAction:
             "op": "send_action_goal",
             "id": goal.id,
             "action": self.name,
-            "action_type": self.type_name,
+            "action_type": self.type_given or self.type_name,
             "args": args,
             "feedback": True,
         }

@@ -207,7 +207,7 @@ async def test_a_client_provides_an_action_to_another(clients):
         "op": "send_action_goal",
         "id": "action_goal:/fib:1",
         "action": "/fib",
-        "action_type": "test_msgs/action/Fibonacci",
+        "action_type": "test_msgs/Fibonacci",  # as the provider wrote it, as rosbridge_server does
         "args": {"order": 3},
         "feedback": True,
     }

@@ -137,7 +137,7 @@ async def test_a_client_provides_a_ros_action(peer, ros_backend):
             "op": "send_action_goal",
             "id": "action_goal:/arbiter_test/fib:1",
             "action": "/arbiter_test/fib",
-            "action_type": "test_msgs/action/Fibonacci",
+            "action_type": "test_msgs/Fibonacci",  # as advertised
             "args": {"order": 3},
             "feedback": True,
         }
