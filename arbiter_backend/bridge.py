@@ -83,6 +83,7 @@ MAX_THROTTLE_MS = 3_600_000
 MAX_QUEUE_LENGTH = 1_000_000
 SERVICE_TIMEOUT_S = 10.0  # a call_service to a ROS service without a "timeout" field
 MAX_SERVICE_TIMEOUT_S = 600.0
+MAX_CALLS = 256  # service calls and goals one client may have under way at once
 MIN_FRAGMENT = 64  # the smallest fragment_size taken (smaller would be a frame per few characters)
 COMPRESSIONS = (
     "none",
@@ -879,6 +880,7 @@ class RosbridgeEndpoint:
             sub.timer = asyncio.get_running_loop().call_later(sub.throttle_s, self._flush, client, sub)
 
     def _call_service(self, client: Client, frame: dict[str, Any]) -> None:
+        self._room_for_call(client)
         service = self._field(frame, "service", str)
         req_id = frame.get("id")
         reply: dict[str, Any] = {"op": "service_response", "service": service}
@@ -1095,11 +1097,19 @@ class RosbridgeEndpoint:
                     raise BadFrame(f"values: {exc}") from None
         elif status is None:
             status = STATUS_ABORTED
+        elif status not in FINAL_STATUSES:
+            raise BadFrame(f"status must be a final GoalStatus (4, 5 or 6), got {status}")
         if not act.finish(goal_id, status, values, result):
             raise BadFrame(f"no goal of {act.name} with id {goal_id[:80]!r} is running")
 
     # -- goals clients send (send_action_goal, cancel_action_goal) -------------------------------------
+    @staticmethod
+    def _room_for_call(client: Client) -> None:
+        if len(client.calls) >= MAX_CALLS:
+            raise BadFrame(f"{MAX_CALLS} calls and goals are under way for this client already")
+
     def _send_action_goal(self, client: Client, frame: dict[str, Any]) -> None:
+        self._room_for_call(client)
         action = self._topic(frame, "action")
         req_id = frame.get("id")
         if req_id is not None and not isinstance(req_id, (str, int)):

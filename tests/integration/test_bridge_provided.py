@@ -355,3 +355,32 @@ def test_roslibpy_provides_and_calls_a_service(backend):
         for ros in (provider, caller):
             if ros is not None:
                 ros.close()
+
+
+async def test_calls_under_way_per_client_are_bounded(clients):
+    """A client cannot pile up calls without bound: past MAX_CALLS waiting, a call is a status error."""
+    from arbiter_backend.bridge import MAX_CALLS
+
+    provider, caller = clients
+    await provider.send_json({"op": "advertise_service", "service": "/slow", "type": "std_srvs/Trigger"})
+    await caller.send_json({"op": "call_service", "id": "first", "service": "/slow", "timeout": 30})
+    await frame_where(provider, op_is("call_service"))  # advertised: the calls below reach it
+    for i in range(MAX_CALLS - 1):
+        await caller.send_json({"op": "call_service", "id": i, "service": "/slow", "timeout": 30})
+    await caller.send_json({"op": "call_service", "id": "over", "service": "/slow"})
+    status = await frame_where(caller, op_is("status"))
+    assert status["id"] == "over" and "under way" in status["msg"]
+    # one answered: room again
+    await provider.send_json(
+        {
+            "op": "service_response",
+            "service": "/slow",
+            "values": {},
+            "result": True,
+            "id": "service_request:/slow:1",
+        }
+    )
+    assert (await frame_where(caller, op_is("service_response", id="first")))["result"] is True
+    await caller.send_json({"op": "call_service", "id": "again", "service": "/slow", "timeout": 0.2})
+    reply = await frame_where(caller, op_is("service_response", id="again"))
+    assert reply["result"] is False and "no response" in reply["values"]
