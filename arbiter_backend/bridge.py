@@ -1125,20 +1125,23 @@ class RosbridgeEndpoint:
             return
         if self.interfaces is not None:
             args = self.interfaces.values(type_name, "Goal", args, path="args")  # MessageError: status
+        ended: list[bool] = []  # the result went out: later feedback is not sent (ROS carries feedback
+        # and result on different channels, so the last feedback can arrive after the result)
         on_feedback = None
         if feedback:
-            on_feedback = lambda values: self._goal_feedback(client, action, req_id, values)  # noqa: E731
+            on_feedback = lambda values: ended or self._goal_feedback(client, action, req_id, values)  # noqa: E731
         if provided is not None:
             goal = provided.start(args, on_feedback)
             if req_id is not None:
                 client.goals[req_id] = lambda: provided.cancel(goal)
-            self._track(client, self._await_provided_goal(client, action, req_id, goal.result))
+            self._track(client, self._await_provided_goal(client, action, req_id, goal.result, ended))
             return
         ros_goal = self.interfaces.new_goal()
         if req_id is not None:
             client.goals[req_id] = ros_goal.cancel
         self._track(
-            client, self._await_ros_goal(client, action, type_name, req_id, args, on_feedback, ros_goal)
+            client,
+            self._await_ros_goal(client, action, type_name, req_id, args, on_feedback, ros_goal, ended),
         )
 
     def _goal_feedback(self, client: Client, action: str, req_id: Any, values: Any) -> None:
@@ -1159,9 +1162,15 @@ class RosbridgeEndpoint:
         client.send(_dumps(frame))
 
     async def _await_provided_goal(
-        self, client: Client, action: str, req_id: Any, result: asyncio.Future[tuple[int, Any, bool]]
+        self,
+        client: Client,
+        action: str,
+        req_id: Any,
+        result: asyncio.Future[tuple[int, Any, bool]],
+        ended: list[bool],
     ) -> None:
         status, values, ok = await result
+        ended.append(True)
         self._goal_ended(client, action, req_id, status, values, ok)
 
     async def _await_ros_goal(
@@ -1173,9 +1182,13 @@ class RosbridgeEndpoint:
         args: Any,
         on_feedback: Callable[[Any], None] | None,
         goal: Any,
+        ended: list[bool],
     ) -> None:
         try:
-            status, values = await self.interfaces.send_goal(action, type_name, args, on_feedback, goal)
+            try:
+                status, values = await self.interfaces.send_goal(action, type_name, args, on_feedback, goal)
+            finally:
+                ended.append(True)
         except MessageError as exc:
             self._goal_ended(client, action, req_id, STATUS_UNKNOWN, str(exc), False)
         except Exception as exc:

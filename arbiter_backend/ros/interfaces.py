@@ -41,6 +41,7 @@ from rclpy.node import Node
 from arbiter_core.msgtypes import MessageError
 
 from ..provided import (
+    FINAL_STATUSES,
     PROVIDER_TIMEOUT_S,
     STATUS_ABORTED,
     STATUS_CANCELED,
@@ -54,6 +55,8 @@ log = logging.getLogger(__name__)
 PROVIDER_NODE_NAME = "arbiter_bridge_provider"
 PROVIDER_THREADS = 16  # provided calls and goals waiting at once before more queue
 SERVER_WAIT_S = 1.0  # how long a goal waits for its action server to be matched (rosbridge: 1 s)
+SERVER_GONE_S = 3.0  # an action server unseen this long while its goal runs has gone: the goal fails
+RESULT_AGAIN_S = 1.0  # a goal the server reports ended whose result has not come: asked for again
 
 
 def _args(fields: dict[str, str], args: Any) -> dict[str, Any]:
@@ -356,11 +359,35 @@ class RosInterfaces:
             goal.handle = handle
             if goal.cancel_requested:
                 goal.cancel()
-            response = await self._on_loop(handle.get_result_async())
+            response = await self._result(action, client, handle)
         except asyncio.CancelledError:
             goal.cancel()  # the client went away: its goal does not go on without it
             raise
         return response.status, to_json(response.result)
+
+    async def _result(self, action: str, client: ActionClient, handle: Any) -> Any:
+        """The goal's result, never waited for without end: a result request whose answer is lost (one
+        sent as the service first matches can be) is sent again once the status topic says the goal
+        ended; a server that leaves the graph fails the goal."""
+        waiting = {self._on_loop(handle.get_result_async())}
+        gone_since = ended_since = None
+        while True:
+            done, _ = await asyncio.wait(waiting, timeout=0.5, return_when=asyncio.FIRST_COMPLETED)
+            if done:
+                return done.pop().result()
+            now = self.loop.time()
+            if client.server_is_ready():
+                gone_since = None
+            else:
+                gone_since = gone_since or now
+                if now - gone_since > SERVER_GONE_S:
+                    raise MessageError(f"{action}: the action server left before the goal ended")
+            if handle.status in FINAL_STATUSES:
+                ended_since = ended_since or now
+                if now - ended_since > RESULT_AGAIN_S:
+                    log.info("%s: the goal ended but its result has not come; asking again", action)
+                    waiting.add(self._on_loop(handle.get_result_async()))
+                    ended_since = now
 
     def close(self) -> None:
         self._closed = True
