@@ -304,3 +304,36 @@ async def test_send_action_goal_to_a_ros_action_server(peer, ros_backend):
         await ws.close()
     release.set()
     server.destroy()
+
+
+async def test_a_goal_whose_server_leaves_ends(ros_backend):
+    """An action server that leaves the graph while its goal runs: the goal ends, result false."""
+    release = threading.Event()
+    server_peer = Peer("arbiter_leaving_peer", threads=2)
+    try:
+        server = fibonacci_server(server_peer, "/arbiter_test/leaving", release)
+        async with aiohttp.ClientSession() as session:
+            ws = await session.ws_connect(f"ws://127.0.0.1:{ros_backend.bridge_port}/")
+            goal = {
+                "op": "send_action_goal",
+                "action": "/arbiter_test/leaving",
+                "action_type": "test_msgs/Fibonacci",
+                "args": {"order": 40},
+                "feedback": True,
+            }
+            for attempt in range(40):  # until the backend sees the server: the first feedback
+                gid = f"l{attempt}"
+                await ws.send_json({**goal, "id": gid})
+                first = await frame_where(ws, lambda m, gid=gid: m.get("id") == gid)
+                if first["op"] == "action_feedback":
+                    break
+            assert first["op"] == "action_feedback", first
+            server.destroy()
+            server_peer.node.destroy_node()  # the server leaves the graph mid-goal
+            result = await frame_where(ws, op_is("action_result", id=gid), limit=500, timeout=20)
+            assert result["result"] is False and "left before the goal ended" in result["values"], result
+            await ws.close()
+    finally:
+        release.set()
+        server_peer.executor.shutdown(timeout_sec=2)
+        server_peer.context.try_shutdown()
