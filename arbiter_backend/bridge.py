@@ -348,6 +348,7 @@ class RosbridgeEndpoint:
         services: dict[str, Callable[[Any], dict[str, Any]]] | None = None,
         expose_topics: TopicFilter | None = None,
         expose_services: TopicFilter | None = None,
+        expose_actions: TopicFilter | None = None,
         heartbeat: float | None = WS_PING_S,
         token: str | None = None,
     ) -> None:
@@ -365,6 +366,7 @@ class RosbridgeEndpoint:
         # what a client may reach (rosbridge_server's topics_glob / services_glob); None: everything
         self.expose_topics = expose_topics
         self.expose_services = expose_services
+        self.expose_actions = expose_actions  # --actions-glob: goals sent and actions advertised
         self.services: dict[str, Callable[[Any], dict[str, Any]]] = {
             "/rosapi/topics": self._svc_topics,
             "/rosapi/topic_type": self._svc_topic_type,
@@ -705,6 +707,12 @@ class RosbridgeEndpoint:
     def service_exposed(self, service: str) -> bool:
         return self.expose_services is None or self.expose_services.wants(service)
 
+    def _exposed_action(self, frame: dict[str, Any]) -> str:
+        action = self._topic(frame, "action")
+        if self.expose_actions is not None and not self.expose_actions.wants(action):
+            raise BadFrame(f"action {action} is not exposed by this server (--actions-glob)")
+        return action
+
     def _exposed_topic(self, frame: dict[str, Any]) -> str:
         topic = self._topic(frame)
         if not self.topic_exposed(topic):
@@ -1043,7 +1051,7 @@ class RosbridgeEndpoint:
             raise BadFrame(f"no call to {svc.name} with id {req_id[:80]!r} is waiting for an answer")
 
     def _advertise_action(self, client: Client, frame: dict[str, Any]) -> None:
-        name = self._topic(frame, "action")
+        name = self._exposed_action(frame)
         type_name = self._interface_type(frame, "type", "action")
         act = ProvidedAction(name, type_name, client, type_given=frame["type"])
         if self.interfaces is not None:
@@ -1110,7 +1118,7 @@ class RosbridgeEndpoint:
 
     def _send_action_goal(self, client: Client, frame: dict[str, Any]) -> None:
         self._room_for_call(client)
-        action = self._topic(frame, "action")
+        action = self._exposed_action(frame)
         req_id = frame.get("id")
         if req_id is not None and not isinstance(req_id, (str, int)):
             raise BadFrame("field 'id' must be a string or an integer")

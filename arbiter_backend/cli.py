@@ -157,6 +157,13 @@ def build_parser() -> argparse.ArgumentParser:
         "robot out unless the operator means clients to reach them",
     )
     p.add_argument(
+        "--actions-glob",
+        metavar="GLOBS",
+        help="the only actions a rosbridge client may send goals to (send_action_goal) or provide "
+        "(advertise_action), e.g. '/arm/*' (default: all; rosbridge_server has no such launch "
+        "parameter). Keep actions that move the robot out unless the operator means clients to reach them",
+    )
+    p.add_argument(
         "--ws-ping",
         type=non_negative_float,
         default=WS_PING_S,
@@ -323,6 +330,7 @@ def main(argv: list[str] | None = None) -> int:
         ws_ping=args.ws_ping,
         topics_glob=args.topics_glob,
         services_glob=args.services_glob,
+        actions_glob=args.actions_glob,
         max_frame=args.max_frame,
     )
     try:

@@ -61,6 +61,7 @@ class BackendConfig:
     max_frame: int = MAX_FRAME_BYTES  # a client's frames above this are answered with a status error
     topics_glob: str | None = None  # comma-separated globs of the topics clients may reach (None: all)
     services_glob: str | None = None  # ... and of the services they may call
+    actions_glob: str | None = None  # ... and of the actions they may send goals to or provide
 
     def make_endpoint(self, bus: Bus) -> bridge.RosbridgeEndpoint:
         """The rosbridge endpoint of either transport (the embedded bus or the DDS relay)."""
@@ -82,6 +83,7 @@ class BackendConfig:
             services=rosapi_services,
             expose_topics=topics,
             expose_services=services,
+            expose_actions=TopicFilter.parse(self.actions_glob, None) if self.actions_glob else None,
         )
 
     def make_topic_watch(self) -> TopicWatch:
