@@ -164,6 +164,13 @@ def build_parser() -> argparse.ArgumentParser:
         "parameter). Keep actions that move the robot out unless the operator means clients to reach them",
     )
     p.add_argument(
+        "--params-glob",
+        metavar="GLOBS",
+        help="the only parameters rosapi's get/set/has/delete_param and get_param_names reach, by name "
+        "(the part after '<node>:'), e.g. 'max_*,use_sim_time' (rosbridge_server's params_glob; "
+        "default: all)",
+    )
+    p.add_argument(
         "--ws-ping",
         type=non_negative_float,
         default=WS_PING_S,
@@ -331,6 +338,7 @@ def main(argv: list[str] | None = None) -> int:
         topics_glob=args.topics_glob,
         services_glob=args.services_glob,
         actions_glob=args.actions_glob,
+        params_glob=args.params_glob,
         max_frame=args.max_frame,
     )
     try:

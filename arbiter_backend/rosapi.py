@@ -19,6 +19,7 @@ the node or parameter does not exist), ``/rosapi/set_param`` (``name``, ``value`
 (``get_parameters``, ``set_parameters``, ``list_parameters``); a set or delete the node refuses is
 ``result: false`` with its reason (rosapi says nothing). On the embedded transport there are no nodes:
 the same services keep plain names in a store in memory, for the backend's lifetime (``ParamStore``).
+``--params-glob`` bounds both by parameter name (outside it: result false, not there, not listed).
 """
 
 from __future__ import annotations
@@ -123,33 +124,42 @@ def parameter_json(pv: dict[str, Any]) -> tuple[bool, Any]:
     return (False, None) if field is None else (True, pv.get(field))
 
 
+def _exposed(param_ok: Callable[[str], bool], param: str) -> str:
+    if not param_ok(param):
+        raise ValueError(f"parameter {param} is not exposed by this server (--params-glob)")
+    return param
+
+
 class ParamStore:
     """The parameter services on the embedded transport: plain names, values kept in memory."""
 
     def __init__(self) -> None:
         self.values: dict[str, Any] = {}
 
-    def handlers(self) -> dict[str, Handler]:
+    def handlers(self, param_ok: Callable[[str], bool] = lambda name: True) -> dict[str, Handler]:
+        """``param_ok``: the server's --params-glob (outside it: result false; not listed, not there)."""
+
         def get_param(args: Any) -> dict[str, Any]:
-            name = _arg(args, "name")
+            name = _exposed(param_ok, _arg(args, "name"))
             default = _json_arg(args, "default_value", 1)
             return {"value": json.dumps(self.values.get(name, "" if default is None else default))}
 
         def set_param(args: Any) -> dict[str, Any]:
-            name, value = _arg(args, "name"), _json_arg(args, "value", 1)
+            name, value = _exposed(param_ok, _arg(args, "name")), _json_arg(args, "value", 1)
             parameter_value(value)  # the kinds a ROS parameter can hold, as on the graph
             self.values[name] = value
             return {}
 
         def has_param(args: Any) -> dict[str, Any]:
-            return {"exists": _arg(args, "name") in self.values}
+            name = _arg(args, "name")
+            return {"exists": param_ok(name) and name in self.values}
 
         def delete_param(args: Any) -> dict[str, Any]:
-            self.values.pop(_arg(args, "name"), None)
+            self.values.pop(_exposed(param_ok, _arg(args, "name")), None)
             return {}
 
         def get_param_names(args: Any) -> dict[str, Any]:
-            return {"names": sorted(self.values)}
+            return {"names": sorted(n for n in self.values if param_ok(n))}
 
         return {
             "/rosapi/get_param": get_param,
@@ -160,9 +170,14 @@ class ParamStore:
         }
 
 
-def param_handlers(graph: Graph, service_ok: Callable[[str], bool] = lambda name: True) -> dict[str, Handler]:
+def param_handlers(
+    graph: Graph,
+    service_ok: Callable[[str], bool] = lambda name: True,
+    param_ok: Callable[[str], bool] = lambda name: True,
+) -> dict[str, Handler]:
     """The parameter services over the nodes' own parameter services (ROS mode); a node whose
-    parameter services are outside --services-glob is as if it had none."""
+    parameter services are outside --services-glob is as if it had none; a parameter whose name (the
+    part after ``<node>:``, as rosapi matches params_glob) is outside --params-glob is not reachable."""
 
     async def call(node: str, service: str, args: dict[str, Any]) -> dict[str, Any]:
         name = f"{node}/{service}"
@@ -172,6 +187,7 @@ def param_handlers(graph: Graph, service_ok: Callable[[str], bool] = lambda name
 
     async def fetch(name: str) -> tuple[bool, Any]:
         node, param = node_and_param(name)
+        _exposed(param_ok, param)
         try:
             got = await call(node, "get_parameters", {"names": [param]})
         except (ValueError, TimeoutError, asyncio.TimeoutError):
@@ -181,6 +197,7 @@ def param_handlers(graph: Graph, service_ok: Callable[[str], bool] = lambda name
 
     async def change(name: str, value: dict[str, Any]) -> dict[str, Any]:
         node, param = node_and_param(name)
+        _exposed(param_ok, param)
         got = await call(node, "set_parameters", {"parameters": [{"name": param, "value": value}]})
         result = (got.get("results") or [{}])[0]
         if not result.get("successful", False):
@@ -196,7 +213,10 @@ def param_handlers(graph: Graph, service_ok: Callable[[str], bool] = lambda name
         return await change(_arg(args, "name"), parameter_value(_json_arg(args, "value", 1)))
 
     async def has_param(args: Any) -> dict[str, Any]:
-        return {"exists": (await fetch(_arg(args, "name")))[0]}
+        name = _arg(args, "name")
+        if not param_ok(node_and_param(name)[1]):
+            return {"exists": False}
+        return {"exists": (await fetch(name))[0]}
 
     async def delete_param(args: Any) -> dict[str, Any]:
         return await change(_arg(args, "name"), {"type": 0})
@@ -206,7 +226,7 @@ def param_handlers(graph: Graph, service_ok: Callable[[str], bool] = lambda name
             got = await asyncio.wait_for(call(node, "list_parameters", {}), PARAM_TIMEOUT_S)
         except (ValueError, TimeoutError, asyncio.TimeoutError):
             return []  # a node without parameter services (or not answering)
-        return [f"{node}:{p}" for p in got.get("result", {}).get("names", [])]
+        return [f"{node}:{p}" for p in got.get("result", {}).get("names", []) if param_ok(p)]
 
     async def get_param_names(args: Any) -> dict[str, Any]:
         found = await asyncio.gather(*(names_of(node) for node in sorted(set(graph.node_names()))))
@@ -226,6 +246,7 @@ def handlers(
     clock_ns: Callable[[], int] = time.time_ns,
     topic_ok: Callable[[str], bool] = lambda name: True,
     service_ok: Callable[[str], bool] = lambda name: True,
+    param_ok: Callable[[str], bool] = lambda name: True,
 ) -> dict[str, Handler]:
     """The rosapi services over ``graph``, by service name; nothing outside what the server exposes
     (``topic_ok``, ``service_ok``: its --topics-glob and --services-glob) appears in an answer."""
@@ -295,5 +316,5 @@ def handlers(
         "/rosapi/services_for_type": services_for_type,
         "/rosapi/get_time": get_time,
         "/rosapi/topics_and_raw_types": topics_and_raw_types,
-        **param_handlers(graph, service_ok),
+        **param_handlers(graph, service_ok, param_ok),
     }

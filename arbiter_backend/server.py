@@ -62,18 +62,22 @@ class BackendConfig:
     topics_glob: str | None = None  # comma-separated globs of the topics clients may reach (None: all)
     services_glob: str | None = None  # ... and of the services they may call
     actions_glob: str | None = None  # ... and of the actions they may send goals to or provide
+    params_glob: str | None = None  # ... and of the parameters rosapi reads and sets (names, no node)
 
     def make_endpoint(self, bus: Bus) -> bridge.RosbridgeEndpoint:
         """The rosbridge endpoint of either transport (the embedded bus or the DDS relay)."""
         topics = TopicFilter.parse(self.topics_glob, None) if self.topics_glob else None
         services = TopicFilter.parse(self.services_glob, None) if self.services_glob else None
+        params = TopicFilter.parse(self.params_glob, None) if self.params_glob else None
+        param_ok = params.wants if params else lambda name: True
         # no graph on the embedded transport: its parameters live in a store in memory
-        rosapi_services = rosapi.ParamStore().handlers()
+        rosapi_services = rosapi.ParamStore().handlers(param_ok)
         if hasattr(bus, "node_names"):  # rosapi from the live graph where there is one (ROS mode)
             rosapi_services = rosapi.handlers(
                 bus,  # type: ignore[arg-type]
                 topic_ok=topics.wants if topics else lambda name: True,
                 service_ok=services.wants if services else lambda name: True,
+                param_ok=param_ok,
             )
         return bridge.RosbridgeEndpoint(
             bus,

@@ -49,3 +49,26 @@ def test_roslibpy_param(backend):
         assert roslibpy.Param(ros, "max_speed").get(timeout=10) == ""  # rosapi's answer: no default
     finally:
         ros.close()
+
+
+async def test_parameters_outside_the_glob_are_not_reachable(session):
+    from arbiter_backend.server import Backend, BackendConfig
+
+    backend = Backend(BackendConfig(bridge_port=0, api_port=0, sim=False, params_glob="max_*"))
+    await backend.start()
+    try:
+        ws = await session.ws_connect(f"ws://127.0.0.1:{backend.bridge_port}/")
+
+        async def param(service, **args):
+            return await call(ws, id=service, service=f"/rosapi/{service}", args=args)
+
+        assert (await param("set_param", name="max_speed", value="1.0"))["result"] is True
+        bad = await param("set_param", name="secret", value="1")
+        assert bad["result"] is False and "secret is not exposed" in bad["values"]
+        bad = await param("get_param", name="secret")
+        assert bad["result"] is False and "--params-glob" in bad["values"]
+        assert (await param("has_param", name="secret"))["values"] == {"exists": False}
+        assert (await param("get_param_names"))["values"] == {"names": ["max_speed"]}
+        await ws.close()
+    finally:
+        await backend.stop()
