@@ -337,3 +337,31 @@ async def test_a_goal_whose_server_leaves_ends(ros_backend):
         release.set()
         server_peer.executor.shutdown(timeout_sec=2)
         server_peer.context.try_shutdown()
+
+
+def test_roslibpy_action_client_reaches_a_ros_action_server(peer, ros_backend):
+    """roslibpy's own ActionClient (send_goal, feedback, result) against an rclpy action server."""
+    import roslibpy
+
+    from ..support.waits import wait_for
+
+    release = threading.Event()
+    server = fibonacci_server(peer, "/arbiter_test/fib_roslibpy", release)
+    ros = roslibpy.Ros("127.0.0.1", ros_backend.bridge_port)
+    ros.run(timeout=10)
+    try:
+        client = roslibpy.ActionClient(ros, "/arbiter_test/fib_roslibpy", "test_msgs/action/Fibonacci")
+        results, feedback, errors = [], [], []
+        for _ in range(40):  # until the backend sees the server (before: an error, "not available")
+            errors.clear()
+            client.send_goal(roslibpy.Goal({"order": 3}), results.append, feedback.append, errors.append)
+            assert wait_for(lambda: results or errors, 10)
+            if results:
+                break
+        assert results, errors
+        assert list(results[0]["values"]["sequence"]) == [0, 1, 1, 2]
+        assert results[0]["status"] == roslibpy.GoalStatus.SUCCEEDED
+    finally:
+        ros.close()
+        release.set()
+        server.destroy()
