@@ -85,7 +85,13 @@ async def test_call_service_reaches_any_service_and_fails_cleanly(peer, stuck_pe
         assert reply["result"] is False and "unknown field" in reply["values"]
 
         # a server that does not answer: result false after the call's timeout, and the socket is free (the
-        # timeout long enough that the other call, answered at once, comes first on a loaded machine)
+        # timeout long enough that the other call, answered at once, comes first on a loaded machine);
+        # first the graph must show the backend that server (else: "does not exist", at once)
+        for _ in range(100):
+            listed = await call(ws, id="s", service="/rosapi/services")
+            if "/stuck" in listed["values"]["services"]:
+                break
+            await asyncio.sleep(0.1)
         await ws.send_str(json.dumps({"op": "call_service", "id": "t", "service": "/stuck", "timeout": 3}))
         await ws.send_str(
             json.dumps({"op": "call_service", "id": "g2", "service": name, "args": {"names": []}})
