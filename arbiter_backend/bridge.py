@@ -1,9 +1,17 @@
 """A rosbridge v2 WebSocket endpoint on the in-process topic bus (aiohttp).
 
-Ops: advertise, unadvertise, publish, subscribe (throttle_rate, queue_length),
-unsubscribe, call_service for the rosapi basics (/rosapi/topics,
-/rosapi/topic_type, /rosapi/topics_for_type), set_level. Unlike the real ROS 2
-server, every bad frame is answered with a ``status`` frame naming the problem
+Ops: advertise, unadvertise, publish, subscribe (throttle_rate, queue_length, compression
+cbor/cbor-raw, fragment_size), unsubscribe, call_service, set_level, auth, and services and actions
+both ways: advertise_service / service_response / unadvertise_service, advertise_action /
+action_feedback / action_result / unadvertise_action (a client provides; ``provided.py``), and
+send_action_goal / cancel_action_goal. ``call_service`` reaches, in this order: a service another
+client provides; the endpoint's rosapi (/rosapi/topics, topic_type, topics_for_type, and the parameter
+services, in memory on the embedded bus; in ROS mode ``rosapi.py`` from the live graph); in ROS mode any
+service on the graph (``RosBus.call_service``). In ROS mode a provided service or action is also an
+rclpy server on the graph, and a goal reaches any action server there (``ros/interfaces.py``). Calls
+and goals run beside the client's other frames, never holding them, and always end: a call within its
+``timeout`` (default 10 s), a goal when its server or provider ends it, cancels it, or goes away.
+Unlike the real ROS 2 server, every bad frame is answered with a ``status`` frame naming the problem
 (and the request's ``id``), and the connection stays open.
 
 Liveness (``--ws-ping``): a client that has sent nothing for ``WS_PING_S`` is pinged (again
@@ -28,6 +36,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import inspect
 import itertools
 import json
 import logging
@@ -46,6 +55,15 @@ from arbiter_core.msgtypes import MessageError, normalize_type
 
 from . import cborenc
 from .bus import Bus
+from .provided import (
+    FINAL_STATUSES,
+    PROVIDER_TIMEOUT_S,
+    STATUS_ABORTED,
+    STATUS_UNKNOWN,
+    CallFailed,
+    ProvidedAction,
+    ProvidedService,
+)
 from .topicwatch import TopicFilter
 
 log = logging.getLogger(__name__)
@@ -60,10 +78,12 @@ WS_PING_S = 5.0  # ping a client silent this long (0/None: never), and again as 
 DEAD_AFTER = 4  # ...and drop it once nothing has come from it for this many ping intervals
 LEVELS = ("info", "warning", "error", "none")
 TOPIC_NAME = re.compile(r"(?:/[A-Za-z_][A-Za-z0-9_]*)+", re.ASCII)  # a fully qualified ROS 2 name
+INTERFACE_TYPE = re.compile(r"([A-Za-z][A-Za-z0-9_]*)/(?:(srv|action)/)?([A-Za-z][A-Za-z0-9_]*)", re.ASCII)
 MAX_THROTTLE_MS = 3_600_000
 MAX_QUEUE_LENGTH = 1_000_000
 SERVICE_TIMEOUT_S = 10.0  # a call_service to a ROS service without a "timeout" field
 MAX_SERVICE_TIMEOUT_S = 600.0
+MAX_CALLS = 256  # service calls and goals one client may have under way at once
 MIN_FRAGMENT = 64  # the smallest fragment_size taken (smaller would be a frame per few characters)
 COMPRESSIONS = (
     "none",
@@ -221,7 +241,8 @@ class Client:
         self.closed = False
         self.authenticated = True
         self.kick: tuple[int, str] | None = None  # close with (code, reason) once the queue is sent
-        self.calls: set[asyncio.Task[None]] = set()  # service calls under way (ROS mode)
+        self.calls: set[asyncio.Task[None]] = set()  # service calls and goals under way
+        self.goals: dict[Any, Callable[[], None]] = {}  # the goals it sent, by its id -> cancel
         self.last_rx = 0.0  # loop time of the last frame (pong included) received from the client
 
     @property
@@ -327,6 +348,7 @@ class RosbridgeEndpoint:
         services: dict[str, Callable[[Any], dict[str, Any]]] | None = None,
         expose_topics: TopicFilter | None = None,
         expose_services: TopicFilter | None = None,
+        expose_actions: TopicFilter | None = None,
         heartbeat: float | None = WS_PING_S,
         token: str | None = None,
     ) -> None:
@@ -344,6 +366,7 @@ class RosbridgeEndpoint:
         # what a client may reach (rosbridge_server's topics_glob / services_glob); None: everything
         self.expose_topics = expose_topics
         self.expose_services = expose_services
+        self.expose_actions = expose_actions  # --actions-glob: goals sent and actions advertised
         self.services: dict[str, Callable[[Any], dict[str, Any]]] = {
             "/rosapi/topics": self._svc_topics,
             "/rosapi/topic_type": self._svc_topic_type,
@@ -351,6 +374,11 @@ class RosbridgeEndpoint:
         }
         if services:
             self.services.update(services)
+        # what clients provide (advertise_service, advertise_action), by name; one provider per name
+        self.provided_services: dict[str, ProvidedService] = {}
+        self.provided_actions: dict[str, ProvidedAction] = {}
+        # ROS mode: rclpy servers for those, an action client for goals (ros/interfaces.py)
+        self.interfaces: Any = getattr(bus, "interfaces", None)
         self._ops: dict[str, Callable[[Client, dict[str, Any]], None]] = {
             "advertise": self._advertise,
             "unadvertise": self._unadvertise,
@@ -358,6 +386,15 @@ class RosbridgeEndpoint:
             "subscribe": self._subscribe,
             "unsubscribe": self._unsubscribe,
             "call_service": self._call_service,
+            "advertise_service": self._advertise_service,
+            "unadvertise_service": self._unadvertise_service,
+            "service_response": self._service_response,
+            "send_action_goal": self._send_action_goal,
+            "cancel_action_goal": self._cancel_action_goal,
+            "advertise_action": self._advertise_action,
+            "unadvertise_action": self._unadvertise_action,
+            "action_feedback": self._action_feedback,
+            "action_result": self._action_result,
             "set_level": self._set_level,
             "auth": lambda client, frame: None,  # authenticated already, or no token required
         }
@@ -521,8 +558,15 @@ class RosbridgeEndpoint:
 
     def _drop_client(self, client: Client) -> None:
         client.closed = True
+        for cancel_goal in list(client.goals.values()):
+            cancel_goal()  # a goal does not go on for a client that is gone
+        client.goals.clear()
         for call in list(client.calls):
             call.cancel()
+        for svc in [s for s in self.provided_services.values() if s.provider is client]:
+            self._retire_service(svc, f"Service {svc.name}: its provider disconnected")
+        for act in [a for a in self.provided_actions.values() if a.provider is client]:
+            self._retire_action(act, f"Action {act.name}: its provider disconnected")
         for sub in client.subs.values():
             if sub.unsubscribe:
                 sub.unsubscribe()
@@ -631,24 +675,43 @@ class RosbridgeEndpoint:
         return value
 
     @staticmethod
-    def _topic(frame: dict[str, Any]) -> str:
-        topic = RosbridgeEndpoint._field(frame, "topic", str)
+    def _topic(frame: dict[str, Any], key: str = "topic") -> str:
+        """A topic, service or action name (``key``), fully qualified (a leading / added)."""
+        topic = RosbridgeEndpoint._field(frame, key, str)
         if not topic or len(topic) > 256:
-            raise BadFrame("topic must be a non-empty string of at most 256 characters")
+            raise BadFrame(f"{key} must be a non-empty string of at most 256 characters")
         topic = topic if topic.startswith("/") else "/" + topic
         if not TOPIC_NAME.fullmatch(topic):
             shown = json.dumps(topic[:60])
             raise BadFrame(
-                f"invalid topic name {shown}: tokens of letters, digits and _ separated by /, "
+                f"invalid {key} name {shown}: tokens of letters, digits and _ separated by /, "
                 "none starting with a digit"
             )
         return topic
+
+    def _interface_type(self, frame: dict[str, Any], key: str, kind: str) -> str:
+        """A service (``kind`` srv) or action type, as ``pkg/<kind>/Name``: installed here in ROS mode;
+        in the embedded transport any well-formed name (values then pass through unchecked)."""
+        given = self._field(frame, key, str)
+        m = INTERFACE_TYPE.fullmatch(given)
+        if m is None or m.group(2) not in (None, kind):
+            raise BadFrame(f"invalid {kind} type name {given[:80]!r}: pkg/{kind}/Name or pkg/Name")
+        if self.interfaces is not None:
+            check = self.interfaces.service_type if kind == "srv" else self.interfaces.action_type
+            return str(check(given))
+        return f"{m.group(1)}/{kind}/{m.group(3)}"
 
     def topic_exposed(self, topic: str) -> bool:
         return self.expose_topics is None or self.expose_topics.wants(topic)
 
     def service_exposed(self, service: str) -> bool:
         return self.expose_services is None or self.expose_services.wants(service)
+
+    def _exposed_action(self, frame: dict[str, Any]) -> str:
+        action = self._topic(frame, "action")
+        if self.expose_actions is not None and not self.expose_actions.wants(action):
+            raise BadFrame(f"action {action} is not exposed by this server (--actions-glob)")
+        return action
 
     def _exposed_topic(self, frame: dict[str, Any]) -> str:
         topic = self._topic(frame)
@@ -825,6 +888,7 @@ class RosbridgeEndpoint:
             sub.timer = asyncio.get_running_loop().call_later(sub.throttle_s, self._flush, client, sub)
 
     def _call_service(self, client: Client, frame: dict[str, Any]) -> None:
+        self._room_for_call(client)
         service = self._field(frame, "service", str)
         req_id = frame.get("id")
         reply: dict[str, Any] = {"op": "service_response", "service": service}
@@ -836,26 +900,66 @@ class RosbridgeEndpoint:
             )
             client.send(_dumps(reply))
             return
+        provided = self.provided_services.get(service)
+        if provided is not None:  # a WebSocket client provides it: straight to that client
+            timeout = self._timeout(frame, PROVIDER_TIMEOUT_S)
+            args = frame.get("args", {})
+            if self.interfaces is not None:
+                try:
+                    args = self.interfaces.values(provided.type_name, "Request", args, path="args")
+                except MessageError as exc:
+                    reply.update(result=False, values=f"{service}: {exc}")
+                    client.send(_dumps(reply))
+                    return
+            self._track(client, self._call_provided(client, provided, args, timeout, reply))
+            return
         handler = self.services.get(service)
         remote = getattr(self.bus, "call_service", None)
         if handler is None and remote is not None:  # ROS mode: any service on the graph
-            timeout = self._field(frame, "timeout", (int, float), required=False)
-            timeout = SERVICE_TIMEOUT_S if timeout is None else float(timeout)
-            if not 0 < timeout <= MAX_SERVICE_TIMEOUT_S:
-                raise BadFrame(f"timeout must be more than 0 and at most {MAX_SERVICE_TIMEOUT_S:g} s")
-            call = asyncio.get_running_loop().create_task(
-                self._call_remote(client, remote, service, frame.get("args"), timeout, reply)
-            )
-            client.calls.add(call)
-            call.add_done_callback(client.calls.discard)
+            timeout = self._timeout(frame, SERVICE_TIMEOUT_S)
+            self._track(client, self._call_remote(client, remote, service, frame.get("args"), timeout, reply))
             return
         if handler is None:
             reply.update(result=False, values=f"Service {service} does not exist")
         else:
+            timeout = self._timeout(frame, SERVICE_TIMEOUT_S)
             try:
-                reply.update(result=True, values=handler(frame.get("args")))
+                values = handler(frame.get("args"))
             except (BadFrame, MessageError, ValueError) as exc:
                 reply.update(result=False, values=f"{service}: {exc}")
+            else:
+                if inspect.isawaitable(values):  # rosapi that asks the graph (parameters)
+                    self._track(
+                        client,
+                        self._call_remote(client, lambda _s, _a: values, service, None, timeout, reply),
+                    )
+                    return
+                reply.update(result=True, values=values)
+        client.send(_dumps(reply))
+
+    def _timeout(self, frame: dict[str, Any], default: float) -> float:
+        timeout = self._field(frame, "timeout", (int, float), required=False)
+        timeout = default if timeout is None else float(timeout)
+        if not 0 < timeout <= MAX_SERVICE_TIMEOUT_S:
+            raise BadFrame(f"timeout must be more than 0 and at most {MAX_SERVICE_TIMEOUT_S:g} s")
+        return timeout
+
+    @staticmethod
+    def _track(client: Client, work: Any) -> asyncio.Task[None]:
+        """Run a call or goal for ``client`` without holding its other frames; cancelled if it leaves."""
+        task = asyncio.get_running_loop().create_task(work)
+        client.calls.add(task)
+        task.add_done_callback(client.calls.discard)
+        return task
+
+    async def _call_provided(
+        self, client: Client, provided: ProvidedService, args: Any, timeout: float, reply: dict[str, Any]
+    ) -> None:
+        try:
+            ok, values = await provided.call(args, timeout)
+        except CallFailed as exc:
+            ok, values = False, str(exc)
+        reply.update(result=ok, values=values)
         client.send(_dumps(reply))
 
     async def _call_remote(
@@ -883,6 +987,233 @@ class RosbridgeEndpoint:
         else:
             reply.update(result=True, values=values)
         client.send(_dumps(reply))
+
+    # -- services and actions clients provide (advertise_service, advertise_action) -------------------
+    def _advertise_service(self, client: Client, frame: dict[str, Any]) -> None:
+        name = self._topic(frame, "service")
+        if name.startswith("/rosapi/") or name in self.services:
+            raise BadFrame(f"service {name} is the server's own")
+        if not self.service_exposed(name):
+            raise BadFrame(f"service {name} is not exposed by this server (--services-glob)")
+        type_name = self._interface_type(frame, "type", "srv")
+        svc = ProvidedService(name, type_name, client)
+        if self.interfaces is not None:  # on the graph first: if that fails, the old provider stays
+            svc.withdraw = self.interfaces.advertise_service(name, type_name, svc.call)
+        old = self.provided_services.get(name)
+        self.provided_services[name] = svc
+        if old is not None:
+            self._replaced(client, frame, "service", name, old.provider.id)
+            self._retire_service(old, f"Service {name} was advertised again by another provider")
+        log.info("client %d provides service %s (%s)", client.id, name, type_name)
+
+    def _replaced(self, client: Client, frame: dict[str, Any], kind: str, name: str, old_id: int) -> None:
+        """A second advertisement replaces the first, as rosbridge_server does, with a warning."""
+        msg = f"duplicate {kind} advertised: {name} was provided by client {old_id}; replaced"
+        log.warning("client %d: %s", client.id, msg)
+        client.status("warning", msg, frame.get("id"))
+
+    def _retire_service(self, svc: ProvidedService, reason: str) -> None:
+        if self.provided_services.get(svc.name) is svc:
+            del self.provided_services[svc.name]
+        svc.fail_all(reason)
+        if svc.withdraw is not None:
+            svc.withdraw()
+            svc.withdraw = None
+
+    def _provided_by(self, client: Client, frame: dict[str, Any], kind: str) -> Any:
+        name = self._topic(frame, kind)
+        table: dict[str, Any] = self.provided_services if kind == "service" else self.provided_actions
+        entry = table.get(name)
+        if entry is None or entry.provider is not client:
+            raise BadFrame(f"{kind} {name} is not advertised by this client")
+        return entry
+
+    def _unadvertise_service(self, client: Client, frame: dict[str, Any]) -> None:
+        svc = self._provided_by(client, frame, "service")
+        self._retire_service(svc, f"Service {svc.name} was unadvertised")
+        log.info("client %d no longer provides service %s", client.id, svc.name)
+
+    def _service_response(self, client: Client, frame: dict[str, Any]) -> None:
+        svc: ProvidedService = self._provided_by(client, frame, "service")
+        req_id = self._field(frame, "id", str)
+        result = self._field(frame, "result", bool)
+        values = frame.get("values", {})
+        if result:
+            if not isinstance(values, dict):
+                raise BadFrame("values must be an object when result is true")
+            if self.interfaces is not None:
+                try:
+                    values = self.interfaces.values(svc.type_name, "Response", values)
+                except MessageError as exc:  # the caller learns it now, not at its timeout
+                    svc.answer(req_id, False, f"{svc.name}: its provider's response does not fit: {exc}")
+                    raise
+        if not svc.answer(req_id, result, values):
+            raise BadFrame(f"no call to {svc.name} with id {req_id[:80]!r} is waiting for an answer")
+
+    def _advertise_action(self, client: Client, frame: dict[str, Any]) -> None:
+        name = self._exposed_action(frame)
+        type_name = self._interface_type(frame, "type", "action")
+        act = ProvidedAction(name, type_name, client, type_given=frame["type"])
+        if self.interfaces is not None:
+            act.withdraw = self.interfaces.advertise_action(name, type_name, act.start, act.cancel)
+        old = self.provided_actions.get(name)
+        self.provided_actions[name] = act
+        if old is not None:
+            self._replaced(client, frame, "action", name, old.provider.id)
+            self._retire_action(old, f"Action {name} was advertised again by another provider")
+        log.info("client %d provides action %s (%s)", client.id, name, type_name)
+
+    def _retire_action(self, act: ProvidedAction, reason: str) -> None:
+        if self.provided_actions.get(act.name) is act:
+            del self.provided_actions[act.name]
+        act.fail_all(reason)
+        if act.withdraw is not None:
+            act.withdraw()
+            act.withdraw = None
+
+    def _unadvertise_action(self, client: Client, frame: dict[str, Any]) -> None:
+        act = self._provided_by(client, frame, "action")
+        self._retire_action(act, f"Action {act.name} was unadvertised")
+        log.info("client %d no longer provides action %s", client.id, act.name)
+
+    def _action_feedback(self, client: Client, frame: dict[str, Any]) -> None:
+        act: ProvidedAction = self._provided_by(client, frame, "action")
+        goal_id = self._field(frame, "id", str)
+        values = self._field(frame, "values", dict)
+        if self.interfaces is not None:
+            values = self.interfaces.values(act.type_name, "Feedback", values)
+        if not act.feedback(goal_id, values):
+            raise BadFrame(f"no goal of {act.name} with id {goal_id[:80]!r} is running")
+
+    def _action_result(self, client: Client, frame: dict[str, Any]) -> None:
+        act: ProvidedAction = self._provided_by(client, frame, "action")
+        goal_id = self._field(frame, "id", str)
+        result = self._field(frame, "result", bool)
+        status = self._field(frame, "status", int, required=result)
+        values = frame.get("values", {})
+        if result:
+            if status not in FINAL_STATUSES:
+                raise BadFrame(f"status must be a final GoalStatus (4, 5 or 6), got {status}")
+            if not isinstance(values, dict):
+                raise BadFrame("values must be an object when result is true")
+            if self.interfaces is not None:
+                try:
+                    values = self.interfaces.values(act.type_name, "Result", values)
+                except MessageError as exc:  # the goal ends now, aborted, not never
+                    why = f"{act.name}: its provider's result does not fit"
+                    act.finish(goal_id, STATUS_ABORTED, why, False)
+                    raise BadFrame(f"values: {exc}") from None
+        elif status is None:
+            status = STATUS_ABORTED
+        elif status not in FINAL_STATUSES:
+            raise BadFrame(f"status must be a final GoalStatus (4, 5 or 6), got {status}")
+        if not act.finish(goal_id, status, values, result):
+            raise BadFrame(f"no goal of {act.name} with id {goal_id[:80]!r} is running")
+
+    # -- goals clients send (send_action_goal, cancel_action_goal) -------------------------------------
+    @staticmethod
+    def _room_for_call(client: Client) -> None:
+        if len(client.calls) >= MAX_CALLS:
+            raise BadFrame(f"{MAX_CALLS} calls and goals are under way for this client already")
+
+    def _send_action_goal(self, client: Client, frame: dict[str, Any]) -> None:
+        self._room_for_call(client)
+        action = self._exposed_action(frame)
+        req_id = frame.get("id")
+        if req_id is not None and not isinstance(req_id, (str, int)):
+            raise BadFrame("field 'id' must be a string or an integer")
+        feedback = self._field(frame, "feedback", bool, required=False) is True
+        if req_id is not None and req_id in client.goals:
+            raise BadFrame(f"a goal with id {req_id!r} is running already: give each goal its own id")
+        args = frame.get("args", {})
+        provided = self.provided_actions.get(action)
+        type_name = self._interface_type(frame, "action_type", "action")
+        if provided is None and self.interfaces is None:
+            self._goal_ended(client, action, req_id, STATUS_UNKNOWN, f"Action {action} does not exist", False)
+            return
+        if self.interfaces is not None:
+            args = self.interfaces.values(type_name, "Goal", args, path="args")  # MessageError: status
+        ended: list[bool] = []  # the result went out: later feedback is not sent (ROS carries feedback
+        # and result on different channels, so the last feedback can arrive after the result)
+        on_feedback = None
+        if feedback:
+            on_feedback = lambda values: ended or self._goal_feedback(client, action, req_id, values)  # noqa: E731
+        if provided is not None:
+            goal = provided.start(args, on_feedback)
+            if req_id is not None:
+                client.goals[req_id] = lambda: provided.cancel(goal)
+            self._track(client, self._await_provided_goal(client, action, req_id, goal.result, ended))
+            return
+        ros_goal = self.interfaces.new_goal()
+        if req_id is not None:
+            client.goals[req_id] = ros_goal.cancel
+        self._track(
+            client,
+            self._await_ros_goal(client, action, type_name, req_id, args, on_feedback, ros_goal, ended),
+        )
+
+    def _goal_feedback(self, client: Client, action: str, req_id: Any, values: Any) -> None:
+        frame: dict[str, Any] = {"op": "action_feedback", "action": action, "values": values}
+        if req_id is not None:
+            frame["id"] = req_id
+        client.send(_dumps(frame))
+
+    def _goal_ended(
+        self, client: Client, action: str, req_id: Any, status: int, values: Any, result: bool
+    ) -> None:
+        if req_id is not None:
+            client.goals.pop(req_id, None)
+        frame: dict[str, Any] = {"op": "action_result", "action": action, "values": values}
+        frame.update(status=status, result=result)
+        if req_id is not None:
+            frame["id"] = req_id
+        client.send(_dumps(frame))
+
+    async def _await_provided_goal(
+        self,
+        client: Client,
+        action: str,
+        req_id: Any,
+        result: asyncio.Future[tuple[int, Any, bool]],
+        ended: list[bool],
+    ) -> None:
+        status, values, ok = await result
+        ended.append(True)
+        self._goal_ended(client, action, req_id, status, values, ok)
+
+    async def _await_ros_goal(
+        self,
+        client: Client,
+        action: str,
+        type_name: str,
+        req_id: Any,
+        args: Any,
+        on_feedback: Callable[[Any], None] | None,
+        goal: Any,
+        ended: list[bool],
+    ) -> None:
+        try:
+            try:
+                status, values = await self.interfaces.send_goal(action, type_name, args, on_feedback, goal)
+            finally:
+                ended.append(True)
+        except MessageError as exc:
+            self._goal_ended(client, action, req_id, STATUS_UNKNOWN, str(exc), False)
+        except Exception as exc:
+            log.exception("goal to %s failed", action)
+            self._goal_ended(client, action, req_id, STATUS_UNKNOWN, f"{action}: {type(exc).__name__}", False)
+        else:
+            self._goal_ended(client, action, req_id, status, values, True)
+
+    def _cancel_action_goal(self, client: Client, frame: dict[str, Any]) -> None:
+        self._topic(frame, "action")
+        if "id" not in frame:
+            raise BadFrame("missing field 'id' (the id of the goal to cancel)")
+        req_id = frame["id"]
+        cancel = client.goals.get(req_id) if isinstance(req_id, (str, int)) else None
+        if cancel is None:
+            raise BadFrame(f"no goal with id {str(req_id)[:80]!r} is running for this client")
+        cancel()
 
     def _set_level(self, client: Client, frame: dict[str, Any]) -> None:
         level = self._field(frame, "level", str)

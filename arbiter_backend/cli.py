@@ -157,6 +157,20 @@ def build_parser() -> argparse.ArgumentParser:
         "robot out unless the operator means clients to reach them",
     )
     p.add_argument(
+        "--actions-glob",
+        metavar="GLOBS",
+        help="the only actions a rosbridge client may send goals to (send_action_goal) or provide "
+        "(advertise_action), e.g. '/arm/*' (default: all; rosbridge_server has no such launch "
+        "parameter). Keep actions that move the robot out unless the operator means clients to reach them",
+    )
+    p.add_argument(
+        "--params-glob",
+        metavar="GLOBS",
+        help="the only parameters rosapi's get/set/has/delete_param and get_param_names reach, by name "
+        "(the part after '<node>:'), e.g. 'max_*,use_sim_time' (rosbridge_server's params_glob; "
+        "default: all)",
+    )
+    p.add_argument(
         "--ws-ping",
         type=non_negative_float,
         default=WS_PING_S,
@@ -323,6 +337,8 @@ def main(argv: list[str] | None = None) -> int:
         ws_ping=args.ws_ping,
         topics_glob=args.topics_glob,
         services_glob=args.services_glob,
+        actions_glob=args.actions_glob,
+        params_glob=args.params_glob,
         max_frame=args.max_frame,
     )
     try:

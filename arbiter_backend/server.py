@@ -61,17 +61,23 @@ class BackendConfig:
     max_frame: int = MAX_FRAME_BYTES  # a client's frames above this are answered with a status error
     topics_glob: str | None = None  # comma-separated globs of the topics clients may reach (None: all)
     services_glob: str | None = None  # ... and of the services they may call
+    actions_glob: str | None = None  # ... and of the actions they may send goals to or provide
+    params_glob: str | None = None  # ... and of the parameters rosapi reads and sets (names, no node)
 
     def make_endpoint(self, bus: Bus) -> bridge.RosbridgeEndpoint:
         """The rosbridge endpoint of either transport (the embedded bus or the DDS relay)."""
         topics = TopicFilter.parse(self.topics_glob, None) if self.topics_glob else None
         services = TopicFilter.parse(self.services_glob, None) if self.services_glob else None
-        rosapi_services = None
+        params = TopicFilter.parse(self.params_glob, None) if self.params_glob else None
+        param_ok = params.wants if params else lambda name: True
+        # no graph on the embedded transport: its parameters live in a store in memory
+        rosapi_services = rosapi.ParamStore().handlers(param_ok)
         if hasattr(bus, "node_names"):  # rosapi from the live graph where there is one (ROS mode)
             rosapi_services = rosapi.handlers(
                 bus,  # type: ignore[arg-type]
                 topic_ok=topics.wants if topics else lambda name: True,
                 service_ok=services.wants if services else lambda name: True,
+                param_ok=param_ok,
             )
         return bridge.RosbridgeEndpoint(
             bus,
@@ -81,6 +87,7 @@ class BackendConfig:
             services=rosapi_services,
             expose_topics=topics,
             expose_services=services,
+            expose_actions=TopicFilter.parse(self.actions_glob, None) if self.actions_glob else None,
         )
 
     def make_topic_watch(self) -> TopicWatch:

@@ -7,10 +7,16 @@ step: it starts a fresh ``arbiter-backend --transport ros`` for every run (a fre
 discovery races show) with its bridge node renamed ``rosbridge_websocket``; our bridge node declares
 ``actual_port`` as rosbridge's does, so the tests find the port through the graph, unmodified (and
 wait, as against the stock server, until the two processes have discovered each other).
-Needs the ``[ros]`` extra (rclpy, std_msgs, rcl_interfaces) and autobahn/twisted (roslibpy's).
+Needs the ``[ros]`` extra (rclpy, std_msgs, rcl_interfaces, std_srvs) and autobahn/twisted (roslibpy's).
+
+The three action tests (advertise_action, advertise_action_feedback, send_action_goal) import
+``example_interfaces``, which has no wheel on PyPI. ``--fibonacci-from test_msgs`` runs them on a copy
+whose only change is that package name (``test_msgs/action/Fibonacci``, a wheel, is the same action:
+``int32 order`` / ``int32[] sequence`` / ``int32[] sequence``); the table marks them ``(test_msgs)``.
 
     git clone -b ros2 https://github.com/RobotWebTools/rosbridge_suite /tmp/rosbridge_suite
     python bench/rosbridge_stock.py --suite /tmp/rosbridge_suite --runs 5
+    python bench/rosbridge_stock.py --suite /tmp/rosbridge_suite --tests all --fibonacci-from test_msgs
 
 Prints one line per run and a table of passes; exits non-zero when a run failed.
 """
@@ -20,8 +26,10 @@ from __future__ import annotations
 import argparse
 import os
 import random
+import shutil
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -31,7 +39,16 @@ sys.path.insert(0, str(ROOT))
 from tests.support.backend import start_backend  # noqa: E402
 
 RENAME = "arbiter_bridge:__node:=rosbridge_websocket"  # where the tests ask for actual_port
-DEFAULT_TESTS = ("smoke", "multiple_subscribers", "best_effort_publisher", "transient_local_publisher")
+DEFAULT_TESTS = (
+    "smoke",
+    "multiple_subscribers",
+    "best_effort_publisher",
+    "transient_local_publisher",
+    "advertise_service",
+    "advertise_service_duplicate",
+    "call_service",
+)
+ACTION_TESTS = ("advertise_action", "advertise_action_feedback", "send_action_goal")
 
 # Runs in the child: stub launch/launch_ros/launch_testing (only used to start the stock server), point
 # common.get_server_port at our port, then run the test file's TestCase with unittest.
@@ -82,10 +99,25 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--tests", default=",".join(DEFAULT_TESTS), help="comma-separated test names")
     ap.add_argument("--timeout", type=float, default=30.0, help="seconds before a run counts as failed")
     ap.add_argument("--log-dir", type=Path, help="keep each run's backend log (DEBUG) here")
+    ap.add_argument(
+        "--fibonacci-from",
+        metavar="PKG",
+        help="run the action tests on a copy importing Fibonacci from PKG instead of example_interfaces",
+    )
     args = ap.parse_args(argv)
     test_dir = args.suite / "rosbridge_server" / "test" / "websocket"
     if not (test_dir / "common.py").is_file():
         ap.error(f"{test_dir} has no common.py: is --suite a rosbridge_suite checkout (ros2 branch)?")
+    names = args.tests.split(",")
+    if names == ["all"]:
+        names = sorted({*DEFAULT_TESTS, *ACTION_TESTS, "multiple_subscribers_raw"})
+    swapped_dir = None
+    if args.fibonacci_from:
+        swapped_dir = Path(tempfile.mkdtemp(prefix="rosbridge_stock_"))
+        shutil.copytree(test_dir, swapped_dir, dirs_exist_ok=True)
+        for name in ACTION_TESTS:
+            f = swapped_dir / f"{name}.test.py"
+            f.write_text(f.read_text().replace("example_interfaces", args.fibonacci_from))
     env = {
         **os.environ,
         "ROS_DOMAIN_ID": str(random.Random(os.getpid()).randint(101, 200)),
@@ -95,18 +127,20 @@ def main(argv: list[str] | None = None) -> int:
     if args.log_dir:
         args.log_dir.mkdir(parents=True, exist_ok=True)
     passed: dict[str, int] = {}
-    for name in args.tests.split(","):
-        passed[name] = 0
+    for name in names:
+        swapped = swapped_dir is not None and name in ACTION_TESTS
+        label = f"{name} ({args.fibonacci_from})" if swapped else name
+        passed[label] = 0
         for run in range(1, args.runs + 1):
             log = args.log_dir / f"{name}-{run}.log" if args.log_dir else None
-            ok, took, tail = run_one(test_dir, name, args.timeout, env, log)
-            passed[name] += ok
+            ok, took, tail = run_one(swapped_dir if swapped else test_dir, name, args.timeout, env, log)
+            passed[label] += ok
             verdict = "pass" if ok else f"FAIL  {tail}"
-            print(f"{name:28} run {run}: {took:5.1f} s {verdict}", flush=True)
+            print(f"{label:40} run {run}: {took:5.1f} s {verdict}", flush=True)
     print()
-    print(f"{'test':28} passed")
-    for name, n in passed.items():
-        print(f"{name:28} {n}/{args.runs}")
+    print(f"{'test':40} passed")
+    for label, n in passed.items():
+        print(f"{label:40} {n}/{args.runs}")
     return 0 if all(n == args.runs for n in passed.values()) else 1
 
 

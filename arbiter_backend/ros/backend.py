@@ -24,6 +24,7 @@ from .. import bridge
 from ..server import BackendConfig, Servers
 from . import topicwatch
 from .bus import RosBus
+from .interfaces import RosInterfaces
 from .nodes import SimulatorNode, TrackerNode
 
 log = logging.getLogger(__name__)
@@ -88,6 +89,8 @@ class RosBackend(Servers):
     async def start(self) -> None:
         if self.bridge_node is not None:
             self.bus = RosBus(self.bridge_node, asyncio.get_running_loop())
+            # services and actions across the bridge: the provided servers on a node of their own
+            self.bus.interfaces = RosInterfaces(self.bridge_node, asyncio.get_running_loop(), self.context)
             self.tracker_node.local_report = self.bus.deliver_local
             stamped = self.tracker_node.stamped_sub.topic_name
             self.bus.local_handlers[stamped] = self.tracker_node.on_local_command
@@ -109,6 +112,8 @@ class RosBackend(Servers):
         await self.stop_servers(self.endpoint)
         if self.bus is not None:
             self.bus.close()
+            if self.bus.interfaces is not None:
+                self.bus.interfaces.close()
         self.topics.close()
         self.executor.shutdown(timeout_sec=2.0)
         if self._thread is not None:

@@ -33,7 +33,7 @@ from arbiter_core.msgtypes import MessageError, normalize_type
 from arbiter_core.topics import QOS_DEPTH, is_command
 
 from ..bus import Callback, TypeClash
-from .convert import message_class, service_class, to_cbor, to_json, to_ros
+from .convert import message_class, service_class, to_cbor, to_json, to_ros, typedef_text
 from .local import HandledLocally
 
 log = logging.getLogger(__name__)
@@ -163,6 +163,7 @@ class RosBus:
         self._local: dict[str, HandledLocally] = {}
         self.local_delivered = 0
         self.local_handlers: dict[str, Callable[[str], None]] = {}
+        self.interfaces: Any = None  # RosInterfaces: services and actions across the bridge (backend.py)
         self._clients: dict[
             str, tuple[type, Any]
         ] = {}  # service -> (its type's class, the rclpy client)  # topic -> a node's in-process handler
@@ -213,6 +214,10 @@ class RosBus:
 
     def service_names_and_types(self) -> list[tuple[str, list[str]]]:
         return [(name, list(types)) for name, types in self.node.get_service_names_and_types()]
+
+    @staticmethod
+    def typedef_text(type_name: str) -> str:
+        return typedef_text(type_name)
 
     def topics(self) -> list[tuple[str, str]]:
         merged = {name: types[0] for name, types in self._graph().items() if types}

@@ -16,6 +16,8 @@ import base64
 import binascii
 import importlib
 import math
+import os
+import sys
 from functools import lru_cache
 from typing import Any
 
@@ -76,6 +78,35 @@ def service_class(type_name: str) -> type:
     return cls
 
 
+def _interface_class(type_name: str, kind: str, marker: str) -> type:
+    """The generated class for ``pkg/<kind>/Name`` (or ``pkg/Name``); MessageError if it is not installed."""
+    parts = type_name.split("/") if isinstance(type_name, str) else []
+    if len(parts) == 3 and parts[1] == kind:
+        pkg, name = parts[0], parts[2]
+    elif len(parts) == 2:
+        pkg, name = parts
+    else:
+        raise MessageError(f"invalid {kind} type name {str(type_name)[:80]!r}")
+    try:
+        cls = getattr(importlib.import_module(f"{pkg}.{kind}"), name)
+    except (ImportError, AttributeError, ValueError):
+        raise MessageError(f"{kind} type {pkg}/{kind}/{name} is not installed here") from None
+    if not hasattr(cls, marker):
+        raise MessageError(f"{pkg}/{kind}/{name} is not a{'n' if kind == 'action' else ''} {kind} type")
+    return cls
+
+
+@lru_cache(maxsize=128)
+def action_class(type_name: str) -> type:
+    """The generated class for ``pkg/action/Name`` (or ``pkg/Name``); MessageError if not installed."""
+    return _interface_class(type_name, "action", "Goal")
+
+
+def interface_name(cls: type, kind: str) -> str:
+    """``std_srvs.srv.SetBool`` -> ``std_srvs/srv/SetBool`` (``kind``: srv or action)."""
+    return f"{cls.__module__.split('.')[0]}/{kind}/{cls.__name__}"
+
+
 def type_name_of(cls: type) -> str:
     """``geometry_msgs.msg.Twist`` -> ``geometry_msgs/msg/Twist``."""
     pkg = cls.__module__.split(".")[0]
@@ -89,6 +120,48 @@ def _fields(cls: type) -> tuple[tuple[str, Any], ...]:
 
 def _nested_class(t: rd.NamespacedType) -> type:
     return message_class("/".join([*t.namespaces, t.name]))
+
+
+def _share_dir(pkg: str) -> str:
+    """A package's share directory: from the ament index (a sourced ROS 2), else beside this Python's
+    prefix (the PyPI wheels install ``share/<pkg>`` there and set no AMENT_PREFIX_PATH)."""
+    try:
+        from ament_index_python.packages import get_package_share_directory
+
+        return str(get_package_share_directory(pkg))
+    except Exception:
+        return os.path.join(sys.prefix, "share", pkg)
+
+
+@lru_cache(maxsize=128)
+def typedef_text(type_name: str) -> str:
+    """The full definition of a message type, as ``gendeps --cat`` and rosapi's
+    ``topics_and_raw_types`` give it: its ``.msg`` text, then each type it uses (depth first, once
+    each) after a line of ``=`` and ``MSG: pkg/Type``. A comment line saying why when it cannot be read."""
+    out: list[str] = []
+    seen: set[str] = set()
+    stack = [normalize_type(type_name)]
+    root = True
+    try:
+        while stack:
+            full = stack.pop()
+            pkg, _, name = full.split("/")
+            if not root:
+                out.append("\n" + "=" * 80 + f"\nMSG: {pkg}/{name}\n")
+            root = False
+            with open(os.path.join(_share_dir(pkg), "msg", f"{name}.msg"), encoding="utf-8") as f:
+                out.append(f.read())
+            for _field, slot in _fields(message_class(full)):
+                while isinstance(slot, rd.AbstractNestedType):
+                    slot = slot.value_type
+                if isinstance(slot, rd.NamespacedType):
+                    dep = "/".join([*slot.namespaces, slot.name])
+                    if dep not in seen:
+                        seen.add(dep)
+                        stack.append(dep)
+    except (OSError, LookupError, MessageError, ValueError) as exc:
+        return f"# failed to get full definition text for {type_name}: {exc}"
+    return "".join(out)
 
 
 # -- JSON -> ROS ----------------------------------------------------------------------------------

@@ -57,3 +57,47 @@ async def test_a_service_outside_the_glob_is_result_false(session):
         await ws.close()
     finally:
         await backend.stop()
+
+
+async def test_actions_outside_the_glob_are_status_errors(session):
+    """--actions-glob: a goal to an action outside it, or advertising one, is a status error naming the
+    id; nothing reaches a provider. Inside it, goals reach the provider."""
+    backend = Backend(BackendConfig(bridge_port=0, api_port=0, sim=False, actions_glob="/arm/*"))
+    await backend.start()
+    try:
+        url = f"ws://127.0.0.1:{backend.bridge_port}/"
+        provider, caller = await session.ws_connect(url), await session.ws_connect(url)
+        await provider.send_json(
+            {"op": "advertise_action", "id": "a1", "action": "/drive/go", "type": "test_msgs/Fibonacci"}
+        )
+        status = await frames_until(provider, lambda m: m.get("op") == "status")
+        assert status["id"] == "a1" and "/drive/go is not exposed" in status["msg"]
+        await caller.send_json(
+            {
+                "op": "send_action_goal",
+                "id": "g1",
+                "action": "/drive/go",
+                "action_type": "test_msgs/Fibonacci",
+                "args": {"order": 1},
+            }
+        )
+        status = await frames_until(caller, lambda m: m.get("op") == "status")
+        assert status["id"] == "g1" and "--actions-glob" in status["msg"]
+        await provider.send_json(
+            {"op": "advertise_action", "action": "/arm/home", "type": "test_msgs/Fibonacci"}
+        )
+        await caller.send_json(
+            {
+                "op": "send_action_goal",
+                "id": "g2",
+                "action": "/arm/home",
+                "action_type": "test_msgs/Fibonacci",
+                "args": {"order": 1},
+            }
+        )
+        goal = await frames_until(provider, lambda m: m.get("op") == "send_action_goal")
+        assert goal["action"] == "/arm/home"  # the only goal that reached the provider
+        await provider.close()
+        await caller.close()
+    finally:
+        await backend.stop()

@@ -18,7 +18,7 @@ try:
     from geometry_msgs.msg import PoseStamped, Twist, TwistStamped  # noqa: F401
     from nav_msgs.msg import Odometry  # noqa: F401
     from rclpy.context import Context
-    from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+    from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor, SingleThreadedExecutor
     from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy  # noqa: F401
     from std_msgs.msg import String  # noqa: F401
 except ImportError as exc:  # pragma: no cover - depends on the install
@@ -46,11 +46,16 @@ def use_test_domain():
 
 
 class Peer:
-    def __init__(self, name: str = "arbiter_test_peer") -> None:
+    def __init__(self, name: str = "arbiter_test_peer", threads: int = 1) -> None:
+        """``threads`` > 1: callbacks that block (an action server's) do not hold the others up."""
         self.context = Context()
         rclpy.init(context=self.context, domain_id=DOMAIN)
         self.node = rclpy.create_node(name, context=self.context)
-        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor = (
+            MultiThreadedExecutor(num_threads=threads, context=self.context)
+            if threads > 1
+            else SingleThreadedExecutor(context=self.context)
+        )
         self.executor.add_node(self.node)
         self.subscriptions: dict = {}
         self.thread = threading.Thread(target=self._spin, daemon=True)
