@@ -14,7 +14,8 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
+from typing import TypeVar
 
 from ..analytics.linkcurve import RUNNING, LinkSweepView, measured_p95
 from ..latency.topics_client import TopicsState
@@ -35,6 +36,7 @@ from .views import (
     status_view,
 )
 
+T = TypeVar("T")
 COUNT_PERIOD_S = 1.0  # the status line's sample count follows at most this often
 
 CONTROL, ANALYTICS, LATENCY, TOPICS = "control", "analytics", "latency", "topics"
@@ -63,6 +65,16 @@ class Shown:
 
     def shows(self, screen: str) -> bool:
         return self.screen == screen or self.dashboard
+
+
+def _kept(old: T, new: T) -> T:
+    """``old`` when ``new`` equals it: an unchanged part stays the same object, so a frame whose parts
+    are all unchanged is the same frame."""
+    return old if new == old else new
+
+
+def astuple_shallow(frame: Frame) -> tuple[object, ...]:
+    return tuple(getattr(frame, f.name) for f in fields(frame))
 
 
 class FrameClock:
@@ -157,23 +169,25 @@ class FrameSampler:
         status = self._status(f.status, now, bool(slow), force)
         robot, trail, analytics, latency, sweep = f.robot, f.map, f.analytics, f.latency, f.link_sweep
         if shown.screen == CONTROL and (force or not (slow and shown.dashboard)):
-            robot = robot_view(s.link, s.loop, s.too_small)
-            trail = map_view(s.link, s.loop, f.map)
+            robot = _kept(f.robot, robot_view(s.link, s.loop, s.too_small))
+            trail = _kept(f.map, map_view(s.link, s.loop, f.map))
         if ANALYTICS in slow and shown.shows(ANALYTICS):
             analytics = analytics_view(s.store, f.analytics, s.loop)
             sweep = self._measured_p95(sweep)
         if LATENCY in slow and shown.shows(LATENCY):
             # not at the UI rate: the console's own figures change with every round trip, and a line
             # repainted at the UI rate made every frame span the screen below it (bench/pi.py)
-            latency = self.latency()
+            latency = _kept(f.latency, self.latency())
         topics = f.topics
         if TOPICS in slow:
             answer = self._topics if self._topics is not None else topics
             self._topics = None
             if answer is not topics or topics.echo != s.echo.current:
                 topics = replace(answer, echo=s.echo.current)
-        self.frame = Frame(status, robot, trail, analytics, latency, topics, sweep)
-        return self.frame
+        parts = (_kept(f.status, status), robot, trail, analytics, latency, topics, sweep)
+        if any(new is not old for new, old in zip(parts, astuple_shallow(f), strict=True)):
+            self.frame = Frame(*parts)
+        return self.frame  # nothing changed: the same frame, which the shell then does not hand on
 
     def tracker_view(self) -> LatencyView | None:
         """What the tracker's poller last brought (None: simulated, or no tracker)."""

@@ -13,15 +13,17 @@ T = TypeVar("T")
 
 async def poll_forever(
     poll: Callable[[], Awaitable[T]],
-    period_s: float,
+    period_s: float | Callable[[], float],
     deliver: Callable[[T], None],
     wanted: Callable[[], bool] = lambda: True,
     clock: Callable[[], float] = time.monotonic,
 ) -> None:
     """``poll()`` every ``period_s`` (from the start of one to the start of the next, or at once after a
-    poll that took longer), while ``wanted()``; each answer goes to ``deliver``. Runs until cancelled."""
+    poll that took longer; a callable: asked each time), while ``wanted()``; each answer goes to
+    ``deliver``. Runs until cancelled."""
     while True:
         started = clock()
         if wanted():
             deliver(await poll())
-        await asyncio.sleep(max(0.0, period_s - (clock() - started)))
+        period = period_s() if callable(period_s) else period_s
+        await asyncio.sleep(max(0.0, period - (clock() - started)))

@@ -33,7 +33,8 @@ class Settings:
     key_timeout: float = 0.6
     ui_rate: float = 5.0  # redraws per second, however fast data arrives
     analytics_rate: float = 2.0  # analytics and latency figures (screens 2, 3, the dashboard): no flicker
-    poll_period: float = 0.5  # tracker API poll, 2 Hz
+    poll_period: float = 0.5  # tracker API poll, 2 Hz, while a screen shows the latency figures...
+    idle_poll_period: float = 2.0  # ...and every 2 s while none does (the status line's reachability)
     live: bool = True  # timers and workers on; snapshot tests turn it off for still frames
     handle_signals: bool = True
     offset_warn_ms: float = 10.0  # warn when the estimated clock offset to the tracker exceeds this

@@ -32,7 +32,7 @@ from ..latency.topics_client import TopicsPoller
 from ..latency.tracker_client import TrackerClient
 from ..link.base import Link, PendingLink
 from ..session.config import save_theme
-from ..session.frames import CONTROL, TOPICS, Frame, FrameClock, FrameSampler, Shown
+from ..session.frames import CONTROL, LATENCY, TOPICS, Frame, FrameClock, FrameSampler, Shown
 from ..session.link_sweep import sweep_curve
 from ..session.pollers import poll_forever
 from ..session.robot import MissionFinished, RobotSession
@@ -180,7 +180,7 @@ class ArbiterApp(App[None]):
         if tracker is None or not self.settings.live:
             return
         self.run_worker(
-            poll_forever(tracker.poll, self.settings.poll_period, lambda _view: None),
+            poll_forever(tracker.poll, self._poll_period, lambda _view: None),
             group="poll", exclusive=True,
         )  # fmt: skip
         topics = poll_forever(
@@ -190,6 +190,12 @@ class ArbiterApp(App[None]):
             lambda: self._shown().shows(TOPICS),
         )
         self.run_worker(topics, group="topics", exclusive=True)
+
+    def _poll_period(self) -> float:
+        """The tracker is polled at ``poll_period`` while the latency figures are shown, else only for
+        the status line (an HTTP poll and its records cost more than a bare Textual app's whole frame)."""
+        shows = self._shown().shows(LATENCY)
+        return self.settings.poll_period if shows else self.settings.idle_poll_period
 
     def _on_signal(self, sig: int) -> None:
         self.session.stop(f"signal {signal.Signals(sig).name}")
@@ -244,9 +250,10 @@ class ArbiterApp(App[None]):
         shown = self._shown()
         frame = self.sampler.sample(shown, force)
         for screen in stack:
-            if isinstance(screen, BaseScreen):
+            if isinstance(screen, BaseScreen) and (frame is not screen.frame or screen.plots_waiting):
                 screen.plot_draws = None if force else 1  # a tick's frame draws at most one plot
-                screen.frame = frame
+                screen.plots_waiting = False
+                screen.frame = frame  # (the same frame again: only for the plots that waited)
         if shown.shows("analytics"):
             mission = self.sampler.sweep_wanted()
             if mission is not None:

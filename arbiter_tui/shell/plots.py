@@ -116,10 +116,11 @@ class Plot(PlotWidget, Generic[V, K], can_focus=False):
         if key == self._key:
             return  # nothing this plot draws changed
         wait = self.follow_period(self._key, key) - (time.monotonic() - self._drawn_at)
-        if wait > 0:  # drawn at the first frame after the period, with what is newest then
+        if wait > 0 or (budgeted and not self._take_draw()):
+            # drawn at the first frame after its period, or after the plot that drew in this one, with
+            # what is newest then
+            self._waiting()
             return
-        if budgeted and not self._take_draw():
-            return  # another plot drew in this frame: this one in the next
         self._key = key
         self._drawn_at = time.monotonic()
         self.draws += 1
@@ -129,6 +130,12 @@ class Plot(PlotWidget, Generic[V, K], can_focus=False):
             # Draw onto the canvases now rather than in the next paint: textual-plot does it in render(),
             # during a frame, and the canvases it dirties then take a frame of their own.
             self.render()
+
+    def _waiting(self) -> None:
+        from .screens.base import BaseScreen  # (the screens import the plots)
+
+        if isinstance(self.screen, BaseScreen):
+            self.screen.plots_waiting = True
 
     def _take_draw(self) -> bool:
         """One of the plot redraws this frame allows (the screen's ``plot_draws``), if one is left."""

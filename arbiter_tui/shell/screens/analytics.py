@@ -15,6 +15,7 @@ from textual.geometry import Size
 from textual.reactive import reactive
 from textual.widget import Widget
 from textual.widgets import DataTable
+from textual.widgets.data_table import ColumnKey
 
 from ...analytics import table as T
 from ...analytics.linkcurve import LinkSweepView
@@ -97,7 +98,10 @@ class CompareTable(DataTable[Text]):
             for i, (before, after) in enumerate(zip(old.rows, table.rows, strict=True)):
                 for j, (k, a, b) in enumerate(zip(table.keys, before, after, strict=True)):
                     if a != b or (j in old.marked[i]) != (j in table.marked[i]):
-                        self.update_cell(str(i), k, _cell(table, i, j), update_width=True)
+                        cell = _cell(table, i, j)
+                        # the columns' widths are worked out again only for a cell wider than its column
+                        wider = cell.cell_len > self.columns[ColumnKey(k)].content_width
+                        self.update_cell(str(i), k, cell, update_width=wider)
             return
         self.fills += 1
         self.clear(columns=True)

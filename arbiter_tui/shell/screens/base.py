@@ -57,6 +57,7 @@ class BaseScreen(Screen[None]):
     # one frame made it longer than a control period under a Pi-class quota; the others draw in the
     # frames after (bench/pi.py)
     plot_draws: int | None = None
+    plots_waiting = False  # a plot put off its redraw: the next frame is handed on even if unchanged
 
     @property
     def console(self) -> Console:
