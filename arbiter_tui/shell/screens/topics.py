@@ -248,8 +248,7 @@ class TopicsScreen(BaseScreen):
     def _echo(self, name: str | None) -> None:
         """Echo ``name``'s latest message (None: stop), through the link's own subscription."""
         figures = next((t for t in self.state.topics if t.name == name), None)
-        self.console.session.echo_topic(figures)
-        self.console.refresh_frame(force=True)
+        self.console.session.echo_topic(figures)  # shown with the next topics answer (at most 0.5 s)
 
     def on_screen_suspend(self) -> None:
         self._echo(None)  # nobody looks at it: unsubscribe
