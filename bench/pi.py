@@ -274,6 +274,8 @@ def main() -> int:
                 "gap_p50_ms": pct(g, 0.5), "gap_p95_ms": pct(g, 0.95), "gap_max_ms": top(g),
                 "cpu_percent_of_quota": round(100 * cpu / dt / a.quota, 1),
                 "throttled_percent_of_periods": round(100 * (th1 - th0) / max(1, n1 - n0), 1),
+                # where the long gaps were: seconds into the measurement, and the gap
+                "gaps_over_150_ms": [(round(i * 0.1, 1), round(x)) for i, x in enumerate(g) if x > 150],
             }  # fmt: skip
             tmux("send-keys", "-t", session, "space")
         result["console"] = screens

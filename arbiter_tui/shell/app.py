@@ -32,7 +32,7 @@ from ..latency.topics_client import TopicsPoller
 from ..latency.tracker_client import TrackerClient
 from ..link.base import Link, PendingLink
 from ..session.config import save_theme
-from ..session.frames import CONTROL, LATENCY, TOPICS, Frame, FrameClock, FrameSampler, Shown
+from ..session.frames import CONTROL, LATENCY, TOPICS, Frame, FrameSampler, Shown
 from ..session.link_sweep import sweep_curve
 from ..session.pollers import poll_forever
 from ..session.robot import MissionFinished, RobotSession
@@ -115,8 +115,7 @@ class ArbiterApp(App[None]):
         self._theme_loaded = False
 
     @property
-    def frame(self) -> Frame:
-        """The frame on screen now."""
+    def frame(self) -> Frame:  # the frame on screen now
         return self.sampler.frame
 
     def _session_event(self, event: object) -> None:
@@ -134,13 +133,7 @@ class ArbiterApp(App[None]):
         self.set_timer(FREEZE_AFTER_S, freeze_heap)  # what start made
         if self.settings.live:
             # the robot's clock (control, sampling, simulation, on their own thread) says when to paint
-            frames = FrameClock(1.0 / self.settings.ui_rate, 1.0 / (self.settings.repeat_rate or 10.0))
-
-            def ticked() -> None:  # the session's thread: post_message is thread-safe
-                if frames.ticked():
-                    self.post_message(FrameDue(frames))
-
-            self.session.on_tick = ticked
+            lifecycle.frames_after_ticks(self, self.session, self.settings)
             self.session.start()
             if self._connector is not None:  # the link (and the backend) start after the first frame
                 connect = partial(lifecycle.connect, self._connector, self)
@@ -175,27 +168,17 @@ class ArbiterApp(App[None]):
         self.refresh_frame(force=True)
 
     def _poll(self) -> None:
-        """The tracker's two pollers: latency records always, topics while a screen shows them."""
-        tracker = self.tracker
-        if tracker is None or not self.settings.live:
+        """The tracker's two pollers: latency records (every ``poll_period`` while a screen shows them,
+        else every ``idle_poll_period``, for the status line: a poll costs more than a bare Textual
+        app's frame), topics while a screen shows them."""
+        tracker, s = self.tracker, self.settings
+        if tracker is None or not s.live:
             return
-        self.run_worker(
-            poll_forever(tracker.poll, self._poll_period, lambda _view: None),
-            group="poll", exclusive=True,
-        )  # fmt: skip
-        topics = poll_forever(
-            TopicsPoller(tracker).poll,
-            TOPICS_PERIOD_S,
-            self.sampler.topics_polled,
-            lambda: self._shown().shows(TOPICS),
-        )
+        period = lambda: s.poll_period if self._shown().shows(LATENCY) else s.idle_poll_period  # noqa: E731
+        self.run_worker(poll_forever(tracker.poll, period, lambda _: None), group="poll", exclusive=True)
+        shown = lambda: self._shown().shows(TOPICS)  # noqa: E731
+        topics = poll_forever(TopicsPoller(tracker).poll, TOPICS_PERIOD_S, self.sampler.topics_polled, shown)
         self.run_worker(topics, group="topics", exclusive=True)
-
-    def _poll_period(self) -> float:
-        """The tracker is polled at ``poll_period`` while the latency figures are shown, else only for
-        the status line (an HTTP poll and its records cost more than a bare Textual app's whole frame)."""
-        shows = self._shown().shows(LATENCY)
-        return self.settings.poll_period if shows else self.settings.idle_poll_period
 
     def _on_signal(self, sig: int) -> None:
         self.session.stop(f"signal {signal.Signals(sig).name}")

@@ -1,5 +1,5 @@
-"""Starting and ending the console's process: the link made in a worker after the first frame, and a
-hang-up or termination signal that always ends the process."""
+"""Starting and ending the console's process: the link made in a worker after the first frame, frames
+paced by the robot's clock, and a hang-up or termination signal that always ends the process."""
 
 from __future__ import annotations
 
@@ -15,7 +15,10 @@ from textual.app import App
 
 from ..latency.tracker_client import TrackerClient
 from ..link.base import Link
-from .messages import BackendFailed, BackendStarted
+from ..session.frames import FrameClock
+from ..session.robot import DEFAULT_CONTROL_HZ, RobotSession
+from ..session.settings import Settings
+from .messages import BackendFailed, BackendStarted, FrameDue
 
 log = logging.getLogger(__name__)
 
@@ -36,6 +39,18 @@ def connect(connector: Connector, app: App[object]) -> None:
         cleanup()
         return
     app.post_message(BackendStarted(link, tracker, cleanup))
+
+
+def frames_after_ticks(app: App[object], session: RobotSession, settings: Settings) -> None:
+    """Frames at ``ui_rate``, each asked for just after a control tick (``FrameClock``): the session's
+    thread posts ``FrameDue`` (``post_message`` is thread-safe)."""
+    frames = FrameClock(1.0 / settings.ui_rate, 1.0 / (settings.repeat_rate or DEFAULT_CONTROL_HZ))
+
+    def ticked() -> None:
+        if frames.ticked():
+            app.post_message(FrameDue(frames))
+
+    session.on_tick = ticked
 
 
 def on_hangup(handler: Callable[[int], None]) -> None:

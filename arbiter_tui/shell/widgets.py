@@ -74,14 +74,23 @@ def fit_lines(text: Text, width: int) -> Text:
 
 
 def fitted(widget: Widget, text: Text) -> Text:
-    """``text`` fitted to ``widget``'s width; when that takes another number of rows than the last time,
-    a new layout (a ``height: auto`` widget is sized when laid out, not when its figures change: a line
-    that came with the first round trip was otherwise cut until the next resize)."""
-    text = fit_lines(text, widget.content_size.width)
+    """``text`` fitted to ``widget``'s width, on as many rows as the same lines have ever taken at this
+    width (blank rows below when they take fewer); when that changes, a new layout (a ``height: auto``
+    widget is sized when laid out, not when its figures change: a line that came with the first round
+    trip was otherwise cut until the next resize). The same lines never take fewer rows: figures whose
+    widths varied around the width changed the height every few seconds, and each new layout repaints
+    the whole screen."""
+    width = widget.content_size.width
+    shape = (width, text.plain.count("\n"))  # the same lines at the same width: their rows never shrink
+    text = fit_lines(text, width)
     rows = text.plain.count("\n") + 1
-    if rows != getattr(widget, "_fit_rows", rows):
+    last_shape, last_rows = getattr(widget, "_fit", (None, rows))
+    most = max(last_rows, rows) if shape == last_shape else rows
+    if most != last_rows:
         widget.refresh(layout=True)
-    widget._fit_rows = rows  # type: ignore[attr-defined]
+    widget._fit = (shape, most)  # type: ignore[attr-defined]
+    if rows < most:
+        text.append("\n" * (most - rows))
     return text
 
 
