@@ -34,6 +34,7 @@ from arbiter_core.topics import QOS_DEPTH, is_command
 
 from ..bus import Callback, TypeClash
 from .convert import message_class, service_class, to_cbor, to_json, to_ros, typedef_text
+from .futures import on_loop
 from .local import HandledLocally
 
 log = logging.getLogger(__name__)
@@ -415,21 +416,7 @@ class RosBus:
         else:
             raise MessageError(f"Service {service} is not available")
         future = client.call_async(request)
-        answer: asyncio.Future[Any] = self.loop.create_future()
-
-        def settle(done: Any) -> None:  # executor thread (or here, when already done)
-            def on_loop() -> None:
-                if answer.done():
-                    return
-                if done.exception() is not None:
-                    answer.set_exception(done.exception())
-                else:
-                    answer.set_result(done.result())
-
-            with contextlib.suppress(RuntimeError):
-                self.loop.call_soon_threadsafe(on_loop)
-
-        future.add_done_callback(settle)
+        answer = on_loop(self.loop, future)
         try:
             response = await answer
         except asyncio.CancelledError:

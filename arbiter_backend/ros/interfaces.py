@@ -49,6 +49,7 @@ from ..provided import (
     Goal,
 )
 from .convert import action_class, interface_name, service_class, to_json, to_ros
+from .futures import on_loop
 
 log = logging.getLogger(__name__)
 
@@ -302,22 +303,7 @@ class RosInterfaces:
 
     def _on_loop(self, future: Any) -> asyncio.Future[Any]:
         """An rclpy future as an asyncio one (its result crosses from the executor thread)."""
-        answer: asyncio.Future[Any] = self.loop.create_future()
-
-        def settle(done: Any) -> None:
-            def on_loop() -> None:
-                if answer.done():
-                    return
-                if done.exception() is not None:
-                    answer.set_exception(done.exception())
-                else:
-                    answer.set_result(done.result())
-
-            with contextlib.suppress(RuntimeError):
-                self.loop.call_soon_threadsafe(on_loop)
-
-        future.add_done_callback(settle)
-        return answer
+        return on_loop(self.loop, future)
 
     async def send_goal(
         self,
