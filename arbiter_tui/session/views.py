@@ -1,9 +1,9 @@
 """What each widget shows, as frozen snapshots built from the console's state (pure: no Textual).
 
-The app samples its sources (the link's telemetry, written on roslibpy's thread; the control loop; the
-store; the tracker poller) at the UI rate and assigns these snapshots to its reactive attributes.
+The frame sampler (``frames.py``) builds them from its sources (the link's telemetry, written on
+roslibpy's thread; the control loop; the store; the tracker poller) into one frame at the UI rate.
 Values are rounded to what the screen prints, so a snapshot equals the previous one exactly when the
-screen would not change: Textual then calls no watcher and the widget does no work.
+screen would not change: the widget that picks it then does no work.
 """
 
 from __future__ import annotations

@@ -27,6 +27,7 @@ from ..analytics.styles import GOAL, ROBOT_ARROWS, WAYPOINT, style_of
 from ..session.frames import Frame
 from ..session.views import PLOT_PERIOD_S, AnalyticsView, LatencySnapshot, MapView, thin
 from .messages import GoalPicked
+from .screens.base import BaseScreen
 
 V = TypeVar("V")  # the part of the frame a plot shows
 K = TypeVar("K")  # what it draws of it: equal keys, equal drawings
@@ -132,15 +133,11 @@ class Plot(PlotWidget, Generic[V, K], can_focus=False):
             self.render()
 
     def _waiting(self) -> None:
-        from .screens.base import BaseScreen  # (the screens import the plots)
-
         if isinstance(self.screen, BaseScreen):
             self.screen.plots_waiting = True
 
     def _take_draw(self) -> bool:
         """One of the plot redraws this frame allows (the screen's ``plot_draws``), if one is left."""
-        from .screens.base import BaseScreen  # (the screens import the plots)
-
         screen = self.screen
         if not isinstance(screen, BaseScreen) or screen.plot_draws is None:
             return True

@@ -1,7 +1,6 @@
 """call_service to any service on the ROS graph (issue 34, item 1): answers, failures as ``result: false``
 within the call's ``timeout``, never a hang, and the connection stays up."""
 
-import asyncio
 import json
 import threading
 
@@ -10,7 +9,7 @@ import pytest
 
 from ..support.backend import start_backend
 from ..support.ros import Peer, use_test_domain
-from ..support.waits import async_until
+from ..support.waits import async_poll, async_until
 
 srv = pytest.importorskip("rcl_interfaces.srv")
 
@@ -61,11 +60,9 @@ async def test_call_service_reaches_any_service_and_fails_cleanly(peer, stuck_pe
         ws = await session.ws_connect(url)
         name = "/arbiter_srv_peer/get_parameters"
         # the graph needs a moment to show the peer's services to the backend
-        for _ in range(100):
-            reply = await call(ws, id="g", service=name, args={"names": ["speed"]})
-            if reply["result"]:
-                break
-            await asyncio.sleep(0.1)
+        reply = await async_poll(
+            lambda: call(ws, id="g", service=name, args={"names": ["speed"]}), lambda r: r["result"]
+        )
         assert reply["result"] is True, reply
         assert reply["values"]["values"][0]["double_value"] == 1.5
         assert reply["service"] == name
@@ -87,11 +84,11 @@ async def test_call_service_reaches_any_service_and_fails_cleanly(peer, stuck_pe
         # a server that does not answer: result false after the call's timeout, and the socket is free (the
         # timeout long enough that the other call, answered at once, comes first on a loaded machine);
         # first the graph must show the backend that server (else: "does not exist", at once)
-        for _ in range(100):
-            listed = await call(ws, id="s", service="/rosapi/services")
-            if "/stuck" in listed["values"]["services"]:
-                break
-            await asyncio.sleep(0.1)
+        listed = await async_poll(
+            lambda: call(ws, id="s", service="/rosapi/services"),
+            lambda r: "/stuck" in r["values"]["services"],
+        )
+        assert "/stuck" in listed["values"]["services"], listed
         await ws.send_str(json.dumps({"op": "call_service", "id": "t", "service": "/stuck", "timeout": 3}))
         await ws.send_str(
             json.dumps({"op": "call_service", "id": "g2", "service": name, "args": {"names": []}})
@@ -128,15 +125,6 @@ async def test_rosapi_answers_from_the_live_graph(peer, ros_backend):
             assert reply["result"] is True, reply
             return reply["values"]
 
-        async def eventually(
-            check, timeout: float = 15.0
-        ) -> bool:  # the graph takes a moment to show the peer
-            for _ in range(int(timeout / 0.1)):
-                if await check():
-                    return True
-                await asyncio.sleep(0.1)
-            return await check()
-
         async def peer_seen() -> bool:
             return "/arbiter_srv_peer" in (await values("/rosapi/nodes"))["nodes"]
 
@@ -144,8 +132,8 @@ async def test_rosapi_answers_from_the_live_graph(peer, ros_backend):
             found = await values("/rosapi/publishers", {"topic": "/arbiter_graph_test"})
             return "/arbiter_srv_peer" in found["publishers"]
 
-        assert await eventually(peer_seen)
-        assert await eventually(peer_publishes)
+        assert await async_poll(peer_seen, bool, 15.0)  # the graph takes a moment to show the peer
+        assert await async_poll(peer_publishes, bool, 15.0)
         details = await values("/rosapi/node_details", {"node": "/arbiter_srv_peer"})
         assert "/arbiter_graph_test" in details["publishing"]
         assert "/arbiter_srv_peer/get_parameters" in details["services"]
@@ -168,11 +156,11 @@ async def test_rosapi_parameters_and_raw_types_from_the_graph(peer, ros_backend)
     url = f"ws://127.0.0.1:{ros_backend.bridge_port}/"
     async with aiohttp.ClientSession() as session:
         ws = await session.ws_connect(url)
-        for _ in range(150):  # the graph needs a moment to show the peer's parameter services
-            reply = await call(ws, id="n", service="/rosapi/get_param_names")
-            if "/arbiter_srv_peer:speed" in reply["values"]["names"]:
-                break
-            await asyncio.sleep(0.1)
+        reply = await async_poll(  # the graph needs a moment to show the peer's parameter services
+            lambda: call(ws, id="n", service="/rosapi/get_param_names"),
+            lambda r: "/arbiter_srv_peer:speed" in r["values"]["names"],
+            15.0,
+        )
         assert "/arbiter_srv_peer:speed" in reply["values"]["names"], reply
 
         async def param(service, **args):
@@ -198,11 +186,12 @@ async def test_rosapi_parameters_and_raw_types_from_the_graph(peer, ros_backend)
         reply = await param("get_param", name="speed")
         assert reply["result"] is False and "<node_name>:<param_name>" in reply["values"]
 
-        for _ in range(100):
-            raw = (await call(ws, id="raw", service="/rosapi/topics_and_raw_types"))["values"]
-            if "/arbiter_raw_types_test" in raw["topics"]:
-                break
-            await asyncio.sleep(0.1)
+        raw = (
+            await async_poll(
+                lambda: call(ws, id="raw", service="/rosapi/topics_and_raw_types"),
+                lambda r: "/arbiter_raw_types_test" in r["values"]["topics"],
+            )
+        )["values"]
         i = raw["topics"].index("/arbiter_raw_types_test")
         assert raw["types"][i] == "std_msgs/msg/String"
         assert "string data" in raw["typedefs_full_text"][i]

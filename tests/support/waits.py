@@ -4,7 +4,10 @@ machine is loaded. A fixed sleep remains only where a test proves that nothing h
 
 import asyncio
 import time
-from collections.abc import Callable
+from collections.abc import Awaitable, Callable
+from typing import TypeVar
+
+T = TypeVar("T")
 
 
 def wait_for(predicate: Callable[[], object], timeout: float = 5.0, interval: float = 0.02) -> bool:
@@ -25,3 +28,19 @@ async def async_until(predicate: Callable[[], object], timeout: float = 5.0, int
             return True
         await asyncio.sleep(interval)
     return bool(predicate())
+
+
+async def async_poll(
+    probe: Callable[[], Awaitable[T]],
+    done: Callable[[T], object],
+    timeout: float = 10.0,
+    interval: float = 0.1,
+) -> T:
+    """Ask ``probe()`` (a request to a server) until ``done(answer)`` holds or ``timeout`` passes; the last
+    answer either way, for the test to assert on (and show when it fails)."""
+    deadline = time.monotonic() + timeout
+    answer = await probe()
+    while not done(answer) and time.monotonic() < deadline:
+        await asyncio.sleep(interval)
+        answer = await probe()
+    return answer
