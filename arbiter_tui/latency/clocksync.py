@@ -150,6 +150,7 @@ class LatencyMeter:
         self.loss_window_s = loss_window_s
         self.max_pending = max_pending
         self.sent = 0
+        self.last_send_mono: float | None = None  # when the newest command was written to the socket
         self.matched = 0
         self.negative = 0
         self.lost = 0
@@ -165,6 +166,7 @@ class LatencyMeter:
                 self._count_lost(send_mono)
             self._pending[seq] = (send_mono, stamp_ms)
             self.sent += 1
+            self.last_send_mono = send_mono
 
     def on_report(self, record: LatencyRecord, arrival_mono: float) -> Sample | None:
         """Match a tracker record to our send; None when it is not one of ours (or has no ``seq``,

@@ -86,23 +86,55 @@ class FrameClock:
     timer of its own drifts over the control ticks and, in a frame that covers one, delayed that command
     (bench/pi.py, the dashboard at 200x60). Started from the tick instead, the frame is over long before
     the next one. ``ticked`` runs on the session's thread after each control tick; ``drawn`` on the UI's
-    once the frame is sampled (until then no other frame is asked for: a slow UI never piles them up)."""
+    once the frame is sampled (until then no other frame is asked for: a slow UI never piles them up).
+
+    **The UI gives way to the robot.** Where painting a frame takes longer than a control period (a
+    big terminal on a slow CPU), the command after it leaves late. ``ticked`` is told how late each
+    command left (``late_s``); one later than ``LATE_S`` makes frames ``BACK_OFF`` times further apart
+    (up to ``SLOWEST_S``), and every ``RECOVER_TICKS`` punctual ticks in a row bring them ``RECOVER``
+    times closer again (down to the asked-for ``frame_s``). Where frames fit, nothing changes."""
+
+    LATE_S = 0.015  # a command that left this much after its time was held up
+    BACK_OFF = 1.5
+    RECOVER = 0.9
+    RECOVER_TICKS = 20  # two seconds of punctual commands at 10 Hz
+    SLOWEST_S = 1.0
 
     def __init__(self, frame_s: float, tick_s: float, clock: Callable[[], float] = time.monotonic) -> None:
-        self.frame_s = frame_s
+        self.asked_s = frame_s
+        self.frame_s = frame_s  # the current distance between frames
         self.tick_s = tick_s
         self.clock = clock
+        self.backed_off = 0  # times the frames were spread out (the bench reads it)
+        self.asked = 0  # frames asked for
         self._due = float("-inf")
         self._pending = False
+        self._punctual = 0
 
-    def ticked(self) -> bool:
-        """A control tick just ended: True when a frame is due now (and none is pending)."""
+    def ticked(self, late_s: float = 0.0) -> bool:
+        """A control tick just ended, its command ``late_s`` after its time: True when a frame is due
+        now (and none is pending)."""
+        self._adapt(late_s)
         now = self.clock()
         if self._pending or now < self._due:
             return False
         self._pending = True
         self._due = now + self.frame_s - self.tick_s / 2  # the tick nearest to one frame from now
+        self.asked += 1
         return True
+
+    def _adapt(self, late_s: float) -> None:
+        if late_s > self.LATE_S:
+            self._punctual = 0
+            slower = min(self.SLOWEST_S, max(self.asked_s, self.frame_s * self.BACK_OFF))
+            if slower > self.frame_s:
+                self.frame_s = slower
+                self.backed_off += 1
+            return
+        self._punctual += 1
+        if self._punctual >= self.RECOVER_TICKS and self.frame_s > self.asked_s:
+            self._punctual = 0
+            self.frame_s = max(self.asked_s, self.frame_s * self.RECOVER)
 
     def drawn(self) -> None:
         self._pending = False
@@ -115,13 +147,17 @@ class FrameSampler:
     calls it on its own thread; the sources it reads have their own locks."""
 
     def __init__(
-        self, session: RobotSession, settings: Settings, clock: Callable[[], float] = time.monotonic
+        self,
+        session: RobotSession,
+        settings: Settings,
+        clock: Callable[[], float] = time.monotonic,
+        tracker: TrackerClient | None = None,
     ):
         self.session = session
         self.settings = settings
         self.clock = clock
         self.frame = Frame()
-        self.tracker: TrackerClient | None = None  # the tracker the pollers ask (None: none yet)
+        self.tracker = tracker  # the tracker the pollers ask (None: none yet)
         self.start_error: str | None = None
         self._slow_at = {ANALYTICS: float("-inf"), LATENCY: float("-inf"), TOPICS: float("-inf")}
         self._count_at = float("-inf")

@@ -36,6 +36,7 @@ from ..control.loop import ControlLoop
 from ..control.teleop import MOVE_KEYS, SCALE_KEYS, STOP_KEYS, Teleop
 from ..link.base import DISCONNECTED, RECONNECTING, STARTING, Link
 from ..link.sim import SimLink
+from .collector import TickCollector
 from .echo import TopicEcho
 from .settings import Settings
 
@@ -102,6 +103,8 @@ class RobotSession:
         self.on_tick: Callable[[], None] = lambda: None  # after each control tick, on the session's thread
         self.ticks = 0  # control ticks run (tests and the bench read it)
         self.late_ticks = 0  # ticks that ran more than one period late
+        self.tick_late_s = 0.0  # how late the newest command left, after its tick's due time
+        self.collector = TickCollector()  # full garbage collections just after a tick (the thread's own)
         self._was_running = False
         self._thread: threading.Thread | None = None
         self._stopping = threading.Event()
@@ -148,6 +151,17 @@ class RobotSession:
         if event is not None:
             self.on_event(event)
 
+    def _lateness(self, due_s: float, last_due_s: float | None) -> float:
+        """How late the commands left: this tick's own end, or the newest command's write to the
+        socket (on the link's thread, so usually the previous tick's) after its tick's due time."""
+        late = time.monotonic() - due_s
+        sent = self.link.telemetry.meter.last_send_mono
+        if sent is not None and sent >= due_s:  # this tick's command is written already
+            late = max(late, sent - due_s)
+        elif sent is not None and last_due_s is not None and sent >= last_due_s:
+            late = max(late, sent - last_due_s)
+        return max(0.0, late)
+
     def sample(self) -> DataPoint | None:
         """One sample of the robot into the store (at the collection rate); the point recorded, if any."""
         if self.observer is not None:
@@ -176,6 +190,13 @@ class RobotSession:
             self._thread.start()
 
     def _run(self) -> None:
+        self.collector.begin()
+        try:
+            self._run_clocked()
+        finally:
+            self.collector.end()
+
+    def _run_clocked(self) -> None:
         periods = {
             self.tick_control: 1.0 / (self.config.repeat_rate or DEFAULT_CONTROL_HZ),
             self.sample: 1.0 / self.config.collection_rate,
@@ -183,6 +204,7 @@ class RobotSession:
         }
         now = time.monotonic()
         due = {job: now + period for job, period in periods.items()}
+        last_due: float | None = None
         while not self._stopping.is_set():
             job = min(due, key=due.__getitem__)
             wait = due[job] - time.monotonic()
@@ -190,6 +212,9 @@ class RobotSession:
                 break
             job()
             if job == self.tick_control:
+                self.tick_late_s = self._lateness(due[job], last_due)
+                last_due = due[job]
+                self.collector.after_tick(driving=self.loop.running or self.teleop.moving)
                 self.on_tick()
             period = periods[job]
             due[job] += period

@@ -41,16 +41,18 @@ def connect(connector: Connector, app: App[object]) -> None:
     app.post_message(BackendStarted(link, tracker, cleanup))
 
 
-def frames_after_ticks(app: App[object], session: RobotSession, settings: Settings) -> None:
-    """Frames at ``ui_rate``, each asked for just after a control tick (``FrameClock``): the session's
-    thread posts ``FrameDue`` (``post_message`` is thread-safe)."""
+def frames_after_ticks(app: App[object], session: RobotSession, settings: Settings) -> FrameClock:
+    """Frames at ``ui_rate``, each asked for just after a control tick (``FrameClock``), fewer while
+    commands leave late (the session's ``tick_late_s``): the session's thread posts ``FrameDue``
+    (``post_message`` is thread-safe)."""
     frames = FrameClock(1.0 / settings.ui_rate, 1.0 / (settings.repeat_rate or DEFAULT_CONTROL_HZ))
 
     def ticked() -> None:
-        if frames.ticked():
+        if frames.ticked(session.tick_late_s):
             app.post_message(FrameDue(frames))
 
     session.on_tick = ticked
+    return frames
 
 
 def on_hangup(handler: Callable[[int], None]) -> None:

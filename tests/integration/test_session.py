@@ -86,3 +86,38 @@ async def test_a_slow_paint_does_not_delay_the_commands(tmp_path):
         await pilot.press("space")
     assert len(gaps) >= 20
     assert max(gaps) < 0.25, f"a command waited {max(gaps) * 1000:.0f} ms behind a paint"
+
+
+class LateWrites(Timed):
+    """A link whose every command reaches the socket ``late_s`` after it was sent, as a link thread
+    starved of CPU by painting writes it (the meter is told the write time, as ``RosLink`` tells it)."""
+
+    def __init__(self, late_s: float):
+        super().__init__()
+        self.late_s = late_s
+        self.seq = 0
+
+    def send(self, v, w):
+        self.seq += 1
+        now = time.monotonic()
+        self.telemetry.meter.on_send(self.seq, time.time() * 1000.0, now + self.late_s)
+        return super().send(v, w)
+
+
+async def test_the_ui_gives_way_when_commands_leave_late(tmp_path):
+    """Commands that reach the socket 40 ms late spread the frames out (the UI gives way to the
+    robot); frames still come, at least one a second."""
+    link = LateWrites(0.04)
+    settings = Settings(mode="embedded", handle_signals=False, export_dir=tmp_path, repeat_rate=10.0)
+    app = make_app(settings, link, TrackerClient("http://127.0.0.1:9"))
+    async with app.run_test(size=(100, 30)) as pilot:
+        frames = app.frame_clock
+        assert frames is not None
+        app.session.select_algorithm("go_to_goal")
+        assert app.session.go() is None
+        assert await async_until(lambda: frames.frame_s >= frames.SLOWEST_S, timeout=20)
+        assert app.session.tick_late_s >= 0.03
+        asked = frames.asked  # ...and frames still come, each drawn before the next is asked for
+        assert await async_until(lambda: frames.asked >= asked + 2, timeout=5)
+        await pilot.press("space")
+
