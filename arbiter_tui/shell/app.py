@@ -32,13 +32,13 @@ from ..latency.topics_client import TopicsPoller
 from ..latency.tracker_client import TrackerClient
 from ..link.base import Link, PendingLink
 from ..session.config import save_theme
-from ..session.frames import CONTROL, LATENCY, TOPICS, Frame, FrameSampler, Shown
+from ..session.frames import CONTROL, LATENCY, TOPICS, Frame, FrameClock, FrameSampler, Shown
 from ..session.link_sweep import sweep_curve
 from ..session.pollers import poll_forever
 from ..session.robot import MissionFinished, RobotSession
 from ..session.settings import Settings
-from . import lifecycle, palette
-from .heap import FREEZE_AFTER_S, freeze_heap
+from . import lifecycle, palette, strips
+from .heap import freeze_heap
 from .keys import KeyRouter, direct_keys
 from .messages import (
     BackendFailed,
@@ -54,6 +54,8 @@ from .screens.control import ControlScreen
 from .screens.help import HelpScreen
 from .screens.latency import LatencyScreen
 from .screens.topics import TopicsScreen
+
+strips.install()  # Textual's strips freed by reference counting, not by full garbage collections
 
 log = logging.getLogger(__name__)
 NOTICE_AFTER_STOP_S = 0.1  # a run's end is told once its stop command has reached the robot
@@ -108,8 +110,8 @@ class ArbiterApp(App[None]):
         self._cleanup: Callable[[], None] | None = None
         self.session = RobotSession(settings, link, store, clock)
         self.session.on_event = self._session_event  # from the session's thread: post_message is safe
-        self.sampler = FrameSampler(self.session, settings)
-        self.sampler.tracker = tracker
+        self.sampler = FrameSampler(self.session, settings, tracker=tracker)
+        self.frame_clock: FrameClock | None = None  # live only: frames after control ticks
         self.keys = KeyRouter(self.session.key)
         self._shown_state: tuple[object, ...] = ()
         self._theme_loaded = False
@@ -130,10 +132,10 @@ class ArbiterApp(App[None]):
         for note in self.settings.notes:
             self.notify(note, severity="warning", timeout=8)
         self.refresh_frame(force=True)
-        self.set_timer(FREEZE_AFTER_S, freeze_heap)  # what start made
+        self.call_after_refresh(freeze_heap)  # what start made, once it is on screen
         if self.settings.live:
             # the robot's clock (control, sampling, simulation, on their own thread) says when to paint
-            lifecycle.frames_after_ticks(self, self.session, self.settings)
+            self.frame_clock = lifecycle.frames_after_ticks(self, self.session, self.settings)
             self.session.start()
             if self._connector is not None:  # the link (and the backend) start after the first frame
                 connect = partial(lifecycle.connect, self._connector, self)

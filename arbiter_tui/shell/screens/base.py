@@ -16,7 +16,7 @@ from textual.widgets import Footer, Static
 
 from ...session.frames import Frame
 from ...session.robot import RobotSession
-from ..heap import FREEZE_AFTER_S, freeze_heap
+from ..heap import freeze_heap
 from ..keys import KeyRouter
 from ..widgets import StatusLine
 
@@ -91,7 +91,7 @@ class BaseScreen(Screen[None]):
         """After this screen's first showing, its widgets (kept for good) leave the collector's walks."""
         if not self._frozen:
             self._frozen = True
-            self.set_timer(FREEZE_AFTER_S, freeze_heap)
+            self.call_after_refresh(freeze_heap)
 
     def on_resize(self, event: events.Resize) -> None:
         self._check_size(event.size)

@@ -14,7 +14,7 @@ from textual.widgets import Static
 from ...control.algorithms import ALGORITHMS
 from ...control.teleop import key_name
 from .. import dialogs
-from ..heap import FREEZE_AFTER_S, freeze_heap
+from ..heap import freeze_heap
 from ..plots import ErrorPlot, LatencyHistogram, LatencyPlot, LiveMap, TrajectoryPlot
 from ..widgets import FIT, KEY_HELP, ClientLine, RobotPanel, StatsCards, TrackerCards, TrackerLine
 from .analytics import CompareTable, RuleLine
@@ -92,7 +92,7 @@ class ControlScreen(BaseScreen):
             self.console.refresh_frame(force=True)  # its panes show what was not sampled before
             if dashboard and not self._dashboard_frozen:  # its widgets, once made, live for good
                 self._dashboard_frozen = True
-                self.set_timer(FREEZE_AFTER_S, freeze_heap)
+                self.call_after_refresh(freeze_heap)
 
     def on_key(self, event: events.Key) -> None:
         if self.console.session.key(key_name(event.character, event.key)):
