@@ -66,7 +66,9 @@ def test_asymmetric_paths_and_a_shifted_clock_every_bound_holds(base_rtt):
     assert abs(m.rtt_p50_ms - m.true_rtt_ms) < 1.0, (m.rtt_p50_ms, m.true_rtt_ms)
     assert m.offset_bound_holds, (m.offset_ms, m.true_offset_ms, m.offset_bound_ms)
     assert m.one_way_in_interval, (m.corrected_p50_lo_ms, m.true_one_way_ms, m.corrected_p50_hi_ms)
-    assert m.offset_bound_ms < 25.0 / 2 + 1.0
+    # tight: about half of the injected 25 ms plus this machine's own path (measured, not assumed:
+    # on a loaded 2-core box the path alone has taken 2.5 ms)
+    assert m.offset_bound_ms < (25.0 + m.base_rtt_ms) / 2 + 1.0, (m.offset_bound_ms, m.base_rtt_ms)
 
 
 @needs_faketime
