@@ -19,6 +19,7 @@ Each app runs ``--repeat`` times, alternating; the figures are medians and the r
 medians. Last line: JSON with both apps' figures and the ratios.
 
     python bench/tui.py --seconds 10 --repeat 3
+    python bench/tui.py --seconds 10 --repeat 3 --pythonpath /path/to/another/checkout
 """
 
 from __future__ import annotations
@@ -118,6 +119,7 @@ def main() -> int:
     p.add_argument("--seconds", type=float, default=20.0, help="length of each phase")
     p.add_argument("--size", default="100x30", help="terminal size, COLSxROWS")
     p.add_argument("--repeat", type=int, default=3, help="runs of each app, alternating; medians reported")
+    p.add_argument("--pythonpath", help="measure the code of another checkout (its root)")
     a = p.parse_args()
     if shutil.which("tmux") is None:
         print("tui: tmux is not installed", file=sys.stderr)
@@ -126,6 +128,8 @@ def main() -> int:
     tmp = Path(tempfile.mkdtemp())
     s = a.seconds
     exe = str(Path(sys.executable).with_name("arbiter-tui"))
+    if a.pythonpath:  # the same console, imported from another checkout
+        exe = f"env PYTHONPATH={a.pythonpath} {sys.executable} -m arbiter_tui.cli"
     tui_cmd = f"{exe} --bridge-port 0 --api-port 0 --export-dir {tmp} --log-file {tmp / 'tui.log'}"
     steps = [
         ("control_key_held", [], "i", s),

@@ -1,0 +1,53 @@
+#!/usr/bin/env python
+"""The table of ``bench/pi_table.sh``'s output: per size and screen, the before and after checkouts'
+command gaps p95 / max and console CPU (% of quota), medians over the runs, and the worst max after.
+
+    sudo bash bench/pi_table.sh BEFORE AFTER 3 > pi.jsonl && python bench/pi_table_summary.py pi.jsonl
+"""
+
+from __future__ import annotations
+
+import json
+import statistics
+import sys
+from collections import defaultdict
+
+
+def main() -> int:
+    rows: dict[tuple[str, str, str], list[dict]] = defaultdict(list)
+    codes: list[str] = []
+    with open(sys.argv[1]) as f:
+        for line in f:
+            if not line.strip():
+                continue
+            entry = json.loads(line)
+            code, result = entry["code"], entry["result"]
+            if code not in codes:
+                codes.append(code)
+            for screen, figures in result["console"].items():
+                rows[(result["size"], screen, code)].append(figures)
+            rows[(result["size"], "floor", code)].append(result["floor"])
+    before, after = codes[0], codes[-1]
+    print(f"before: {before}  after: {after}")
+    print("| size | screen | before p95 / max (ms) | after p95 / max (ms) | before CPU % | after CPU % | "
+          "runs | worst max after |")
+    print("|---|---|---|---|---|---|---|---|")
+    sizes = sorted({k[0] for k in rows}, key=lambda s: int(s.split("x")[0]))
+    for size in sizes:
+        for screen in dict.fromkeys(k[1] for k in rows if k[0] == size):
+            b, a = rows[(size, screen, before)], rows[(size, screen, after)]
+
+            def med(runs: list[dict], key: str) -> str:
+                values = [r[key] for r in runs if r.get(key) is not None]
+                return f"{statistics.median(values):.0f}" if values else "—"
+
+            maxima = [r["gap_max_ms"] for r in a if r.get("gap_max_ms") is not None]
+            worst = max(maxima, default=float("nan"))
+            print(f"| {size} | {screen} | {med(b, 'gap_p95_ms')} / {med(b, 'gap_max_ms')} | "
+                  f"{med(a, 'gap_p95_ms')} / {med(a, 'gap_max_ms')} | {med(b, 'cpu_percent_of_quota')} | "
+                  f"{med(a, 'cpu_percent_of_quota')} | {len(a)} | {worst:.0f} |")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
