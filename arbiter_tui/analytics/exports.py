@@ -78,6 +78,9 @@ MCAP_TRACKING_DEF = "\n".join(
         "float64 time_to_complete_s  # NaN unless completed",
         "float64 path_ratio  # NaN when the reference has no length",
         "float64 mean_abs_dw_dt",
+        "float64 linear_jerk  # integrated squared jerk of the commanded speed, m^2/s^5",
+        "float64 angular_jerk  # of the commanded turn rate, rad^2/s^5",
+        "float64 success  # 1/0 for a run, the success rate for several; NaN: unknown",
     ]
 )
 _TRACKING_TAIL = [_SEP, "MSG: arbiter_msgs/TrackingStats", MCAP_TRACKING_DEF]
@@ -322,7 +325,8 @@ def _mcap_tracking_dict(m: Any) -> dict[str, Any] | None:
     t = getattr(m, "tracking", None)
     if t is None or not t.measured:
         return None
-    values = {name: None if math.isnan(v := getattr(t, name)) else v for name in TRACKING_FIELDS}
+    # a file written before a field existed has no such attribute: unknown
+    values = {name: None if math.isnan(v := getattr(t, name, math.nan)) else v for name in TRACKING_FIELDS}
     return {"samples": t.samples, **values}
 
 

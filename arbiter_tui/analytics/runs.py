@@ -186,7 +186,7 @@ class _Run:
             if self.path is not None and self.n:
                 done = summary.time_s if self.outcome == COMPLETED else None
                 tracking = T.tracking_stats(
-                    c[6] / 1e3, c[0], c[1], c[3], self.path, stats.totalPathLength, done
+                    c[6] / 1e3, c[0], c[1], c[2], c[3], self.path, stats.totalPathLength, done
                 )
                 summary = replace(summary, tracking=tracking)
             self._summary = summary

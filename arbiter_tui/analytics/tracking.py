@@ -5,7 +5,7 @@ screen, ``arbiter-tui compare`` and the exports.
 
 The **reference path** of a mission run is the polyline from where the run started through every
 waypoint in order (a goal run: the straight segment from its start to the goal). For samples
-``i = 0..n-1`` at times ``t_i`` with positions ``p_i`` and commanded turn rates ``w_i``:
+``i = 0..n-1`` at times ``t_i`` with positions ``p_i``, commanded speeds ``v_i`` and turn rates ``w_i``:
 
 * cross-track error ``e_i = min over the path's segments of the distance from p_i to the segment``;
   reported as its mean, RMS ``sqrt(sum e_i^2 / n)``, p95 (the seed's rule: sorted, index
@@ -14,7 +14,19 @@ waypoint in order (a goal run: the straight segment from its start to the goal).
 * path-length ratio: the distance the robot travelled (the seed's ``totalPathLength`` of the run) over
   the reference path's length (1.0 = no detour);
 * smoothness, mean ``|dw/dt|``: ``sum |w_{i+1} - w_i| / (t_{i+1} - t_i)`` over consecutive samples with
-  a positive time step, divided by their count, in rad/s² (0 = a constant turn rate).
+  a positive time step, divided by their count, in rad/s² (0 = a constant turn rate);
+* integrated jerk (navigation2 #3239's smoothness), linear and angular: the commanded velocity ``u`` (``v``
+  or ``w``) differentiated twice by finite differences over the samples' own times, squared and
+  integrated: with ``a_k = (u_{k+1} - u_k) / (t_{k+1} - t_k)`` at the midpoints ``m_k``, ``j_k = (a_{k+1}
+  - a_k) / (m_{k+1} - m_k)``, the figure is ``sum j_k^2 (m_{k+1} - m_k)``, in m²/s⁵ (linear) and rad²/s⁵
+  (angular); steps with no time are skipped. 0 for a constant command; a stop from full speed within
+  one sample counts, so compare runs sampled at the same rate;
+* success: 1 when the run completed (reached its goal within the mission's tolerance) within its time
+  limit, ``time_limit_s(reference) = GRACE_S + reference length / MIN_PROGRESS_MPS`` (10 s plus 10 s a
+  metre: a run averaging less than 0.1 m/s along its reference failed), else 0; several runs: the
+  fraction that succeeded (the success rate).
+
+Path length is the seed's ``totalPathLength`` (``AnalyticsStats``), not repeated here.
 """
 
 from __future__ import annotations
@@ -32,8 +44,12 @@ Point = tuple[float, float]
 
 TRACKING_FIELDS = (
     "xte_mean_m", "xte_rms_m", "xte_p95_m", "xte_max_m", "time_to_complete_s", "path_ratio",
-    "mean_abs_dw_dt",
+    "mean_abs_dw_dt", "linear_jerk", "angular_jerk", "success",
 )  # fmt: skip
+ADDED_LATER = ("linear_jerk", "angular_jerk", "success")  # None in files written before they existed
+OPTIONAL = ("time_to_complete_s", "path_ratio", *ADDED_LATER)
+GRACE_S = 10.0
+MIN_PROGRESS_MPS = 0.1
 
 
 @dataclass(frozen=True, slots=True)
@@ -46,6 +62,9 @@ class TrackingStats:
     time_to_complete_s: float | None  # None unless the run completed
     path_ratio: float | None  # None when the reference has no length
     mean_abs_dw_dt: float  # rad/s^2
+    linear_jerk: float | None = None  # m^2/s^5; None: read from a file that predates it
+    angular_jerk: float | None = None  # rad^2/s^5
+    success: float | None = None  # 1/0 for a run, the success rate for several
 
     def as_dict(self) -> dict[str, Any]:
         def r(v: float | None) -> float | None:
@@ -64,12 +83,13 @@ class TrackingStats:
         values: dict[str, float | None] = {}
         for f in TRACKING_FIELDS:
             v = raw.get(f)
-            optional = f in ("time_to_complete_s", "path_ratio")
-            if v is None and optional:
+            if v is None and f in OPTIONAL:
                 values[f] = None
                 continue
             if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
                 raise ValueError(f"tracking.{f} must be a finite number")
+            if f == "success" and not 0.0 <= v <= 1.0:
+                raise ValueError("tracking.success must be between 0 and 1")
             values[f] = float(v)
         return cls(samples, **values)  # type: ignore[arg-type]
 
@@ -109,8 +129,40 @@ def mean_abs_rate(t_s: np.ndarray, w: np.ndarray) -> float:
     return S.mean(dw[ok] / dt[ok]) if ok.any() else 0.0
 
 
+def integrated_jerk(t_s: np.ndarray, u: np.ndarray) -> float:
+    """``sum j_k^2 (m_{k+1} - m_k)`` of a commanded velocity ``u`` over times ``t_s`` (the module's
+    formula); 0 with fewer than three samples at distinct times."""
+    t = np.asarray(t_s, dtype=np.float64)
+    v = np.asarray(u, dtype=np.float64)
+    keep = np.concatenate(([True], np.diff(t) > 0)) if t.size else t.astype(bool)
+    t, v = t[keep], v[keep]
+    if t.size < 3:
+        return 0.0
+    dt = np.diff(t)
+    a = np.diff(v) / dt
+    m = t[:-1] + dt / 2
+    dm = np.diff(m)
+    j = np.diff(a) / dm
+    return float(np.sum(j * j * dm))
+
+
+def time_limit_s(reference_m: float) -> float:
+    """How long a run along a reference of this length may take and still count as a success."""
+    return GRACE_S + reference_m / MIN_PROGRESS_MPS
+
+
+def succeeded(completed_time_s: float | None, reference_m: float) -> float:
+    return 1.0 if completed_time_s is not None and completed_time_s <= time_limit_s(reference_m) else 0.0
+
+
 def of_errors(
-    xte: np.ndarray, travelled: float, reference_m: float, completed_time_s: float | None, dw_dt: float
+    xte: np.ndarray,
+    travelled: float,
+    reference_m: float,
+    completed_time_s: float | None,
+    dw_dt: float,
+    jerks: tuple[float, float] | None = None,
+    success: float | None = None,
 ) -> TrackingStats:
     """TrackingStats from cross-track errors already computed (a run's, or several runs' pooled)."""
     e = np.asarray(xte, dtype=np.float64)
@@ -124,6 +176,9 @@ def of_errors(
         time_to_complete_s=completed_time_s,
         path_ratio=travelled / reference_m if reference_m > 0 else None,
         mean_abs_dw_dt=dw_dt,
+        linear_jerk=None if jerks is None else jerks[0],
+        angular_jerk=None if jerks is None else jerks[1],
+        success=success,
     )
 
 
@@ -131,19 +186,30 @@ def tracking_stats(
     t_s: np.ndarray,
     x: np.ndarray,
     y: np.ndarray,
+    v: np.ndarray,
     w: np.ndarray,
     path: np.ndarray,
     travelled: float,
     completed_time_s: float | None,
 ) -> TrackingStats:
-    """A run's tracking metrics from its time-ordered samples (see the module for each formula)."""
-    return of_errors(cross_track(x, y, path), travelled, path_length(path), completed_time_s,
-                     mean_abs_rate(t_s, w))  # fmt: skip
+    """A run's tracking metrics from its time-ordered samples: positions, commanded speeds and turn
+    rates (see the module for each formula)."""
+    reference_m = path_length(path)
+    jerks = (integrated_jerk(t_s, v), integrated_jerk(t_s, w))
+    return of_errors(cross_track(x, y, path), travelled, reference_m, completed_time_s,
+                     mean_abs_rate(t_s, w), jerks, succeeded(completed_time_s, reference_m))  # fmt: skip
+
+
+def mean_of(values: Sequence[float | None]) -> float | None:
+    """The mean of the values that are known; None when none is."""
+    known = [v for v in values if v is not None]
+    return sum(known) / len(known) if known else None
 
 
 def pooled(runs: Sequence[tuple[np.ndarray, TrackingStats, float]]) -> TrackingStats | None:
     """Several runs of one algorithm on one mission together: the cross-track figures over their pooled
-    errors; time to complete, path ratio and smoothness averaged over the runs that have them.
+    errors; time to complete, path ratio, the jerks and success averaged over the runs that have them
+    (success: the success rate); smoothness weighted by samples.
     ``runs``: (cross-track errors, the run's TrackingStats, its weight for smoothness = samples)."""
     if not runs:
         return None
@@ -158,4 +224,7 @@ def pooled(runs: Sequence[tuple[np.ndarray, TrackingStats, float]]) -> TrackingS
         sum(times) / len(times) if times else None,
         sum(ratios) / len(ratios) if ratios else None,
         smooth,
+        mean_of([s.linear_jerk for _e, s, _n in runs]),
+        mean_of([s.angular_jerk for _e, s, _n in runs]),
+        mean_of([s.success for _e, s, _n in runs]),
     )  # fmt: skip

@@ -169,8 +169,12 @@ def latencies_of(text: str | None, measured_from: str = DEFAULT_TRACKER) -> list
 
 HEAD = (
     "rank", "algorithm", "done", "time s", "avg e_xt m", "p95 e_xt m", "max e_xt m", "path/ref",
-    "|dω/dt| rad/s²", "avg e_d m", "final m",
+    "|dω/dt| rad/s²", "jerk v m²/s⁵", "jerk ω rad²/s⁵", "path m", "avg e_d m", "final m",
 )  # fmt: skip
+
+
+def _jerk(value: float | None) -> str:
+    return "—" if value is None else f"{value:.1f}"
 
 
 def table(results: list[RunResult]) -> str:
@@ -189,7 +193,8 @@ def table(results: list[RunResult]) -> str:
             rows.append([
                 f"{i}{mark}", r.algorithm, "yes" if r.completed else "NO", f"{r.time_s:.1f}",
                 f"{t.xte_mean_m:.{d}f}", f"{t.xte_p95_m:.3f}", f"{t.xte_max_m:.3f}", _ratio(t.path_ratio),
-                f"{t.mean_abs_dw_dt:.2f}", f"{r.stats.avgDistanceError:.3f}", f"{r.final_error_m:.3f}",
+                f"{t.mean_abs_dw_dt:.2f}", _jerk(t.linear_jerk), _jerk(t.angular_jerk),
+                f"{r.stats.totalPathLength:.2f}", f"{r.stats.avgDistanceError:.3f}", f"{r.final_error_m:.3f}",
             ])  # fmt: skip
         rows.extend([["", name, "not run"] for name in m.not_run])
     cells = [r for r in rows if len(r) > 1]

@@ -225,4 +225,10 @@ def _outcome(run: RunSummary | None, json_form: bool = False) -> dict[str, objec
             "pathRatio": "—" if t.path_ratio is None else f"{t.path_ratio:.6f}",
             "meanAbsDwDt": f"{t.mean_abs_dw_dt:.6f} rad/s²",
         }
+        if t.linear_jerk is not None and t.angular_jerk is not None:
+            out["linearJerk"] = f"{t.linear_jerk:.6f} m²/s⁵"
+            out["angularJerk"] = f"{t.angular_jerk:.6f} rad²/s⁵"
+        if t.success is not None:
+            out["success"] = "yes" if t.success == 1.0 else "no"
+
     return out

@@ -108,7 +108,7 @@ def run_one(
     control_every = round(SIM_HZ / CONTROL_HZ)
     sample_every = max(1, round(SIM_HZ / collection_rate))
     path = reference_path(loop.mission.start, loop.mission.waypoints)
-    truth: list[tuple[float, float, float, float]] = []  # t, true x, true y, commanded w at each sample
+    truth: list[tuple[float, float, float, float, float]] = []  # t, true x and y, commanded v and w
     max_v = 0.0
     n = 0
     while loop.running and clock.t < TIME_LIMIT_S:
@@ -120,15 +120,15 @@ def run_one(
             max_v = max(max_v, abs(loop.command[0]))
         if n % sample_every == 0 and (point := session.sample()) is not None and point.runId is not None:
             p = _true_pose(link)  # the run's samples, where the robot truly was
-            truth.append((clock.t, p.x, p.y, point.angularVel))
+            truth.append((clock.t, p.x, p.y, point.linearVel, point.angularVel))
     completed = loop.mission.done
     pose = _true_pose(link)
     last = loop.mission.waypoints[-1]
     if loop.running:  # out of time
         session.stop("out of time")
     (summary,) = store.runs()
-    t, x, y, w = np.array(truth, dtype=np.float64).reshape(-1, 4).T
-    tracking = tracking_stats(t, x, y, w, path, S.path_length(x, y),
+    t, x, y, v, w = np.array(truth, dtype=np.float64).reshape(-1, 5).T
+    tracking = tracking_stats(t, x, y, v, w, path, S.path_length(x, y),
                               clock.t if completed else None)  # fmt: skip
     return RunResult(
         algorithm=algorithm,

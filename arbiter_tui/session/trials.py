@@ -20,6 +20,7 @@ from typing import Any
 from arbiter_core.stats import mean_ci95
 
 from ..analytics import ranking
+from ..analytics import tracking as T
 from ..analytics.model import AnalyticsStats
 from ..analytics.tracking import TrackingStats
 from .compare import RunResult
@@ -124,6 +125,9 @@ def summarize(runs: Sequence[RunResult]) -> CellSummary:
         time_to_complete_s=sum(times) / len(times) if times else None,
         path_ratio=sum(ratios) / len(ratios) if ratios else None,
         mean_abs_dw_dt=figures["mean_abs_dw_dt"].mean,
+        linear_jerk=T.mean_of([r.tracking.linear_jerk for r in runs]),
+        angular_jerk=T.mean_of([r.tracking.angular_jerk for r in runs]),
+        success=T.mean_of([r.tracking.success for r in runs]),
     )
     return CellSummary(
         first.algorithm, first.mission, len(runs), sum(r.completed for r in runs), figures, stats, tracking

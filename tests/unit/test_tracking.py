@@ -36,7 +36,7 @@ def test_tracking_stats_formulas():
     e = np.array([0.0, 0.1, 0.2, 0.3, 0.4])
     t = np.array([0.0, 0.1, 0.2, 0.3, 0.4])
     w = np.array([0.0, 0.5, 0.5, 0.0, 0.0])  # |dw/dt|: 5, 0, 5, 0 -> mean 2.5
-    s = T.tracking_stats(t, np.arange(5.0), e, w, path, travelled=5.0, completed_time_s=12.0)
+    s = T.tracking_stats(t, np.arange(5.0), e, np.zeros(5), w, path, travelled=5.0, completed_time_s=12.0)
     assert s.samples == 5 and s.xte_mean_m == pytest.approx(0.2) and s.xte_max_m == pytest.approx(0.4)
     assert s.xte_rms_m == pytest.approx(math.sqrt((0.01 + 0.04 + 0.09 + 0.16) / 5))
     assert s.xte_p95_m == pytest.approx(0.4)  # the seed's rule: sorted[floor(0.95 * 5)] = sorted[4]
@@ -47,6 +47,54 @@ def test_tracking_stats_formulas():
         T.TrackingStats.from_dict({**s.as_dict(), "xte_mean_m": float("nan")})
     with pytest.raises(ValueError, match="samples"):
         T.TrackingStats.from_dict({**s.as_dict(), "samples": -1})
+
+
+def test_integrated_jerk_is_the_squared_second_derivative_of_the_command_integrated():
+    t = np.linspace(0.0, 1.0, 11)
+    assert T.integrated_jerk(t, np.full(11, 0.4)) == 0.0  # a constant command
+    assert T.integrated_jerk(t, 0.3 * t) == pytest.approx(0.0, abs=1e-9)  # a constant acceleration
+    # u = t^2: jerk 2 everywhere, over the midpoints' span 0.05..0.95 -> 4 * 0.9
+    assert T.integrated_jerk(t, t**2) == pytest.approx(3.6)
+    # u = t^3: jerk 6t at the second differences' centres -> sum 36 t_k^2 * 0.1 over t = 0.1..0.9
+    assert T.integrated_jerk(t, t**3) == pytest.approx(sum(36 * (k / 10) ** 2 * 0.1 for k in range(1, 10)))
+    # a sample at a time already seen is skipped, not divided by zero; too few samples: 0
+    doubled = np.concatenate((t[:5], t[4:]))
+    assert T.integrated_jerk(doubled, doubled**2) == pytest.approx(3.6)
+    assert T.integrated_jerk(t[:2], t[:2]) == 0.0
+    # a sharper stop costs more: the same 0.5 m/s shed over 0.1 s rather than 1 s
+    slow = np.clip(0.5 - 0.5 * (t - 0.0), 0.0, None)
+    fine = np.linspace(0.0, 1.0, 101)
+    sharp = np.where(fine < 0.5, 0.5, np.clip(0.5 - 5.0 * (fine - 0.5), 0.0, None))
+    gentle = np.where(fine < 0.5, 0.5, np.clip(0.5 - 1.0 * (fine - 0.5), 0.0, None))
+    assert T.integrated_jerk(fine, sharp) > 10 * T.integrated_jerk(fine, gentle) > 0
+    assert T.integrated_jerk(t, slow) == pytest.approx(0.0, abs=1e-9)
+
+
+def test_success_is_completion_within_the_time_limit():
+    path = T.reference_path((0.0, 0.0), [(10.0, 0.0)])  # 10 m: limit 10 s + 100 s
+    assert T.time_limit_s(10.0) == 110.0
+    z = np.zeros(3)
+    t = np.array([0.0, 1.0, 2.0])
+
+    def run(done: float | None) -> T.TrackingStats:
+        return T.tracking_stats(t, t, z, z + 0.5, z, path, 2.0, done)
+
+    assert run(12.0).success == 1.0 and run(110.0).success == 1.0
+    assert run(110.5).success == 0.0 and run(None).success == 0.0
+    rows = [(np.zeros(3), run(d), 3) for d in (12.0, None, 50.0, 200.0)]
+    assert T.pooled(rows).success == 0.5  # the success rate
+    assert run(12.0).linear_jerk == 0.0 and run(12.0).angular_jerk == 0.0
+
+
+def test_tracking_written_before_the_jerks_and_success_existed_still_reads():
+    old = {"samples": 3, "xte_mean_m": 0.1, "xte_rms_m": 0.1, "xte_p95_m": 0.2, "xte_max_m": 0.2,
+           "time_to_complete_s": None, "path_ratio": 1.1, "mean_abs_dw_dt": 0.5}  # fmt: skip
+    s = T.TrackingStats.from_dict(old)
+    assert (s.linear_jerk, s.angular_jerk, s.success) == (None, None, None) and s.path_ratio == 1.1
+    with pytest.raises(ValueError, match=r"tracking\.success"):
+        T.TrackingStats.from_dict({**old, "success": 2.0})
+    with pytest.raises(ValueError, match=r"tracking\.linear_jerk"):
+        T.TrackingStats.from_dict({**old, "linear_jerk": "big"})
 
 
 def test_a_run_in_the_store_is_measured_against_its_path_and_exports_keep_it():
@@ -65,6 +113,11 @@ def test_a_run_in_the_store_is_measured_against_its_path_and_exports_keep_it():
     # perfect link: the console's odometry is the true pose, so the store says what compare says
     assert summary.tracking.xte_mean_m == pytest.approx(result.tracking.xte_mean_m, abs=1e-9)
     assert summary.tracking.xte_max_m == pytest.approx(result.tracking.xte_max_m, abs=1e-9)
+    # the jerks from the samples' own times, the same in both (and not nothing: the square has corners)
+    assert result.tracking.angular_jerk > 0 and result.tracking.linear_jerk > 0
+    assert summary.tracking.angular_jerk == pytest.approx(result.tracking.angular_jerk, rel=1e-6)
+    assert summary.tracking.linear_jerk == pytest.approx(result.tracking.linear_jerk, rel=1e-6)
+    assert summary.tracking.success == result.tracking.success == 1.0
     (row,) = store.runs_by_algorithm()
     assert row.tracking.xte_mean_m == pytest.approx(summary.tracking.xte_mean_m)
     import json
@@ -75,6 +128,8 @@ def test_a_run_in_the_store_is_measured_against_its_path_and_exports_keep_it():
     export = read_mcap(to_mcap(store.points(), None, store.runs(), store.runs_by_algorithm()))
     assert export.runs[0].tracking.xte_mean_m == pytest.approx(summary.tracking.xte_mean_m, abs=1e-6)
     assert export.algorithms[0].tracking.path_ratio == pytest.approx(row.tracking.path_ratio, abs=1e-6)
+    assert export.runs[0].tracking.angular_jerk == pytest.approx(summary.tracking.angular_jerk, rel=1e-6)
+    assert export.runs[0].tracking.success == 1.0
 
 
 def test_a_manual_run_has_no_tracking_metrics():
