@@ -53,7 +53,7 @@ from aiohttp import WSMsgType, web
 from arbiter_core import auth
 from arbiter_core.msgtypes import MessageError, normalize_type
 
-from . import cborenc
+from . import cborenc, pngtext
 from .bus import Bus
 from .provided import (
     FINAL_STATUSES,
@@ -87,9 +87,10 @@ MAX_CALLS = 256  # service calls and goals one client may have under way at once
 MIN_FRAGMENT = 64  # the smallest fragment_size taken (smaller would be a frame per few characters)
 COMPRESSIONS = (
     "none",
+    "png",
     "cbor",
     "cbor-raw",
-)  # weakest first; png is not offered (the stock ROS 2 server's fails)
+)  # weakest first (ROSBRIDGE_PROTOCOL.md: cbor-raw beats cbor beats png beats none)
 
 
 class BadFrame(ValueError):
@@ -130,7 +131,7 @@ class _Sub:
 
     @property
     def compression(self) -> str:
-        """The strongest of the requests' (cbor-raw over cbor over none), for all of them, as rosbridge."""
+        """The strongest of the requests' (``COMPRESSIONS``' order), for all of them, as rosbridge."""
         return max((r[2] for r in self.requests.values()), key=COMPRESSIONS.index)
 
     @property
@@ -802,7 +803,8 @@ class RosbridgeEndpoint:
 
     def _encode(self, sub: _Sub, msg: dict[str, Any]) -> Payload:
         """The ``publish`` frame of ``msg`` in the subscription's encoding, made once per message and
-        encoding for all the clients that get it: JSON text, or a binary CBOR frame (``cborenc``)."""
+        encoding for all the clients that get it: JSON text, a ``png`` frame holding that text as an image
+        (``pngtext``), or a binary CBOR frame (``cborenc``)."""
         key = (sub.topic, sub.compression)
         cached = self._encoded.get(key)
         if cached is not None and cached[0] is msg:
@@ -810,6 +812,9 @@ class RosbridgeEndpoint:
         frame: Payload
         if key[1] == "none":
             frame = _dumps({"op": "publish", "topic": sub.topic, "msg": msg})
+        elif key[1] == "png":
+            text = _dumps({"op": "publish", "topic": sub.topic, "msg": msg})
+            frame = _dumps({"op": "png", "data": pngtext.encode(text)})
         elif key[1] == "cbor":
             convert = getattr(self.bus, "cbor_values", None) or cborenc.values_of
             frame = cborenc.encode({"op": "publish", "topic": sub.topic, "msg": convert(sub.type_name, msg)})

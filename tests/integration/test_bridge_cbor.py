@@ -1,8 +1,10 @@
-"""rosbridge's CBOR encodings through the real protocol (issue 34, item 3): embedded transport here,
-ROS mode (typed arrays from ROS messages, cbor-raw's CDR) in test_bridge_cbor_ros.py."""
+"""rosbridge's CBOR and PNG encodings through the real protocol (issue 34, item 3): embedded transport
+here, ROS mode (typed arrays from ROS messages, cbor-raw's CDR) in test_bridge_cbor_ros.py."""
 
 import base64
+import io
 import json
+import random
 import struct
 
 import aiohttp
@@ -88,9 +90,61 @@ async def test_requests_may_come_as_cbor_maps(server, session):
     assert base64.b64decode(msg["data"]) == b"\x00\x01\xff" and msg["v"] == [1.0, 2.5]
 
 
+def png_text(frame):
+    """What roslibjs's decompressPng does: the image's RGB bytes are the JSON text (read with Pillow,
+    an implementation that is not ours)."""
+    from PIL import Image
+
+    assert frame["op"] == "png" and set(frame) == {"op", "data"}, frame
+    image = Image.open(io.BytesIO(base64.b64decode(frame["data"])))
+    assert image.mode == "RGB"
+    return json.loads(image.tobytes().decode("utf-8"))  # the '\n' padding is JSON whitespace
+
+
+async def test_png_subscribers_get_the_json_text_as_an_image_others_plain_text(server, session):
+    png, plain = await connect(session, server), await connect(session, server)
+    await png.send_str(
+        '{"op": "subscribe", "topic": "/chat", "type": "std_msgs/String", "compression": "png"}'
+    )
+    await plain.send_str('{"op": "subscribe", "topic": "/chat", "type": "std_msgs/String"}')
+    await png.send_str(
+        '{"op": "subscribe", "topic": "/big", "type": "std_msgs/String", "compression": "png", '
+        '"fragment_size": 1000}'
+    )
+    pub = await connect(session, server)
+    await pub.send_str('{"op": "advertise", "topic": "/chat", "type": "std_msgs/String"}')
+    await pub.send_str('{"op": "advertise", "topic": "/big", "type": "std_msgs/String"}')
+    for ws in (png, plain, pub):
+        await settled(ws)
+    text = "héllo, png " * 3
+    await pub.send_str(json.dumps({"op": "publish", "topic": "/chat", "msg": {"data": text}}))
+    kind, frame = await frame_of(png)
+    assert kind == "text" and png_text(frame) == {"op": "publish", "topic": "/chat", "msg": {"data": text}}
+    assert (await frame_of(plain))[1]["msg"] == {"data": text}
+    # a message bigger than fragment_size: fragments of the png frame's text, joined, are the png frame
+    big = base64.b64encode(random.Random(7).randbytes(15_000)).decode()  # deflates badly: many fragments
+    await pub.send_str(json.dumps({"op": "publish", "topic": "/big", "msg": {"data": big}}))
+    parts = []
+    while not parts or len(parts) < parts[0]["total"]:
+        kind, frag = await frame_of(png)
+        assert kind == "text" and frag["op"] == "fragment", frag
+        parts.append(frag)
+    assert [p["num"] for p in parts] == list(range(len(parts))) and len(parts) > 1
+    assert all(len(p["data"]) <= 1000 for p in parts)
+    whole = json.loads("".join(p["data"] for p in parts))
+    assert png_text(whole)["msg"] == {"data": big}
+
+
+async def settled(ws):
+    """Every frame this client sent before is handled: the server answers a connection's frames in order."""
+    await ws.send_str('{"op": "call_service", "id": "sync", "service": "/rosapi/topics"}')
+    while (await frame_of(ws))[1].get("id") != "sync":
+        pass
+
+
 BAD = [
     (
-        '{"op": "subscribe", "id": "k1", "topic": "/chat", "type": "std_msgs/String", "compression": "png"}',
+        '{"op": "subscribe", "id": "k1", "topic": "/chat", "type": "std_msgs/String", "compression": "gzip"}',
         "k1",
     ),
     ('{"op": "subscribe", "id": "k2", "topic": "/chat", "type": "std_msgs/String", "compression": 3}', "k2"),
