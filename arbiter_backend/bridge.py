@@ -1,7 +1,7 @@
 """A rosbridge v2 WebSocket endpoint on the in-process topic bus (aiohttp).
 
 Ops: advertise, unadvertise, publish, subscribe (throttle_rate, queue_length, compression
-cbor/cbor-raw, fragment_size), unsubscribe, call_service, set_level, auth, and services and actions
+png/cbor/cbor-raw, fragment_size), unsubscribe, call_service, set_level, auth, and services and actions
 both ways: advertise_service / service_response / unadvertise_service, advertise_action /
 action_feedback / action_result / unadvertise_action (a client provides; ``provided.py``), and
 send_action_goal / cancel_action_goal. ``call_service`` reaches, in this order: a service another
