@@ -7,16 +7,19 @@ command gaps p95 / max and console CPU (% of quota), medians over the runs, and 
 
 from __future__ import annotations
 
+import argparse
 import json
 import statistics
-import sys
 from collections import defaultdict
 
 
 def main() -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("results", help="the JSON lines bench/pi_table.sh printed")
+    a = p.parse_args()
     rows: dict[tuple[str, str, str], list[dict]] = defaultdict(list)
     codes: list[str] = []
-    with open(sys.argv[1]) as f:
+    with open(a.results) as f:
         for line in f:
             if not line.strip():
                 continue
@@ -50,4 +53,4 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    raise SystemExit(main())
