@@ -29,7 +29,9 @@ fast as its socket drains and no faster. A big topic (camera frames) therefore n
 small one: a small message waits for at most the one big frame being written. A full queue
 drops its oldest frame (counted per topic, logged, and in ``/api/health``); a slow client loses
 old frames of the topic that overflows, never another topic's messages or their order, and never
-blocks the bus or the other clients. Per-client state is dropped when the socket closes.
+blocks the bus or the other clients. A client that lags has its big frames paced below the rate it
+reads at (``pacing``), so the buffers a small message waits behind stay nearly empty. Per-client state
+is dropped when the socket closes.
 """
 
 from __future__ import annotations
@@ -55,6 +57,7 @@ from arbiter_core.msgtypes import MessageError, normalize_type
 
 from . import cborenc, pngtext
 from .bus import Bus
+from .pacing import PACED_BYTES, Pacer
 from .provided import (
     FINAL_STATUSES,
     PROVIDER_TIMEOUT_S,
@@ -245,6 +248,7 @@ class Client:
         self.calls: set[asyncio.Task[None]] = set()  # service calls and goals under way
         self.goals: dict[Any, Callable[[], None]] = {}  # the goals it sent, by its id -> cancel
         self.last_rx = 0.0  # loop time of the last frame (pong included) received from the client
+        self.pacer = Pacer()  # its big frames, paced below the rate it reads at once it lags
 
     @property
     def dropped(self) -> int:
@@ -280,6 +284,7 @@ class Client:
         if self.closed:
             return
         box = self.boxes.get(topic) or self.outbox(topic)
+        self.pacer.offered(len(frame), time.monotonic())
         dropped = box.put(frame)
         if dropped:
             before = self.dropped_by_topic.get(topic, 0)
@@ -296,13 +301,24 @@ class Client:
             self.ring.append(box)
         self.wakeup.set()
 
-    def next_turn(self) -> list[Payload]:
-        """What to write next: the oldest reply, or the next topic's turn (up to ``TURN_BYTES``)."""
+    def next_turn(self, now: float | None = None) -> list[Payload]:
+        """What to write next: the oldest reply, or the next topic's turn (up to ``TURN_BYTES``). With
+        ``now`` (loop time), a topic whose next frame is big waits its turn until the client's pacer
+        allows one (``pacing``); [] then when only such topics have something to send."""
         if self.out:
             return [self.out.popleft()]
         if not self.ring:
             return []
         box = self.ring.popleft()
+        if now is not None and now < self.pacer.next_at():
+            for _ in range(len(self.ring) + 1):
+                if _next_size(box.frames[0]) < PACED_BYTES:
+                    break
+                self.ring.append(box)
+                box = self.ring.popleft()
+            else:
+                self.ring.appendleft(box)  # every topic waits for the pacer; the order is unchanged
+                return []
         frames: list[Payload] = []
         size = 0
         while box.frames and (not frames or size + _next_size(box.frames[0]) <= TURN_BYTES):
@@ -320,6 +336,9 @@ class Client:
             "id": self.id,
             "remote": self.remote,
             "replies_dropped": self.replies_dropped,
+            # the rate it was measured reading at while it lagged (its big frames paced below it); null:
+            # it never lagged
+            "read_bytes_per_s": None if self.pacer.rate is None else round(self.pacer.rate),
             "topics": {
                 topic: {
                     "queued": len(box.frames),
@@ -479,17 +498,26 @@ class RosbridgeEndpoint:
     async def _writer(self, client: Client) -> None:
         ws = client.ws
         try:
+            clock = time.monotonic  # not loop.time(): uvloop's is per iteration, to the millisecond
+            paced_until: float | None = None
             while True:
-                await client.wakeup.wait()
+                if paced_until is None:
+                    await client.wakeup.wait()
+                else:  # only big frames wait, for the pacer: until then, or until something else comes
+                    with contextlib.suppress(asyncio.TimeoutError):
+                        await asyncio.wait_for(client.wakeup.wait(), max(0.0, paced_until - clock()))
                 client.wakeup.clear()
-                while frames := client.next_turn():
+                while frames := client.next_turn(clock()):
                     for frame in frames:
                         # each awaits the socket's drain past aiohttp's writer limit: a client gets
                         # frames as fast as it reads them, and the other clients never wait for it
+                        started = clock()
                         if isinstance(frame, str):
                             await ws.send_str(frame)
                         else:
                             await ws.send_bytes(frame)
+                        client.pacer.wrote(len(frame), started, clock())
+                paced_until = client.pacer.next_at() if client.ring else None
                 if client.kick is not None:
                     code, reason = client.kick
                     await ws.close(code=code, message=reason.encode("utf-8")[:120])
