@@ -339,6 +339,7 @@ class Client:
             # the rate it was measured reading at while it lagged (its big frames paced below it); null:
             # it never lagged
             "read_bytes_per_s": None if self.pacer.rate is None else round(self.pacer.rate),
+            "paced": self.pacer.paced,  # its big frames are sent below that rate (it cannot keep up)
             "topics": {
                 topic: {
                     "queued": len(box.frames),

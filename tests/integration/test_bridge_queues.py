@@ -5,6 +5,7 @@ import json
 
 from arbiter_backend.bridge import TOPIC_QUEUE, Client
 
+from ..support.slowreader import SlowReader
 from ..support.waits import async_until
 
 
@@ -168,3 +169,54 @@ async def test_fragment_size_splits_big_frames_and_small_topics_go_between(serve
     # the small message did not wait for the whole camera frame
     chat = next(i for i, f in enumerate(frames) if f["op"] == "publish")
     assert frames[chat]["msg"] == {"data": "between"} and chat < len(frames) - 1
+
+
+async def test_a_client_that_cannot_keep_up_is_measured_and_paced_one_that_can_is_not(server, session):
+    """A camera of 3 MB/s; one client reads 1 MB/s, another all it gets: the slow one's read rate is
+    measured (and its camera paced below it), the fast one is never paced (arbiter_backend/pacing.py)."""
+    url = f"ws://127.0.0.1:{server.bridge_port}/"
+    # its handshake blocks: off the loop, which serves the endpoint here
+    slow = await asyncio.to_thread(SlowReader, server.bridge_port, 1_000_000)
+    slow.send_json({"op": "subscribe", "topic": "/cam", "type": "sensor_msgs/Image", "queue_length": 1,
+                    "fragment_size": 16_384})  # fmt: skip
+    slow.start()
+    fast = await session.ws_connect(url, max_msg_size=0)
+    await _subscribe(fast, "/cam", "sensor_msgs/Image")
+    got = 0
+
+    async def read_all():
+        nonlocal got
+        async for _msg in fast:
+            got += 1
+
+    reader = asyncio.create_task(read_all())
+    assert await async_until(lambda: server.bus.subscriber_count("/cam") == 2)
+    pub = await session.ws_connect(url)
+    await pub.send_str('{"op": "advertise", "topic": "/cam", "type": "sensor_msgs/Image"}')
+    frame = json.dumps({"op": "publish", "topic": "/cam", "msg": {"data": "A" * 150_000}})
+
+    def cam_clients(queue_length_one: bool) -> list[dict]:
+        return [c for c in server.endpoint.stats()["per_client"] if "/cam" in c["topics"]
+                and (c["topics"]["/cam"]["queue_length"] == 1) == queue_length_one]  # fmt: skip
+
+    sent = 0
+    try:
+        deadline = asyncio.get_running_loop().time() + 20
+        while asyncio.get_running_loop().time() < deadline:
+            await pub.send_str(frame)  # a 20 Hz camera: 3 MB/s
+            sent += 1
+            await asyncio.sleep(0.05)
+            (mine,) = cam_clients(True)
+            if mine["read_bytes_per_s"] is not None and sent >= 60:
+                break
+        (mine,) = cam_clients(True)
+        assert mine["read_bytes_per_s"] is not None, mine
+        assert 0.4e6 < mine["read_bytes_per_s"] < 2.5e6, mine  # it reads 1 MB/s (give or take the load)
+        assert mine["paced"] and mine["topics"]["/cam"]["dropped"] > 0, mine
+        assert await async_until(lambda: got >= sent, timeout=10), (got, sent)  # every frame
+        (other,) = cam_clients(False)
+        # measured or not (on a loaded machine it lags now and then), never paced: it lost nothing
+        assert other["topics"]["/cam"]["dropped"] == 0 and not other["paced"], other
+    finally:
+        slow.close()
+        reader.cancel()
