@@ -18,6 +18,13 @@ whose only change is that package name (``test_msgs/action/Fibonacci``, a wheel,
     python bench/rosbridge_stock.py --suite /tmp/rosbridge_suite --runs 5
     python bench/rosbridge_stock.py --suite /tmp/rosbridge_suite --tests all --fibonacci-from test_msgs
 
+``--one-server`` runs the tests in sequence against **one** backend, as a robot's server lives
+(``--runs`` sweeps of every test in a row), and ``--stress N`` runs ``stress-ng --cpu N`` beside it
+all (Debian's stress-ng):
+
+    python bench/rosbridge_stock.py --suite /tmp/rosbridge_suite --tests all --fibonacci-from test_msgs \
+        --one-server --runs 5 --stress 2
+
 Prints one line per run and a table of passes; exits non-zero when a run failed.
 """
 
@@ -70,11 +77,16 @@ sys.exit(0 if result.wasSuccessful() and result.testsRun else 1)
 """
 
 
-def run_one(
-    test_dir: Path, name: str, timeout: float, env: dict[str, str], log: Path | None
-) -> tuple[bool, float, str]:
+def start(env: dict[str, str], log: Path | None):  # -> tests.support.backend's Backend
     extra = ("--log-level", "DEBUG", "--log-file", str(log)) if log else ()
-    backend = start_backend("--transport", "ros", *extra, "--ros-args", "-r", RENAME, timeout=30, env=env)
+    return start_backend("--transport", "ros", *extra, "--ros-args", "-r", RENAME, timeout=30, env=env)
+
+
+def run_one(
+    test_dir: Path, name: str, timeout: float, env: dict[str, str], log: Path | None, shared=None
+) -> tuple[bool, float, str]:
+    """One run of one test file: against ``shared`` (a running backend), else a fresh backend."""
+    backend = shared if shared is not None else start(env, log)
     started = time.monotonic()
     try:
         proc = subprocess.run(
@@ -88,7 +100,8 @@ def run_one(
     except subprocess.TimeoutExpired as exc:
         ok, tail = False, [f"timed out after {timeout:.0f} s", *(str(exc.stderr or "").splitlines()[-2:])]
     finally:
-        backend.stop()
+        if shared is None:
+            backend.stop()
     return ok, time.monotonic() - started, " | ".join(tail)
 
 
@@ -104,6 +117,9 @@ def main(argv: list[str] | None = None) -> int:
         metavar="PKG",
         help="run the action tests on a copy importing Fibonacci from PKG instead of example_interfaces",
     )
+    ap.add_argument("--one-server", action="store_true",
+                    help="every run against one backend, in sweeps of every test (as a robot's server lives)")
+    ap.add_argument("--stress", type=int, default=0, metavar="N", help="stress-ng --cpu N beside it all")
     args = ap.parse_args(argv)
     test_dir = args.suite / "rosbridge_server" / "test" / "websocket"
     if not (test_dir / "common.py").is_file():
@@ -127,16 +143,37 @@ def main(argv: list[str] | None = None) -> int:
     if args.log_dir:
         args.log_dir.mkdir(parents=True, exist_ok=True)
     passed: dict[str, int] = {}
+    labels = {}
     for name in names:
         swapped = swapped_dir is not None and name in ACTION_TESTS
         label = f"{name} ({args.fibonacci_from})" if swapped else name
-        passed[label] = 0
-        for run in range(1, args.runs + 1):
-            log = args.log_dir / f"{name}-{run}.log" if args.log_dir else None
-            ok, took, tail = run_one(swapped_dir if swapped else test_dir, name, args.timeout, env, log)
+        labels[name] = (label, swapped_dir if swapped else test_dir)
+        passed[labels[name][0]] = 0
+    stress = None
+    if args.stress:
+        stress = subprocess.Popen(["stress-ng", "--cpu", str(args.stress), "--quiet"],
+                                  stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)  # fmt: skip
+    shared_log = args.log_dir / "one-server.log" if args.log_dir else None
+    shared = start(env, shared_log) if args.one_server else None
+    # fresh servers: each test's runs in a row; one server: sweeps of every test in a row
+    order = ([(run, name) for run in range(1, args.runs + 1) for name in names] if shared
+             else [(run, name) for name in names for run in range(1, args.runs + 1)])  # fmt: skip
+    try:
+        for run, name in order:
+            label, where = labels[name]
+            log = args.log_dir / f"{name}-{run}.log" if args.log_dir and shared is None else None
+            ok, took, tail = run_one(where, name, args.timeout, env, log, shared)
             passed[label] += ok
             verdict = "pass" if ok else f"FAIL  {tail}"
             print(f"{label:40} run {run}: {took:5.1f} s {verdict}", flush=True)
+    finally:
+        if shared is not None:
+            shared.stop()
+        if stress is not None:
+            stress.terminate()
+            stress.wait()
+    mode = "one server" if shared else "a fresh server each run"
+    print(f"\n{mode}{f', beside stress-ng --cpu {args.stress}' if args.stress else ', idle'}")
     print()
     print(f"{'test':40} passed")
     for label, n in passed.items():
