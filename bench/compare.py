@@ -19,10 +19,10 @@ import time
 
 from _common import emit
 
+from arbiter_core.controllers import MissionProgress, make_controller
 from arbiter_core.kinematics import Pose
 from arbiter_core.linkmodel import LinkModel
 from arbiter_tui.commands.compare import Sweep, run_sweep
-from arbiter_tui.control.algorithms import MissionProgress, make_controller
 from arbiter_tui.session.compare import AUTONOMOUS, MISSION_NAMES
 
 LATENCIES_MS = (0, 50, 100, 200, 300)

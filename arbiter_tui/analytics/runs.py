@@ -19,6 +19,8 @@ from typing import Any
 
 import numpy as np
 
+from arbiter_core.controllers import MANUAL
+
 from . import tracking as T
 from .model import EMPTY_STATS, AnalyticsStats, compute_stats
 from .tracking import TrackingStats
@@ -29,7 +31,6 @@ ABORTED = "aborted"  # stopped: space/k, a screen too small, the link lost, anot
 OVERRIDDEN = "overridden"  # a movement key took over from the controller
 ENDED = "ended"  # a manual run: 2 s without a movement key
 OUTCOMES = (RUNNING, COMPLETED, ABORTED, OVERRIDDEN, ENDED)
-MANUAL = "manual"
 MANUAL_IDLE_S = 2.0
 
 # Columns where lower is better and a "best" mark means something; the others (samples, speeds, path)

@@ -16,6 +16,13 @@ from collections import deque
 from collections.abc import Callable
 from dataclasses import replace
 
+from arbiter_core.controllers import (
+    ALGORITHMS,
+    MISSIONS,
+    MissionProgress,
+    goal_driver,
+    make_controller,
+)
 from arbiter_core.kinematics import Limits, Pose, clamp_twist, distance_error, heading_error
 
 from ..analytics.runs import ABORTED, COMPLETED, ENDED, MANUAL, MANUAL_IDLE_S, OVERRIDDEN
@@ -23,13 +30,6 @@ from ..analytics.store import AnalyticsStore, DataPoint
 from ..analytics.tracking import reference_path
 from ..link.base import Link
 from . import mission as M
-from .algorithms import (
-    ALGORITHMS,
-    MISSIONS,
-    MissionProgress,
-    goal_driver,
-    make_controller,
-)
 from .mission import MissionState, Resumable
 from .teleop import Teleop
 

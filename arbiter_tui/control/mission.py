@@ -7,8 +7,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 
+from arbiter_core.controllers import MissionProgress
+
 from ..analytics.runs import MANUAL
-from .algorithms import MissionProgress
 
 RESUMED = ", resumed"  # what a resumed run's label ends with (the panel shows which waypoint it is at)
 

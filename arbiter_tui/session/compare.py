@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from arbiter_core import stats as S
+from arbiter_core.controllers import ALGORITHMS, MISSIONS
 from arbiter_core.kinematics import Pose, distance_error
 from arbiter_core.linkmodel import LinkModel
 from arbiter_core.simulator import RATE_HZ
@@ -22,7 +23,6 @@ from ..analytics import ranking
 from ..analytics.runs import MANUAL, RunSummary
 from ..analytics.store import AnalyticsStats, AnalyticsStore, DataPoint
 from ..analytics.tracking import TrackingStats, reference_path, tracking_stats
-from ..control.algorithms import ALGORITHMS, MISSIONS
 from ..link.modelled import ModelledLink
 from .robot import RobotSession
 from .settings import Settings

@@ -24,6 +24,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
+from arbiter_core.controllers import choose_controller_hint
 from arbiter_core.simulator import RATE_HZ as SIM_HZ
 from arbiter_core.topicstats import TopicFigures
 
@@ -31,7 +32,6 @@ from ..analytics.files import FORMATS, ExportError, NothingToExport, export_stem
 from ..analytics.observe import ObserveConfig, Observer
 from ..analytics.runs import MANUAL
 from ..analytics.store import AnalyticsStore, DataPoint
-from ..control.algorithms import choose_controller_hint
 from ..control.loop import ControlLoop
 from ..control.teleop import MOVE_KEYS, SCALE_KEYS, STOP_KEYS, Teleop
 from ..link.base import DISCONNECTED, RECONNECTING, STARTING, Link

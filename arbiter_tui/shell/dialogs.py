@@ -14,7 +14,8 @@ from .screens.base import Console
 
 def ask_goal(app: App[object], console: Console) -> None:
     """``t``: type a go-to-goal target; the app drives there (``GoalPicked``)."""
-    from ..control.algorithms import goal_driver
+    from arbiter_core.controllers import goal_driver
+
     from .screens.goal import GoalPrompt
 
     session = console.session

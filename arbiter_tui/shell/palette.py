@@ -7,8 +7,9 @@ from collections.abc import Callable, Iterable
 
 from textual.app import App, SystemCommand
 
+from arbiter_core.controllers import ALGORITHMS, MISSIONS
+
 from ..analytics.files import FORMATS
-from ..control.algorithms import ALGORITHMS, MISSIONS
 from . import dialogs
 from .screens.base import Console
 

@@ -9,10 +9,10 @@ import time
 import numpy as np
 import pytest
 
+from arbiter_core.controllers import MissionProgress, make_controller
 from arbiter_core.kinematics import Pose, quaternion_to_yaw
 from arbiter_tui.analytics import tracking as T
 from arbiter_tui.analytics.runs import COMPLETED
-from arbiter_tui.control.algorithms import MissionProgress, make_controller
 from arbiter_tui.link.base import CONNECTED
 from arbiter_tui.link.rosbridge import RosLink
 from arbiter_tui.session.robot import RobotSession

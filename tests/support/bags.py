@@ -11,9 +11,9 @@ import numpy as np
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import Stores, get_typestore
 
+from arbiter_core.controllers import MissionProgress, make_controller
 from arbiter_core.kinematics import quaternion_to_yaw
 from arbiter_core.simulator import DiffDriveSimulator
-from arbiter_tui.control.algorithms import MissionProgress, make_controller
 
 TS = get_typestore(Stores.ROS2_KILTED)
 T0_NS = 1_800_000_000_000_000_000

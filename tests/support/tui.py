@@ -22,9 +22,9 @@ def seeded_store(latency_ms=None) -> AnalyticsStore:
     one-way latency (default: none measured, as over a simulated link)."""
     from dataclasses import replace
 
+    from arbiter_core.controllers import MISSIONS
     from arbiter_tui.analytics.runs import ABORTED, COMPLETED
     from arbiter_tui.analytics.tracking import reference_path
-    from arbiter_tui.control.algorithms import MISSIONS
     from arbiter_tui.session.compare import run_one
 
     store = AnalyticsStore(max_data_points=SEEDED_POINTS)

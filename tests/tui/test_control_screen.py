@@ -5,10 +5,10 @@ import time
 
 import pytest
 
+from arbiter_core.controllers import MISSIONS
 from arbiter_core.kinematics import Pose
 from arbiter_tui.analytics.labels import STAT_LABELS, format_stat
 from arbiter_tui.analytics.store import STATS_FIELDS
-from arbiter_tui.control.algorithms import MISSIONS
 from arbiter_tui.link.base import CONNECTED, RECONNECTING
 from arbiter_tui.shell.plots import ErrorPlot, LatencyHistogram, LatencyPlot, LiveMap, TrajectoryPlot
 from arbiter_tui.shell.screens.analytics import CompareTable

@@ -83,7 +83,7 @@ async def test_a_typed_goal_and_its_errors(tmp_path):
 
 
 async def test_the_hints_name_the_controller_that_will_drive_from_the_registry(tmp_path):
-    from arbiter_tui.control.algorithms import CONTROLLERS
+    from arbiter_core.controllers import CONTROLLERS
 
     app, _clock = sim_app(tmp_path)
     async with app.run_test(size=SIZE) as pilot:

@@ -5,12 +5,12 @@ import time
 
 import pytest
 
+from arbiter_core.controllers import MISSIONS
 from arbiter_tui.analytics.files import load_points
 from arbiter_tui.analytics.ranking import RULE, RULE_MISSION, RULE_OVERALL
 from arbiter_tui.analytics.store import STATS_FIELDS
 from arbiter_tui.analytics.tracking import TRACKING_FIELDS
 from arbiter_tui.cli import main
-from arbiter_tui.control.algorithms import MISSIONS
 from arbiter_tui.session.compare import AUTONOMOUS, run_one
 
 

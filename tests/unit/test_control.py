@@ -2,6 +2,14 @@ import math
 
 import pytest
 
+from arbiter_core.controllers import (
+    ALGORITHMS,
+    MISSIONS,
+    GoToGoalController,
+    MissionProgress,
+    PurePursuitController,
+    make_controller,
+)
 from arbiter_core.kinematics import (
     Limits,
     Pose,
@@ -13,14 +21,6 @@ from arbiter_core.kinematics import (
     step,
     wrap_angle,
     yaw_to_quaternion,
-)
-from arbiter_tui.control.algorithms import (
-    ALGORITHMS,
-    MISSIONS,
-    GoToGoalController,
-    MissionProgress,
-    PurePursuitController,
-    make_controller,
 )
 
 DT = 0.02  # 50 Hz, the simulator's rate

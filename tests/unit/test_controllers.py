@@ -5,14 +5,14 @@ import math
 
 import pytest
 
-from arbiter_core.kinematics import Limits, Pose, RobotState, step
-from arbiter_tui.control.algorithms import (
+from arbiter_core.controllers import (
     KanayamaController,
     MissionProgress,
     PurePursuitController,
     RegulatedPurePursuitController,
     StanleyController,
 )
+from arbiter_core.kinematics import Limits, Pose, RobotState, step
 
 NEW = (StanleyController, RegulatedPurePursuitController, KanayamaController)
 LIMITS = Limits(max_linear=0.5, max_angular=1.0)

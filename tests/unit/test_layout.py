@@ -108,7 +108,7 @@ def test_pure_console_logic_imports_without_ui_or_network():
     pure = [
         "arbiter_tui.analytics.store",
         "arbiter_tui.analytics.exports",
-        "arbiter_tui.control.algorithms",
+        "arbiter_core.controllers",
         "arbiter_tui.control.teleop",
         "arbiter_tui.latency.clocksync",
         "arbiter_tui.session.compare",

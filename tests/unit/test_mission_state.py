@@ -5,8 +5,8 @@ import dataclasses
 
 import pytest
 
+from arbiter_core.controllers import MissionProgress
 from arbiter_tui.control import mission as M
-from arbiter_tui.control.algorithms import MissionProgress
 from arbiter_tui.session import compare
 
 

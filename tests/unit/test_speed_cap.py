@@ -6,8 +6,8 @@ simulator (50 Hz) through a SimLink; every command that reaches the link is chec
 
 import pytest
 
+from arbiter_core.controllers import MISSIONS
 from arbiter_tui.analytics.store import AnalyticsStore
-from arbiter_tui.control.algorithms import MISSIONS
 from arbiter_tui.control.loop import ControlLoop
 from arbiter_tui.control.teleop import Teleop
 from arbiter_tui.link.sim import SimLink

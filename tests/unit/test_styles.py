@@ -2,8 +2,8 @@
 
 import pytest
 
+from arbiter_core.controllers import ALGORITHMS
 from arbiter_tui.analytics.styles import GOAL, ROBOT_ARROWS, WAYPOINT, style_of
-from arbiter_tui.control.algorithms import ALGORITHMS
 
 
 def test_every_controller_has_its_own_marker_and_colour_apart_from_the_mission_and_robot():

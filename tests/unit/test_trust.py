@@ -8,6 +8,7 @@ from dataclasses import replace
 
 import pytest
 
+from arbiter_core.controllers import MISSIONS
 from arbiter_core.record import LatencyRecord
 from arbiter_tui.analytics import ranking
 from arbiter_tui.analytics.files import export_store, load_points
@@ -15,7 +16,6 @@ from arbiter_tui.analytics.model import EMPTY_STATS, AnalyticsStats
 from arbiter_tui.analytics.runs import ABORTED, COMPLETED, RunSummary
 from arbiter_tui.analytics.store import AnalyticsStore, DataPoint
 from arbiter_tui.cli import main
-from arbiter_tui.control.algorithms import MISSIONS
 from arbiter_tui.control.loop import ControlLoop
 from arbiter_tui.control.teleop import MIN_SPEED, MIN_TURN, Teleop
 from arbiter_tui.latency.clocksync import LatencyMeter

@@ -11,7 +11,8 @@ from textual.binding import Binding
 from textual.containers import Horizontal, Vertical
 from textual.widgets import Static
 
-from ...control.algorithms import ALGORITHMS
+from arbiter_core.controllers import ALGORITHMS
+
 from ...control.teleop import key_name
 from .. import dialogs
 from ..heap import freeze_heap

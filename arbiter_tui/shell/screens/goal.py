@@ -9,7 +9,8 @@ from textual.containers import Vertical
 from textual.screen import ModalScreen
 from textual.widgets import Input, Static
 
-from ...control.algorithms import DEFAULT_CONTROLLER
+from arbiter_core.controllers import DEFAULT_CONTROLLER
+
 from ...control.goals import GoalError, parse_goal
 
 
@@ -20,7 +21,7 @@ class GoalPrompt(ModalScreen[tuple[float, float] | None]):
     def __init__(self, pose: tuple[float, float], driver: str = DEFAULT_CONTROLLER) -> None:
         super().__init__()
         self.pose = pose
-        self.driver = driver  # the controller enter starts (control.algorithms.goal_driver)
+        self.driver = driver  # the controller enter starts (arbiter_core.controllers.goal_driver)
 
     def compose(self) -> ComposeResult:
         with Vertical(classes="dialog"):

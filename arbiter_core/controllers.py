@@ -2,7 +2,9 @@
 stanley, regulated_pure_pursuit, kanayama.
 
 A controller maps (pose, mission progress) to a commanded twist. Nothing here
-knows about time sources, sockets or the UI: the caller steps it.
+knows about time sources, sockets or the UI: the caller steps it. Shared by the console (its control
+loop and ``compare``) and the backend (``arbiter-backend --autonomy``, the robot-side behaviour node),
+so that both run the same control law.
 """
 
 from __future__ import annotations
@@ -10,7 +12,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from arbiter_core.kinematics import (
+from .kinematics import (
     DEFAULT_LIMITS,
     Limits,
     Pose,
@@ -20,8 +22,7 @@ from arbiter_core.kinematics import (
     wrap_angle,
 )
 
-from ..analytics.runs import MANUAL
-
+MANUAL = "manual"  # the algorithm name of driving by hand (and of its runs)
 Point = tuple[float, float]
 
 
