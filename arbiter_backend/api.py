@@ -33,6 +33,14 @@ class BadQuery(ValueError):
     pass
 
 
+class AutonomySource(Protocol):
+    """The robot-side autonomy (``autonomy.AutonomyService``): what ``/api/autonomy`` drives."""
+
+    def start(self, raw: Any) -> dict[str, Any]: ...
+    def stop(self) -> dict[str, Any]: ...
+    def status(self) -> dict[str, Any]: ...
+
+
 def _error(status: int, message: str) -> web.Response:
     return _json({"error": message, "status": status}, status)
 
@@ -69,9 +77,12 @@ def make_app(
     topics: TopicSource | None = None,
     host_clock: HostClock | None = None,
     bridge: Callable[[], dict[str, Any]] | None = None,
+    autonomy: AutonomySource | None = None,
 ) -> web.Application:
     """``bridge``: the rosbridge endpoint's figures (clients, frames dropped per topic), added to
-    ``/api/health`` as its ``bridge`` key."""
+    ``/api/health`` as its ``bridge`` key. ``autonomy``: the robot-side controller ``/api/autonomy``
+    starts (POST), stops (DELETE) and reports (GET); None: 403 (the backend runs without
+    ``--autonomy``: nothing that moves the robot is reachable)."""
     clock = HostClock() if host_clock is None else host_clock
 
     def _int(request: web.Request, name: str, lo: int, hi: int) -> int | None:
@@ -110,6 +121,27 @@ def make_app(
             return _error(404, "this backend watches no topics")
         return _json(topics.answer())
 
+    async def autonomy_route(request: web.Request) -> web.Response:
+        if autonomy is None:
+            return _error(403, "autonomy is off: start the backend with --autonomy to drive from it")
+        if request.method == "GET":
+            return _json(autonomy.status())
+        if request.method == "DELETE":
+            return _json(autonomy.stop())
+        body = await request.content.read(MAX_BODY + 1)
+        if len(body) > MAX_BODY:
+            return _error(413, f"the body is over {MAX_BODY} bytes")
+        try:
+            raw = json.loads(body, parse_constant=_no_constant)
+        except ValueError as exc:
+            return _error(400, f"the body is not JSON: {exc}")
+        try:
+            return _json(autonomy.start(raw))
+        except RuntimeError as exc:
+            return _error(409, str(exc))
+        except ValueError as exc:
+            return _error(400, str(exc))
+
     middlewares = [json_errors] if token is None else [json_errors, bearer_required(token)]
     app = web.Application(middlewares=middlewares)
     app.router.add_get("/api/latency", latency)
@@ -124,4 +156,13 @@ def make_app(
     app.on_startup.append(probe_early)
     app.router.add_get("/api/health", health)
     app.router.add_get("/api/topics", topic_figures)
+    for method in ("GET", "POST", "DELETE"):
+        app.router.add_route(method, "/api/autonomy", autonomy_route)
     return app
+
+
+MAX_BODY = 4096
+
+
+def _no_constant(token: str) -> Any:
+    raise ValueError(f"{token} is not a number JSON allows")

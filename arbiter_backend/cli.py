@@ -80,6 +80,13 @@ def build_parser() -> argparse.ArgumentParser:
         "--no-sim", action="store_true", help="no simulator: a real robot consumes /cmd_vel_measured"
     )
     p.add_argument(
+        "--autonomy",
+        action="store_true",
+        help="let POST /api/autonomy start a controller on the robot (the seed's behaviour node: "
+        "a mission on the odometry, publishing plan, goal_pose and stamped commands; embedded "
+        "transport); off by default: nothing that moves the robot is reachable unless allowed",
+    )
+    p.add_argument(
         "--no-bridge", action="store_true", help="no rosbridge endpoint: another rosbridge server is used"
     )
     p.add_argument("--max-records", type=count, default=10_000, help="latency records kept (default: 10000)")
@@ -308,6 +315,10 @@ def main(argv: list[str] | None = None) -> int:
     if args.tls_key is not None and args.tls_cert is None:
         print("arbiter-backend: --tls-key needs --tls-cert", file=sys.stderr)
         return 2
+    if args.autonomy and args.transport == "ros":
+        print("arbiter-backend: --autonomy runs on the embedded transport only (not yet --transport ros)",
+              file=sys.stderr)  # fmt: skip
+        return 2
     config = BackendConfig(
         host=args.host,
         allow_remote=args.allow_remote,
@@ -320,6 +331,7 @@ def main(argv: list[str] | None = None) -> int:
         deploy_mode=args.deploy_mode,
         sim=not args.no_sim,
         bridge=not args.no_bridge,
+        autonomy=args.autonomy,
         max_records=args.max_records,
         cmd_timeout=args.cmd_timeout,
         max_command_age_ms=args.max_command_age,

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import itertools
 import logging
 import ssl
 import time
@@ -19,13 +20,15 @@ from typing import Any
 
 from aiohttp import web
 
-from arbiter_core import auth, topics
+from arbiter_core import auth, envelope, topics
 from arbiter_core.kinematics import DEFAULT_LIMITS, Limits
 from arbiter_core.listening import format_listening
 from arbiter_core.simulator import RATE_HZ, DiffDriveSimulator
 from arbiter_core.topicstats import WINDOW_S
 
 from . import api, bridge, rosapi
+from . import autonomy as autonomy_mod
+from .autonomy import AutonomyService
 from .bridge import MAX_FRAME_BYTES, WS_PING_S
 from .bus import Bus, TopicBus
 from .topicwatch import EmbeddedTopics, TopicFilter, TopicWatch
@@ -63,6 +66,7 @@ class BackendConfig:
     services_glob: str | None = None  # ... and of the services they may call
     actions_glob: str | None = None  # ... and of the actions they may send goals to or provide
     params_glob: str | None = None  # ... and of the parameters rosapi reads and sets (names, no node)
+    autonomy: bool = False  # the robot-side controller, driven through /api/autonomy (embedded transport)
 
     def make_endpoint(self, bus: Bus) -> bridge.RosbridgeEndpoint:
         """The rosbridge endpoint of either transport (the embedded bus or the DDS relay)."""
@@ -139,6 +143,7 @@ class Servers:
         endpoint: bridge.RosbridgeEndpoint | None,
         tracker: LatencyTracker,
         topics: api.TopicSource | None = None,
+        autonomy: api.AutonomySource | None = None,
     ) -> None:
         # Here, not in the CLI: in ROS mode a parameter may have changed the host.
         auth.check_exposure(self.config.host, self.config.allow_remote, self.config.token)
@@ -146,7 +151,11 @@ class Servers:
             if endpoint is not None:
                 self.bridge_port = await self._serve(bridge.make_app(endpoint), self.config.bridge_port)
             api_app = api.make_app(
-                tracker, self.config.token, topics, bridge=endpoint.stats if endpoint is not None else None
+                tracker,
+                self.config.token,
+                topics,
+                bridge=endpoint.stats if endpoint is not None else None,
+                autonomy=autonomy,
             )
             self.api_port = await self._serve(api_app, self.config.api_port)
         except BaseException:
@@ -207,6 +216,28 @@ class Backend(Servers):
             self.bus.advertise(self.topic_odom, topics.TYPE_ODOM)
             sim = self.simulator
             self.bus.subscribe(self.topic_measured, lambda m: sim.on_twist(m, time.monotonic()))
+        self.autonomy: AutonomyService | None = None
+        if config.autonomy:
+            self.autonomy = self._make_autonomy(ns)
+
+    def _make_autonomy(self, ns: str) -> AutonomyService:
+        """The robot-side controller: on the odometry, its commands onto the tracker's own path."""
+        where = {key: topics.resolve(key, ns) for key in (autonomy_mod.PLAN, autonomy_mod.GOAL)}
+        self.bus.advertise(where[autonomy_mod.PLAN], autonomy_mod.TYPE_PATH, latch=True)
+        self.bus.advertise(where[autonomy_mod.GOAL], autonomy_mod.TYPE_POSE_STAMPED, latch=True)
+        self.bus.advertise(self.topic_stamped, topics.TYPE_STRING)
+        seq = itertools.count(1)
+
+        def send(v: float, w: float) -> None:
+            self.bus.publish(self.topic_stamped, {"data": envelope.build(v, w, seq=next(seq))})
+
+        def stamp() -> dict[str, int]:
+            ns_now = time.time_ns()
+            return {"sec": ns_now // 1_000_000_000, "nanosec": ns_now % 1_000_000_000}
+
+        service = AutonomyService(lambda key, msg: self.bus.publish(where[key], msg), send, stamp)
+        self.bus.subscribe(self.topic_odom, service.on_odometry)
+        return service
 
     def _on_stamped(self, msg: dict[str, Any]) -> None:
         recv_ns = time.time_ns()
@@ -252,7 +283,9 @@ class Backend(Servers):
             await asyncio.sleep(max(0.0, delay))
 
     async def start(self) -> None:
-        await self.start_servers(self.endpoint if self.config.bridge else None, self.tracker, self.topics)
+        await self.start_servers(
+            self.endpoint if self.config.bridge else None, self.tracker, self.topics, self.autonomy
+        )
         loop = asyncio.get_running_loop()
         self._tasks.append(loop.create_task(self._watchdog()))
         self._tasks.append(loop.create_task(self._topics_loop()))

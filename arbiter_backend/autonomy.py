@@ -1,0 +1,208 @@
+"""The seed's autonomous behaviour node, on the robot (``arbiter-backend --autonomy``).
+
+One of the console's controllers (``arbiter_core.controllers``, the same code) follows a named mission
+on the robot's own odometry, in the backend's process: no link inside the control loop. It publishes
+what a robot-side controller leaves on the graph, which the console's observe mode grades
+(README, "Grade any controller"): ``plan`` (``nav_msgs/Path``: where the run started, then every
+waypoint), ``goal_pose`` (``geometry_msgs/PoseStamped``: the last waypoint), and each command as a
+stamped envelope on ``stamped_cmd_vel`` (the seed's section 6.1: commands that are time-stamped and
+measured by the latency tracker, which forwards them to ``cmd_vel_measured``).
+
+As the console's control loop: a command every ``CONTROL_PERIOD`` odometry messages (50 Hz odometry:
+10 Hz, compare's rate), the controller capped at the run's speed and turn (``clamp_twist``), the mission
+relative to where the robot stands when it starts, a waypoint passed within 0.15 m; when the last is
+reached, one zero command and the run is ``completed``. A stop (``DELETE /api/autonomy``) sends one
+zero and the run is ``aborted``; the tracker's deadman stops the robot if the process dies.
+
+Pure: poses in, commands and messages out; the transport wires it (``server.Backend``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from typing import Any
+
+from arbiter_core.controllers import CONTROLLERS, MISSIONS, MissionProgress, make_controller
+from arbiter_core.kinematics import (
+    DEFAULT_LIMITS,
+    Limits,
+    Pose,
+    clamp_twist,
+    distance_error,
+    quaternion_to_yaw,
+    yaw_to_quaternion,
+)
+
+CONTROL_PERIOD = 5  # odometry messages per command (the simulator's 50 Hz -> 10 Hz)
+IDLE, RUNNING, COMPLETED, ABORTED = "idle", "running", "completed", "aborted"
+TYPE_PATH = "nav_msgs/msg/Path"
+TYPE_POSE_STAMPED = "geometry_msgs/msg/PoseStamped"
+PLAN, GOAL = "plan", "goal_pose"
+
+
+class AutonomyError(ValueError):
+    """A request the autonomy cannot take, in one line (the API's 400)."""
+
+
+@dataclass(frozen=True)
+class Request:
+    algorithm: str
+    mission: str
+    speed: float = 0.5  # the console's default caps
+    turn: float = 1.0
+
+    @classmethod
+    def from_json(cls, raw: Any) -> Request:
+        """ValueError naming the field that is wrong."""
+        if not isinstance(raw, dict):
+            raise AutonomyError("the body must be a JSON object: {\"algorithm\": ..., \"mission\": ...}")
+        algorithm, mission = raw.get("algorithm"), raw.get("mission", "square")
+        if algorithm not in CONTROLLERS:
+            raise AutonomyError(f"algorithm must be one of {', '.join(CONTROLLERS)}")
+        if mission not in MISSIONS:
+            raise AutonomyError(f"mission must be one of {', '.join(MISSIONS)}")
+        caps = {}
+        for name, top in (("speed", DEFAULT_LIMITS.max_linear), ("turn", DEFAULT_LIMITS.max_angular)):
+            value = raw.get(name, getattr(cls, name))
+            if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+                raise AutonomyError(f"{name} must be a finite number")
+            if not 0 < value <= top:
+                raise AutonomyError(f"{name} must be in (0, {top}]")
+            caps[name] = float(value)
+        return cls(algorithm, mission, **caps)
+
+
+def pose_of(odom: dict[str, Any]) -> Pose:
+    """The pose of a ``nav_msgs/Odometry`` in JSON form (KeyError/TypeError/ValueError if it has none)."""
+    p = odom["pose"]["pose"]
+    return Pose(float(p["position"]["x"]), float(p["position"]["y"]), quaternion_to_yaw(p["orientation"]))
+
+
+def _pose_stamped(x: float, y: float, yaw: float, stamp: dict[str, int], frame: str) -> dict[str, Any]:
+    return {
+        "header": {"stamp": stamp, "frame_id": frame},
+        "pose": {"position": {"x": x, "y": y, "z": 0.0}, "orientation": yaw_to_quaternion(yaw)},
+    }
+
+
+class Autonomy:
+    """A controller following a mission on odometry (module doc)."""
+
+    def __init__(self, frame_id: str = "odom") -> None:
+        self.frame_id = frame_id
+        self.request: Request | None = None
+        self.outcome = IDLE
+        self.mission: MissionProgress | None = None
+        self._controller: Any = None
+        self._limits: Limits = DEFAULT_LIMITS
+        self._count = 0
+        self.commands = 0
+        self.final_error_m: float | None = None
+
+    @property
+    def running(self) -> bool:
+        return self.outcome == RUNNING
+
+    def start(self, request: Request, pose: Pose, stamp: dict[str, int]) -> list[tuple[str, dict[str, Any]]]:
+        """Start ``request`` from ``pose``; returns the messages to publish first (plan, goal)."""
+        mission = MissionProgress.named(request.mission)
+        mission.waypoints = [(pose.x + x, pose.y + y) for x, y in mission.waypoints]
+        mission.start = (pose.x, pose.y)
+        self.request, self.mission, self.outcome = request, mission, RUNNING
+        self._limits = replace(DEFAULT_LIMITS, max_linear=request.speed, max_angular=request.turn)
+        self._controller = make_controller(request.algorithm, self._limits)
+        self._count, self.commands, self.final_error_m = 0, 0, None
+        points = [mission.start, *mission.waypoints]
+        poses = []
+        for i, (x, y) in enumerate(points):
+            nx, ny = points[min(i + 1, len(points) - 1)]
+            yaw = math.atan2(ny - y, nx - x) if (nx, ny) != (x, y) else pose.theta
+            poses.append(_pose_stamped(x, y, yaw, stamp, self.frame_id))
+        plan = {"header": {"stamp": stamp, "frame_id": self.frame_id}, "poses": poses}
+        goal = poses[-1]
+        return [(PLAN, plan), (GOAL, goal)]
+
+    def on_odometry(self, pose: Pose) -> tuple[float, float] | None:
+        """Every odometry message; the command to send, on every ``CONTROL_PERIOD``-th while running."""
+        if not self.running:
+            return None
+        assert self.mission is not None
+        self._count += 1
+        if (self._count - 1) % CONTROL_PERIOD:
+            return None
+        self.mission.update(pose)
+        if self.mission.done:
+            self.outcome = COMPLETED
+            self.final_error_m = distance_error(pose, self.mission.waypoints[-1])
+            return (0.0, 0.0)
+        self._controller.limits = self._limits
+        v, w = clamp_twist(*self._controller.command(pose, self.mission), self._limits)
+        self.commands += 1
+        return v, w
+
+    def stop(self) -> tuple[float, float] | None:
+        """Abort a run in progress: the zero command to send (None when nothing runs)."""
+        if not self.running:
+            return None
+        self.outcome = ABORTED
+        return (0.0, 0.0)
+
+    def status(self) -> dict[str, Any]:
+        r = self.request
+        m = self.mission
+        return {
+            "state": self.outcome,
+            "algorithm": None if r is None else r.algorithm,
+            "mission": None if r is None else r.mission,
+            "speed": None if r is None else r.speed,
+            "turn": None if r is None else r.turn,
+            "waypoint": None if m is None else min(m.index, len(m.waypoints)),
+            "waypoints": None if m is None else len(m.waypoints),
+            "commands": self.commands,
+            "final_error_m": None if self.final_error_m is None else round(self.final_error_m, 4),
+        }
+
+
+class AutonomyService:
+    """What ``/api/autonomy`` drives: an :class:`Autonomy` wired to a transport by three callables
+    (publish a message on ``plan``/``goal_pose``, send a command, the latest odometry pose)."""
+
+    def __init__(
+        self,
+        publish: Any,  # (topic key PLAN or GOAL, message) -> None
+        send: Any,  # (v, w) -> None: a stamped command onto the tracker's path
+        stamp: Any,  # () -> {"sec", "nanosec"}
+        frame_id: str = "odom",
+    ) -> None:
+        self.autonomy = Autonomy(frame_id)
+        self._publish, self._send, self._stamp = publish, send, stamp
+        self.pose: Pose | None = None
+
+    def on_odometry(self, odom: dict[str, Any]) -> None:
+        try:
+            self.pose = pose_of(odom)
+        except (KeyError, TypeError, ValueError):
+            return  # not odometry with a pose: nothing to drive by
+        cmd = self.autonomy.on_odometry(self.pose)
+        if cmd is not None:
+            self._send(*cmd)
+
+    def start(self, raw: Any) -> dict[str, Any]:
+        """AutonomyError (400) for a bad request, RuntimeError (409) with no odometry yet."""
+        request = Request.from_json(raw)
+        if self.pose is None:
+            raise RuntimeError("no odometry yet: the robot's pose is unknown")
+        if (zero := self.autonomy.stop()) is not None:
+            self._send(*zero)  # the run in progress ends first
+        for key, msg in self.autonomy.start(request, self.pose, self._stamp()):
+            self._publish(key, msg)
+        return self.autonomy.status()
+
+    def stop(self) -> dict[str, Any]:
+        if (zero := self.autonomy.stop()) is not None:
+            self._send(*zero)
+        return self.autonomy.status()
+
+    def status(self) -> dict[str, Any]:
+        return self.autonomy.status()
