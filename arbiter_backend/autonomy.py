@@ -14,12 +14,14 @@ relative to where the robot stands when it starts, a waypoint passed within 0.15
 reached, one zero command and the run is ``completed``. A stop (``DELETE /api/autonomy``) sends one
 zero and the run is ``aborted``; the tracker's deadman stops the robot if the process dies.
 
-Pure: poses in, commands and messages out; the transport wires it (``server.Backend``).
+Pure logic (``Autonomy``) and the service the API drives; the transport wires it
+(``server.Backend`` on the embedded bus, ``ros.autonomy.AutonomyNode`` on DDS).
 """
 
 from __future__ import annotations
 
 import math
+import threading
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -178,31 +180,38 @@ class AutonomyService:
         self.autonomy = Autonomy(frame_id)
         self._publish, self._send, self._stamp = publish, send, stamp
         self.pose: Pose | None = None
+        # ROS mode: odometry on the executor's thread, requests on the API's loop
+        self._lock = threading.Lock()
 
     def on_odometry(self, odom: dict[str, Any]) -> None:
         try:
-            self.pose = pose_of(odom)
+            pose = pose_of(odom)
         except (KeyError, TypeError, ValueError):
             return  # not odometry with a pose: nothing to drive by
-        cmd = self.autonomy.on_odometry(self.pose)
-        if cmd is not None:
-            self._send(*cmd)
+        with self._lock:
+            self.pose = pose
+            cmd = self.autonomy.on_odometry(pose)
+            if cmd is not None:
+                self._send(*cmd)
 
     def start(self, raw: Any) -> dict[str, Any]:
         """AutonomyError (400) for a bad request, RuntimeError (409) with no odometry yet."""
         request = Request.from_json(raw)
-        if self.pose is None:
-            raise RuntimeError("no odometry yet: the robot's pose is unknown")
-        if (zero := self.autonomy.stop()) is not None:
-            self._send(*zero)  # the run in progress ends first
-        for key, msg in self.autonomy.start(request, self.pose, self._stamp()):
-            self._publish(key, msg)
-        return self.autonomy.status()
+        with self._lock:
+            if self.pose is None:
+                raise RuntimeError("no odometry yet: the robot's pose is unknown")
+            if (zero := self.autonomy.stop()) is not None:
+                self._send(*zero)  # the run in progress ends first
+            for key, msg in self.autonomy.start(request, self.pose, self._stamp()):
+                self._publish(key, msg)
+            return self.autonomy.status()
 
     def stop(self) -> dict[str, Any]:
-        if (zero := self.autonomy.stop()) is not None:
-            self._send(*zero)
-        return self.autonomy.status()
+        with self._lock:
+            if (zero := self.autonomy.stop()) is not None:
+                self._send(*zero)
+            return self.autonomy.status()
 
     def status(self) -> dict[str, Any]:
-        return self.autonomy.status()
+        with self._lock:
+            return self.autonomy.status()

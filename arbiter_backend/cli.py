@@ -83,8 +83,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--autonomy",
         action="store_true",
         help="let POST /api/autonomy start a controller on the robot (the seed's behaviour node: "
-        "a mission on the odometry, publishing plan, goal_pose and stamped commands; embedded "
-        "transport); off by default: nothing that moves the robot is reachable unless allowed",
+        "a mission on the odometry, publishing plan, goal_pose and stamped commands; both "
+        "transports); off by default: nothing that moves the robot is reachable unless allowed",
     )
     p.add_argument(
         "--no-bridge", action="store_true", help="no rosbridge endpoint: another rosbridge server is used"
@@ -314,10 +314,6 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     if args.tls_key is not None and args.tls_cert is None:
         print("arbiter-backend: --tls-key needs --tls-cert", file=sys.stderr)
-        return 2
-    if args.autonomy and args.transport == "ros":
-        print("arbiter-backend: --autonomy runs on the embedded transport only (not yet --transport ros)",
-              file=sys.stderr)  # fmt: skip
         return 2
     config = BackendConfig(
         host=args.host,

@@ -23,6 +23,7 @@ from rclpy.node import Node
 from .. import bridge
 from ..server import BackendConfig, Servers
 from . import topicwatch
+from .autonomy import AutonomyNode
 from .bus import RosBus
 from .interfaces import RosInterfaces
 from .nodes import SimulatorNode, TrackerNode
@@ -55,6 +56,10 @@ class RosBackend(Servers):
             self.tracker = self.tracker_node.tracker
             if config.sim:
                 self.nodes.append(SimulatorNode(self.config, self.context))
+            self.autonomy_node: AutonomyNode | None = None
+            if config.autonomy:
+                self.autonomy_node = AutonomyNode(self.config, self.context)
+                self.nodes.append(self.autonomy_node)
             self.sim_enabled = config.sim
             self.bridge_node: Node | None = None
             if config.bridge:
@@ -96,7 +101,8 @@ class RosBackend(Servers):
             self.bus.local_handlers[stamped] = self.tracker_node.on_local_command
             self.endpoint = self.config.make_endpoint(self.bus)
             self._watch = asyncio.create_task(self.bus.watch_publishers())  # QoS follows the publishers
-        await self.start_servers(self.endpoint, self.tracker, self.topics)
+        autonomy = self.autonomy_node.service if self.autonomy_node is not None else None
+        await self.start_servers(self.endpoint, self.tracker, self.topics, autonomy)
         if self.bridge_node is not None:
             # as rosbridge_websocket does: the port bound (``port`` may be 0), for tools that ask the graph
             self.bridge_node.declare_parameter(

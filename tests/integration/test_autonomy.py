@@ -34,7 +34,12 @@ def call(url: str, method: str, body: bytes | None = None) -> tuple[int, dict]:
 # stands at its goal (analytics/observe.py)
 @pytest.mark.parametrize("algorithm", ["stanley", "pure_pursuit"])
 def test_the_robot_side_run_observed_by_the_console_is_what_compare_gives(algorithm):
-    backend = start_backend("--autonomy")
+    observe_robot_side(algorithm, start_backend("--autonomy"))
+
+
+def observe_robot_side(algorithm: str, backend) -> None:
+    """Start ``algorithm`` on ``corner`` through the backend's API, observe it from the console, and hold
+    its figures against compare's on a perfect link (also the ROS-mode test's)."""
     settings = Settings(
         handle_signals=False, observe=True, observe_label=f"robot_{algorithm}", cmd_topic="/cmd_vel_measured"
     )
