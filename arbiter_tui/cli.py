@@ -15,6 +15,10 @@ def main(argv: list[str] | None = None) -> int:
         from .commands.compare import run as run_compare
 
         return run_compare(argv[1:])
+    if argv and argv[0] == "autonomy":
+        from .commands.autonomy import run as run_autonomy
+
+        return run_autonomy(argv[1:])
     if argv and argv[0] == "topics":
         from .commands.topics import run as run_topics
 

@@ -11,6 +11,7 @@ import urllib.request
 import pytest
 
 from arbiter_tui.analytics.runs import COMPLETED
+from arbiter_tui.cli import main
 from arbiter_tui.link.base import CONNECTED
 from arbiter_tui.link.rosbridge import RosLink
 from arbiter_tui.session.compare import run_one
@@ -103,3 +104,28 @@ def test_bad_requests_are_refused_in_one_line_and_nothing_moves():
     finally:
         off.stop()
         on.stop()
+
+
+def test_the_console_starts_stops_and_asks_from_the_command_line(capsys):
+    backend = start_backend("--autonomy")
+    try:
+        tracker = ["--tracker", backend.api]
+        assert wait_for(lambda: backend_has_odometry(backend), 10)
+        assert main(["autonomy", "start", "kanayama", "--mission", "slalom", *tracker]) == 0
+        assert "running · kanayama on slalom" in capsys.readouterr().out
+        assert wait_for(lambda: get_json(f"{backend.api}/api/autonomy")["commands"] >= 5, 10)
+        assert main(["autonomy", "stop", *tracker]) == 0
+        assert "aborted · kanayama on slalom" in capsys.readouterr().out
+        assert main(["autonomy", "start", "stanley", "--speed", "7", *tracker]) == 1
+        assert "speed must be in" in capsys.readouterr().err
+        assert main(["autonomy", "status", "--json", *tracker]) == 0
+        assert json.loads(capsys.readouterr().out)["state"] == "aborted"
+    finally:
+        backend.stop()
+    assert main(["autonomy", "status", "--tracker", backend.api, "--timeout", "1"]) == 3  # it is gone
+    assert "/api/autonomy" in capsys.readouterr().err
+
+
+def backend_has_odometry(backend) -> bool:
+    topics = get_json(f"{backend.api}/api/topics")["topics"]
+    return any(t["name"] == "/odom" and t["count"] > 0 for t in topics)
