@@ -47,7 +47,9 @@ def test_the_proxy_delays_each_direction_and_stalls():
         sock = socket.create_connection(("127.0.0.1", proxy.port))
         sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
         rtts = sorted(round_trip(sock) for _ in range(10))
-        assert 25.0 <= rtts[5] < 26.5
+        # both delays once (a missed one: < 25; a doubled one: >= 45); the rest is this machine's own
+        # scheduling, which reached 26.5 ms on 2 loaded cores under the full suite
+        assert 25.0 <= rtts[5] < 35.0, rtts
         proxy.stall(0.3)
         assert round_trip(sock) >= 290.0
         proxy.blackhole(0.2)  # what arrives is dropped, then the connections close: a link that died
