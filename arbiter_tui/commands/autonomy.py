@@ -11,15 +11,14 @@ import argparse
 import json
 import ssl
 import sys
-from pathlib import Path
 from typing import Any
 
-from arbiter_core.auth import AuthConfigError, load_token
+from arbiter_core.auth import AuthConfigError
 from arbiter_core.cliargs import OneLineParser
 from arbiter_core.controllers import CONTROLLERS, MISSIONS
-from arbiter_core.urls import UrlError, check_token_transport, tracker_endpoint
+from arbiter_core.urls import UrlError
 
-DEFAULT_TRACKER = "http://127.0.0.1:8085"
+from . import tracker_args
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -33,15 +32,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--mission", default="square", choices=tuple(MISSIONS), help="start: default square")
     p.add_argument("--speed", type=float, default=0.5, help="start: m/s cap (default 0.5)")
     p.add_argument("--turn", type=float, default=1.0, help="start: rad/s cap (default 1.0)")
-    p.add_argument(
-        "--tracker", default=DEFAULT_TRACKER, help=f"the backend's API (default {DEFAULT_TRACKER})"
-    )
     p.add_argument("--json", action="store_true", help="print the API's answer as JSON")
-    p.add_argument(
-        "--token-file", type=Path, help="file whose first line is the token (default $ARBITER_TOKEN)"
-    )
-    p.add_argument("--ca-file", type=Path, help="PEM certificate(s) to trust for https://")
-    p.add_argument("--timeout", type=float, default=5.0, help="seconds to wait for an answer (default 5)")
+    tracker_args.add(p)
     return p
 
 
@@ -61,11 +53,7 @@ def run(argv: list[str]) -> int:
     if args.action == "start" and args.algorithm is None:
         p.error(f"start needs an algorithm: {', '.join(CONTROLLERS)}")
     try:
-        endpoint = tracker_endpoint(args.tracker)
-        token = load_token(args.token_file)
-        check_token_transport(endpoint, "--tracker", token)
-        if args.ca_file is not None and not args.ca_file.is_file():
-            raise UrlError(f"--ca-file {args.ca_file}: no such file")
+        endpoint, token = (tracker := tracker_args.checked(args)).endpoint, tracker.token
     except (ValueError, AuthConfigError, UrlError) as exc:
         print(f"arbiter-tui autonomy: {exc}", file=sys.stderr)
         return 2

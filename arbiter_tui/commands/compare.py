@@ -36,6 +36,7 @@ from ..session.compare import (
 )
 from ..session.settings import Settings
 from ..session.trials import INTERVAL, VERDICT_RULE
+from .tracker_args import DEFAULT_TRACKER
 
 D = Settings()  # the console's defaults, one place
 
@@ -117,7 +118,6 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
-DEFAULT_TRACKER = "http://127.0.0.1:8085"
 MEASURED_RECORDS = 1000
 
 

@@ -10,18 +10,16 @@ import argparse
 import asyncio
 import json
 import sys
-from pathlib import Path
 
-from arbiter_core.auth import AuthConfigError, load_token
+from arbiter_core.auth import AuthConfigError
 from arbiter_core.cliargs import OneLineParser
 from arbiter_core.topicstats import Expectation, TopicsAnswer, parse_expect, unmet
-from arbiter_core.urls import UrlError, check_token_transport, tracker_endpoint
+from arbiter_core.urls import UrlError
 
 from ..latency.topics_client import TopicsPoller
 from ..latency.topics_table import COLUMNS, aligned, cells
 from ..latency.tracker_client import TrackerClient
-
-DEFAULT_TRACKER = "http://127.0.0.1:8085"
+from . import tracker_args
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -30,9 +28,7 @@ def build_parser() -> argparse.ArgumentParser:
         description="Print the rate, bandwidth, delay and age of every topic the backend measures "
         "(GET /api/topics), once.",
     )
-    p.add_argument(
-        "--tracker", default=DEFAULT_TRACKER, help=f"the backend's API (default {DEFAULT_TRACKER})"
-    )
+    tracker_args.add(p)
     p.add_argument("--json", action="store_true", help="print the answer as JSON (the API's own shape)")
     p.add_argument(
         "--expect",
@@ -48,11 +44,6 @@ def build_parser() -> argparse.ArgumentParser:
         help="with --expect: ask again until every expectation is met or S seconds passed (a robot that "
         "is still starting)",
     )
-    p.add_argument(
-        "--token-file", type=Path, help="file whose first line is the token (default $ARBITER_TOKEN)"
-    )
-    p.add_argument("--ca-file", type=Path, help="PEM certificate(s) to trust for https://")
-    p.add_argument("--timeout", type=float, default=5.0, help="seconds to wait for an answer (default 5)")
     return p
 
 
@@ -85,11 +76,7 @@ def run(argv: list[str]) -> int:
     args = build_parser().parse_args(argv)
     try:
         expect = parse_expect(args.expect) if args.expect is not None else None
-        endpoint = tracker_endpoint(args.tracker)
-        token = load_token(args.token_file)
-        check_token_transport(endpoint, "--tracker", token)
-        if args.ca_file is not None and not args.ca_file.is_file():
-            raise UrlError(f"--ca-file {args.ca_file}: no such file")
+        endpoint, token = (tracker := tracker_args.checked(args)).endpoint, tracker.token
     except (ValueError, AuthConfigError, UrlError) as exc:
         print(f"arbiter-tui topics: {exc}", file=sys.stderr)
         return 2
