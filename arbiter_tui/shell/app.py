@@ -176,9 +176,9 @@ class ArbiterApp(App[None]):
         tracker, s = self.tracker, self.settings
         if tracker is None or not s.live:
             return
-        period = lambda: s.poll_period if self._shown().shows(LATENCY) else s.idle_poll_period  # noqa: E731
+        period = lambda: s.poll_period if _shown(self).shows(LATENCY) else s.idle_poll_period  # noqa: E731
         self.run_worker(poll_forever(tracker.poll, period, lambda _: None), group="poll", exclusive=True)
-        shown = lambda: self._shown().shows(TOPICS)  # noqa: E731
+        shown = lambda: _shown(self).shows(TOPICS)  # noqa: E731
         topics = poll_forever(TopicsPoller(tracker).poll, TOPICS_PERIOD_S, self.sampler.topics_polled, shown)
         self.run_worker(topics, group="topics", exclusive=True)
 
@@ -209,11 +209,6 @@ class ArbiterApp(App[None]):
         self.sample_frame()
         event.clock.drawn()
 
-    def _shown(self) -> Shown:
-        screen = self.screen
-        dashboard = self.current_mode == CONTROL and isinstance(screen, ControlScreen) and screen.dashboard
-        return Shown(self.current_mode, dashboard)
-
     def refresh_frame(self, force: bool = False) -> None:
         """After a user action: a new frame now if what the user waits to see changed (a new command or
         limit shows at once; a held key's repeats that change nothing wait for the UI tick), or
@@ -224,15 +219,12 @@ class ArbiterApp(App[None]):
     def sample_frame(self, force: bool = False) -> None:
         """A new frame for the screens shown (the UI tick: ``ui_rate`` frames a second, each just after a
         control tick)."""
-        try:
-            stack = self.screen_stack
-        except KeyError:  # the mode's stack is already gone: the app is closing
-            return
+        stack = _screens(self)
         if not stack:
             return
         state = self.sampler.user_state()
         self._shown_state = state
-        shown = self._shown()
+        shown = _shown(self)
         frame = self.sampler.sample(shown, force)
         for screen in stack:
             if isinstance(screen, BaseScreen) and (frame is not screen.frame or screen.plots_waiting):
@@ -332,6 +324,22 @@ class ArbiterApp(App[None]):
     async def action_stop_and_quit(self) -> None:
         self.session.stop("quit")
         self.exit()
+
+
+def _screens(app: App[None]) -> list[Screen[object]]:
+    """The screens shown; none while the app exits (the mode's stack emptied, or already gone)."""
+    try:
+        return app.screen_stack
+    except KeyError:
+        return []
+
+
+def _shown(app: App[None]) -> Shown:
+    """What is on screen (a poller may still ask while the app exits: then nothing)."""
+    stack = _screens(app)
+    top = stack[-1] if stack else None
+    dashboard = app.current_mode == CONTROL and isinstance(top, ControlScreen) and top.dashboard
+    return Shown(app.current_mode, dashboard)
 
 
 def make_app(

@@ -359,3 +359,16 @@ async def test_a_theme_chosen_in_the_console_is_kept_in_the_config_file(tmp_path
         app.theme = "dracula"  # as the palette's theme picker does
         await pilot.pause()
     assert path.read_text() == 'theme = "dracula"\nspeed = 0.3\n'
+
+
+async def test_a_poller_that_asks_what_is_shown_while_the_app_exits_gets_an_answer():
+    """The topics poller asks what is shown on its own schedule; at exit the screen stack is empty (CI
+    once saw ``ScreenStackError('No screens on stack')`` fail the worker, and the app, at quit)."""
+    from arbiter_tui.shell.app import _screens, _shown
+
+    app = still_app()
+    async with app.run_test(size=SIZE) as pilot:
+        await pilot.press("2")
+        assert _shown(app).screen == "analytics" and _screens(app)
+    assert _screens(app) == []  # exited: no screens, no exception
+    assert not _shown(app).shows("topics")
