@@ -58,6 +58,7 @@ PROVIDER_THREADS = 16  # provided calls and goals waiting at once before more qu
 SERVER_WAIT_S = 1.0  # how long a goal waits for its action server to be matched (rosbridge: 1 s)
 SERVER_GONE_S = 3.0  # an action server unseen this long while its goal runs has gone: the goal fails
 RESULT_AGAIN_S = 1.0  # a goal the server reports ended whose result has not come: asked for again
+GOAL_ANSWER_S = 5.0  # a goal request unanswered this long failed (its answer lost as the server matched us)
 
 
 def _args(fields: dict[str, str], args: Any) -> dict[str, Any]:
@@ -337,9 +338,17 @@ class RosInterfaces:
                 self.loop.call_soon_threadsafe(on_feedback, values)
 
         try:
-            handle = await self._on_loop(
+            sent = self._on_loop(
                 client.send_goal_async(request, feedback_callback=feedback if on_feedback else None)
             )
+            try:
+                # a goal request sent as the server first matches us can lose its answer (DDS discovery
+                # is not symmetric): a failure the client can retry, never a wait without end
+                handle = await asyncio.wait_for(sent, GOAL_ANSWER_S)
+            except asyncio.TimeoutError:
+                raise MessageError(
+                    f"{action}: the action server did not answer the goal within {GOAL_ANSWER_S:g} s"
+                ) from None
             if not handle.accepted:
                 raise MessageError(f"{action}: the action server rejected the goal")
             goal.handle = handle
