@@ -32,7 +32,7 @@ from arbiter_core.kinematics import (
     Pose,
     clamp_twist,
     distance_error,
-    quaternion_to_yaw,
+    pose_of_odometry,
     yaw_to_quaternion,
 )
 
@@ -73,12 +73,6 @@ class Request:
                 raise AutonomyError(f"{name} must be in (0, {top}]")
             caps[name] = float(value)
         return cls(algorithm, mission, **caps)
-
-
-def pose_of(odom: dict[str, Any]) -> Pose:
-    """The pose of a ``nav_msgs/Odometry`` in JSON form (KeyError/TypeError/ValueError if it has none)."""
-    p = odom["pose"]["pose"]
-    return Pose(float(p["position"]["x"]), float(p["position"]["y"]), quaternion_to_yaw(p["orientation"]))
 
 
 def _pose_stamped(x: float, y: float, yaw: float, stamp: dict[str, int], frame: str) -> dict[str, Any]:
@@ -138,7 +132,6 @@ class Autonomy:
             self.outcome = COMPLETED
             self.final_error_m = distance_error(pose, self.mission.waypoints[-1])
             return (0.0, 0.0)
-        self._controller.limits = self._limits
         v, w = clamp_twist(*self._controller.command(pose, self.mission), self._limits)
         self.commands += 1
         return v, w
@@ -184,10 +177,15 @@ class AutonomyService:
         self._lock = threading.Lock()
 
     def on_odometry(self, odom: dict[str, Any]) -> None:
+        """An odometry message in rosbridge JSON form (the embedded bus's)."""
         try:
-            pose = pose_of(odom)
+            pose = pose_of_odometry(odom)
         except (KeyError, TypeError, ValueError):
             return  # not odometry with a pose: nothing to drive by
+        self.on_pose(pose)
+
+    def on_pose(self, pose: Pose) -> None:
+        """The robot's pose from its odometry; the command, when one is due, is sent from here."""
         with self._lock:
             self.pose = pose
             cmd = self.autonomy.on_odometry(pose)

@@ -30,6 +30,8 @@ import time
 from collections.abc import Awaitable, Callable
 from typing import Any, Protocol
 
+from arbiter_core.topics import stamp as ros_stamp
+
 Handler = Callable[[Any], Any]  # the response's fields, or an awaitable of them
 Call = Callable[[str, Any], Awaitable[dict[str, Any]]]  # a ROS service call (RosBus.call_service)
 PARAM_TIMEOUT_S = 2.0  # one node's parameter service, for get_param_names (a node that hangs is skipped)
@@ -296,7 +298,7 @@ def handlers(
 
     def get_time(args: Any) -> dict[str, Any]:
         now = clock_ns()
-        return {"time": {"sec": now // 1_000_000_000, "nanosec": now % 1_000_000_000}}
+        return {"time": ros_stamp(now)}
 
     def topics_and_raw_types(args: Any) -> dict[str, Any]:
         topics = [(t, ty) for t, ty in graph.topics() if topic_ok(t)]

@@ -231,11 +231,9 @@ class Backend(Servers):
         def send(v: float, w: float) -> None:
             self.bus.publish(self.topic_stamped, {"data": envelope.build(v, w, seq=next(seq))})
 
-        def stamp() -> dict[str, int]:
-            ns_now = time.time_ns()
-            return {"sec": ns_now // 1_000_000_000, "nanosec": ns_now % 1_000_000_000}
-
-        service = AutonomyService(lambda key, msg: self.bus.publish(where[key], msg), send, stamp)
+        service = AutonomyService(
+            lambda key, msg: self.bus.publish(where[key], msg), send, lambda: topics.stamp(time.time_ns())
+        )
         self.bus.subscribe(self.topic_odom, service.on_odometry)
         return service
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 
 @dataclass(frozen=True)
@@ -116,3 +117,10 @@ def yaw_to_quaternion(yaw: float) -> dict[str, float]:
 def quaternion_to_yaw(q: dict[str, float]) -> float:
     x, y, z, w = q.get("x", 0.0), q.get("y", 0.0), q.get("z", 0.0), q.get("w", 1.0)
     return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+
+
+def pose_of_odometry(msg: dict[str, Any]) -> Pose:
+    """The pose of a ``nav_msgs/Odometry`` in rosbridge JSON form; KeyError, TypeError or ValueError when
+    it has none."""
+    p = msg["pose"]["pose"]
+    return Pose(float(p["position"]["x"]), float(p["position"]["y"]), quaternion_to_yaw(p["orientation"]))

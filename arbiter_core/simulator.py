@@ -11,6 +11,7 @@ import math
 from typing import Any
 
 from .kinematics import DEFAULT_LIMITS, Limits, RobotState, step, yaw_to_quaternion
+from .topics import stamp
 
 NODE_NAME = "arbiter_simulator"
 RATE_HZ = 50.0
@@ -62,7 +63,7 @@ def odometry(state: RobotState, wall_ns: int) -> dict[str, Any]:
     p = state.pose
     return {
         "header": {
-            "stamp": {"sec": wall_ns // 1_000_000_000, "nanosec": wall_ns % 1_000_000_000},
+            "stamp": stamp(wall_ns),
             "frame_id": "odom",
         },
         "child_frame_id": "base_link",

@@ -39,6 +39,11 @@ def absolute(name: str) -> str:
     return name if name.startswith("/") else "/" + name
 
 
+def stamp(ns: int) -> dict[str, int]:
+    """A ``builtin_interfaces/Time`` in rosbridge JSON form, from integer nanoseconds."""
+    return {"sec": ns // 1_000_000_000, "nanosec": ns % 1_000_000_000}
+
+
 def twist(v: float, w: float) -> dict[str, Any]:
     return {"linear": {"x": v, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0, "y": 0.0, "z": w}}
 
@@ -49,7 +54,7 @@ def measured_message(v: float, w: float, measured_type: str, stamp_ns: int) -> d
         return twist(v, w)
     return {
         "header": {
-            "stamp": {"sec": stamp_ns // 1_000_000_000, "nanosec": stamp_ns % 1_000_000_000},
+            "stamp": stamp(stamp_ns),
             "frame_id": "base_link",
         },
         "twist": twist(v, w),

@@ -13,11 +13,12 @@ from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
 from arbiter_core import envelope, topics
+from arbiter_core.kinematics import Pose, quaternion_to_yaw
 
 from .. import autonomy as A
 from ..server import BackendConfig
 from .bus import default_qos
-from .convert import message_class, to_json, to_ros
+from .convert import message_class, to_ros
 
 log = logging.getLogger(__name__)
 NODE_NAME = "arbiter_autonomy"
@@ -46,11 +47,12 @@ class AutonomyNode(Node):
         self._cmd.publish(self._string(data=envelope.build(v, w, seq=next(self._seq))))
 
     def _stamp(self) -> dict[str, int]:
-        now = self.get_clock().now().nanoseconds
-        return {"sec": now // 1_000_000_000, "nanosec": now % 1_000_000_000}
+        return topics.stamp(self.get_clock().now().nanoseconds)
 
     def _on_odom(self, msg: Any) -> None:
+        # the pose read from the message as it is (50 Hz): not the whole Odometry made JSON first
+        p, q = msg.pose.pose.position, msg.pose.pose.orientation
         try:
-            self.service.on_odometry(to_json(msg))
+            self.service.on_pose(Pose(p.x, p.y, quaternion_to_yaw({"x": q.x, "y": q.y, "z": q.z, "w": q.w})))
         except Exception:
             log.exception("arbiter_autonomy: odometry not taken")

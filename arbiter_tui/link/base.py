@@ -13,7 +13,7 @@ import time
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
-from arbiter_core.kinematics import Pose, quaternion_to_yaw
+from arbiter_core.kinematics import Pose, pose_of_odometry
 from arbiter_core.record import LatencyRecord, RecordError
 
 from ..latency.clocksync import LatencyMeter
@@ -45,10 +45,7 @@ class Telemetry:
 
     def set_odom(self, msg: dict[str, Any]) -> None:
         try:
-            p = msg["pose"]["pose"]
-            pose = Pose(
-                float(p["position"]["x"]), float(p["position"]["y"]), quaternion_to_yaw(p["orientation"])
-            )
+            pose = pose_of_odometry(msg)
             v = float(msg["twist"]["twist"]["linear"]["x"])
             w = float(msg["twist"]["twist"]["angular"]["z"])
         except (KeyError, TypeError, ValueError):

@@ -8,7 +8,7 @@ from __future__ import annotations
 import time
 from typing import Any
 
-from arbiter_core.kinematics import quaternion_to_yaw
+from arbiter_core.kinematics import pose_of_odometry
 
 from ..analytics.observe import Observer
 
@@ -30,15 +30,9 @@ def observe_odometry(observer: Observer, msg: dict[str, Any]) -> None:
     if not observer.wants_odometry(now):
         return
     try:
-        p = msg["pose"]["pose"]
+        pose = pose_of_odometry(msg)
         tw = msg["twist"]["twist"]
-        values = (
-            float(p["position"]["x"]),
-            float(p["position"]["y"]),
-            quaternion_to_yaw(p["orientation"]),
-            float(tw["linear"]["x"]),
-            float(tw["angular"]["z"]),
-        )
+        values = (pose.x, pose.y, pose.theta, float(tw["linear"]["x"]), float(tw["angular"]["z"]))
     except _BAD:
         return
     observer.on_odometry(now, *values)
