@@ -55,7 +55,7 @@ from aiohttp import WSMsgType, web
 from arbiter_core import auth
 from arbiter_core.msgtypes import MessageError, normalize_type
 
-from . import cborenc, pngtext
+from . import cborenc, pacing, pngtext
 from .bus import Bus
 from .pacing import PACED_BYTES, Pacer
 from .provided import (
@@ -229,7 +229,13 @@ def _next_size(item: Payload | Fragments) -> int:
 class Client:
     _ids = itertools.count(1)
 
-    def __init__(self, ws: web.WebSocketResponse, queue_size: int, remote: str | None = None) -> None:
+    def __init__(
+        self,
+        ws: web.WebSocketResponse,
+        queue_size: int,
+        remote: str | None = None,
+        paced_wait: float | None = pacing.WAIT_S,
+    ) -> None:
         self.id = next(self._ids)
         self.ws = ws
         self.remote = remote
@@ -248,7 +254,7 @@ class Client:
         self.calls: set[asyncio.Task[None]] = set()  # service calls and goals under way
         self.goals: dict[Any, Callable[[], None]] = {}  # the goals it sent, by its id -> cancel
         self.last_rx = 0.0  # loop time of the last frame (pong included) received from the client
-        self.pacer = Pacer()  # its big frames, paced below the rate it reads at once it lags
+        self.pacer = Pacer(paced_wait)  # its big frames, paced below the rate it reads at once it lags
 
     @property
     def dropped(self) -> int:
@@ -373,8 +379,10 @@ class RosbridgeEndpoint:
         expose_actions: TopicFilter | None = None,
         heartbeat: float | None = WS_PING_S,
         token: str | None = None,
+        paced_wait: float | None = pacing.WAIT_S,
     ) -> None:
         self.bus = bus
+        self.paced_wait = paced_wait  # seconds a slow client's big frame may hold a small one (pacing)
         self.heartbeat = heartbeat or None  # seconds between pings to a silent client; None: no pings
         self.token = token
         self.refused = 0  # connections refused for a missing or wrong token
@@ -437,7 +445,7 @@ class RosbridgeEndpoint:
         # the interval, which drops a client that stops reading for a second behind a camera stream
         ws = web.WebSocketResponse(max_msg_size=TRANSPORT_MAX_FRAME, autoping=False)
         await ws.prepare(request)
-        client = Client(ws, self.client_queue, request.remote)
+        client = Client(ws, self.client_queue, request.remote, self.paced_wait)
         client.authenticated = authenticated
         self.clients.add(client)
         loop = asyncio.get_running_loop()

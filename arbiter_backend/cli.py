@@ -28,6 +28,7 @@ from arbiter_core.topics import MEASURED_TYPES
 from arbiter_core.topicstats import WINDOW_S
 
 from .bridge import DEAD_AFTER, MAX_FRAME_BYTES, TRANSPORT_MAX_FRAME, WS_PING_S
+from .pacing import WAIT_S as PACED_WAIT_S
 from .server import Backend, BackendConfig
 
 if TYPE_CHECKING:
@@ -187,6 +188,15 @@ def build_parser() -> argparse.ArgumentParser:
         "so a client that stops reading for 10 s is kept)",
     )
     p.add_argument(
+        "--paced-wait-ms",
+        type=non_negative_float,
+        default=PACED_WAIT_S * 1000,
+        metavar="MS",
+        help="to a client that reads slower than its topics bring, send a big frame (a camera image "
+        "without fragment_size) only as often as keeps the messages behind it from waiting longer "
+        f"than this 97.5 %% of the time (0: send as many as it reads; default: {PACED_WAIT_S * 1000:g})",
+    )
+    p.add_argument(
         "--max-frame",
         type=lambda text: count(text, TRANSPORT_MAX_FRAME),
         default=MAX_FRAME_BYTES,
@@ -343,6 +353,7 @@ def main(argv: list[str] | None = None) -> int:
         topics_exclude=args.topics_exclude,
         topics_window=args.topics_window,
         ws_ping=args.ws_ping,
+        paced_wait=args.paced_wait_ms / 1000,
         topics_glob=args.topics_glob,
         services_glob=args.services_glob,
         actions_glob=args.actions_glob,

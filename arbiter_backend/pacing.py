@@ -22,6 +22,17 @@ the previous one started. Every ``PROBE_AFTER_S`` without a sample that matches 
 client paced below its rate gives none, or only smaller ones), the pace grows by ``PROBE``, until
 the buffers fill again and a sample says what the client takes now.
 
+A frame a paced client takes longer than ``WAIT_S`` to read (a camera frame as JSON, without
+``fragment_size``, to a client reading a few MB/s) holds every message behind it that long; no order
+of queues helps once its bytes are on the wire, as a WebSocket message cannot be interleaved. Such
+frames are spaced so that a small message waits longer than ``WAIT_S`` at most ``OVER_WAIT_SHARE``
+of the time (each delays the messages that come during its first ``size / rate - WAIT_S``): the
+small topic's p95 stays within ``WAIT_S`` however few frames that client then gets. A client that
+asks for ``fragment_size`` gets every frame it can read, as fragments are small. A frame that comes
+alone (after a pause longer than ``SAMPLE_S``) starts a new measurement; if its write waited for the
+drain, its size less ``BUFFERED`` (what may still sit in the buffers when it returns) over that wait
+is a sample, so that spaced frames keep the estimate up to date.
+
 Pure: loop times in, decisions out; no I/O.
 """
 
@@ -39,15 +50,21 @@ SAMPLE_S = 0.25  # backlogged time that makes one estimate of the read rate
 SHARE = 0.8  # big frames use at most this share of the measured read rate
 PROBE_AFTER_S = 2.0
 PROBE = 1.25
+WAIT_S = 0.05  # how long a paced client's big frame may hold the messages behind it (--paced-wait-ms) ...
+OVER_WAIT_SHARE = 0.025  # ... except this share of the time
+# still buffered when a write returns: the transport's low-water mark (16 KiB), the kernel's unsent
+# bytes (bridge.UNSENT_BYTES, 64 KiB) and a client's receive buffer (Linux: 256 KiB for 128 KiB asked)
+BUFFERED = 384 * 1024
 
 
 class Pacer:
     """One client's pacing of big frames (module doc)."""
 
-    __slots__ = ("_best", "_bytes", "_confirmed", "_next_at", "_offer", "_offered", "_probe", "_samples",
-                 "_since")  # fmt: skip
+    __slots__ = ("_best", "_bytes", "_confirmed", "_last_end", "_next_at", "_offer", "_offered", "_probe",
+                 "_samples", "_since", "_wait")  # fmt: skip
 
-    def __init__(self) -> None:
+    def __init__(self, wait_s: float | None = WAIT_S) -> None:
+        self._wait = wait_s  # None: a big frame may hold the messages behind it as long as it takes
         self._best: float | None = None  # the largest recent sample, bytes/s; None: never lagged
         self._probe = 1.0
         self._samples: deque[tuple[float, float]] = deque()
@@ -55,6 +72,7 @@ class Pacer:
         self._next_at = 0.0
         self._since: float | None = None  # the last moment the buffers were full
         self._bytes = 0
+        self._last_end: float | None = None  # when the last big write returned
         self._offer: tuple[float, int] | None = None  # (window start, bytes) of big frames queued
         self._offered = 0.0  # bytes/s of big frames queued for the client, over the last window
 
@@ -89,7 +107,13 @@ class Pacer:
         """A frame of ``size`` bytes was handed to the socket from ``started`` to ``ended``."""
         if size < PACED_BYTES:
             return
+        alone = self._last_end is None or started - self._last_end > SAMPLE_S
+        self._last_end = ended
+        if alone:  # the buffers had time to run empty: nothing before counts
+            self._since = None
         if ended - started >= BLOCKED_S:  # the buffers were full when this write returned
+            if alone and self._best is not None and size > 2 * BUFFERED:
+                self._sampled(ended, (size - BUFFERED) / (ended - started))
             if self._since is not None:
                 self._bytes += size
                 if ended - self._since >= SAMPLE_S:
@@ -104,7 +128,13 @@ class Pacer:
             self._probe *= PROBE
             self._confirmed = ended
         rate = self._best * self._probe
-        self._next_at = started + size / (SHARE * rate) if rate < LAG * self._offered else 0.0
+        if rate >= LAG * self._offered:
+            self._next_at = 0.0
+            return
+        self._next_at = started + size / (SHARE * rate)
+        hold = size / rate  # what a message behind this frame waits
+        if self._wait is not None and hold > self._wait:
+            self._next_at = max(self._next_at, started + (hold - self._wait) / OVER_WAIT_SHARE)
 
     def _sampled(self, at: float, sample: float) -> None:
         self._samples.append((at, sample))

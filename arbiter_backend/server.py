@@ -31,6 +31,7 @@ from . import autonomy as autonomy_mod
 from .autonomy import AutonomyService
 from .bridge import MAX_FRAME_BYTES, WS_PING_S
 from .bus import Bus, TopicBus
+from .pacing import WAIT_S as PACED_WAIT_S
 from .topicwatch import EmbeddedTopics, TopicFilter, TopicWatch
 from .tracker import DEFAULT_MAX_COMMAND_AGE_MS, LatencyTracker
 
@@ -61,6 +62,7 @@ class BackendConfig:
     topics_exclude: str | None = None
     topics_window: float = WINDOW_S
     ws_ping: float = WS_PING_S  # the endpoint's liveness pings (seconds; 0: none)
+    paced_wait: float = PACED_WAIT_S  # a slow client's big frame holds a small one this long (s; 0: any)
     max_frame: int = MAX_FRAME_BYTES  # a client's frames above this are answered with a status error
     topics_glob: str | None = None  # comma-separated globs of the topics clients may reach (None: all)
     services_glob: str | None = None  # ... and of the services they may call
@@ -87,6 +89,7 @@ class BackendConfig:
             bus,
             token=self.token,
             heartbeat=self.ws_ping or None,
+            paced_wait=self.paced_wait or None,
             max_frame=self.max_frame,
             services=rosapi_services,
             expose_topics=topics,

@@ -1,5 +1,6 @@
 """A WebSocket client on a plain socket that reads at most ``rate`` bytes a second (a slow link or a
-slow client), for the endpoint's pacing tests. It sends frames; it does not parse what it reads."""
+slow client), for the endpoint's pacing tests. It sends frames; with ``frames`` it also parses the
+server's (unmasked, unfragmented) data frames and keeps each one's payload with the time it was read."""
 
 from __future__ import annotations
 
@@ -13,10 +14,13 @@ import time
 
 
 class SlowReader(threading.Thread):
-    def __init__(self, port: int, rate: float, rcvbuf: int = 64 * 1024) -> None:
+    def __init__(self, port: int, rate: float, rcvbuf: int = 64 * 1024, frames: bool = False) -> None:
         super().__init__(daemon=True)
         self.rate = rate
         self.read = 0
+        self.parse = frames
+        self.frames: list[tuple[float, bytes]] = []  # (time.monotonic() when read whole, payload)
+        self._buf = bytearray()
         self.stopped = False
         self.sock = socket.socket()
         self.sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, rcvbuf)
@@ -54,6 +58,27 @@ class SlowReader(threading.Thread):
             if not data:
                 return
             self.read += len(data)
+            if self.parse:
+                self._buf += data
+                self._frames(time.monotonic())
+
+    def _frames(self, now: float) -> None:
+        buf = self._buf
+        while len(buf) >= 2:
+            n, head = buf[1] & 0x7F, 2
+            if n == 126:
+                if len(buf) < 4:
+                    return
+                n, head = struct.unpack("!H", buf[2:4])[0], 4
+            elif n == 127:
+                if len(buf) < 10:
+                    return
+                n, head = struct.unpack("!Q", buf[2:10])[0], 10
+            if len(buf) < head + n:
+                return
+            if buf[0] & 0x0F in (1, 2):  # text and binary; not pings
+                self.frames.append((now, bytes(buf[head : head + n])))
+            del buf[: head + n]
 
     def close(self) -> None:
         self.stopped = True

@@ -81,12 +81,22 @@ def test_a_pause_starts_a_new_measurement_and_a_faster_client_is_found_again():
     assert pacer.rate == pytest.approx(9e6, rel=0.05)
 
 
-def simulate(frame_bytes, rate_bps, seconds, buffers=384 * 1024, limit=256 * 1024, paced=True, fps=30.0):
+def simulate(
+    frame_bytes,
+    rate_bps,
+    seconds,
+    buffers=384 * 1024,
+    limit=256 * 1024,
+    paced=True,
+    fps=30.0,
+    starts_too=False,
+):
     """A writer that always has a frame ready (a camera, queue_length 1) and honours the pacer, against
     a client reading ``rate_bps`` behind ``buffers`` bytes of socket buffers; like aiohttp, the writer
     waits for the drain (until only ``buffers`` are queued) once it has written ``limit`` bytes since
     it last did. Returns the pacer's rates after each write, the frames written a second and the mean
-    bytes queued when a frame starts (what a small message would wait behind), over the last half."""
+    bytes queued when a frame starts (what a small message would wait behind), over the last half
+    (and with ``starts_too`` each frame's (start, bytes queued then))."""
     pacer = P.Pacer()
     camera = Camera(pacer, fps)
     t, queued, out, starts, rates = 0.0, 0.0, 0, [], []
@@ -112,23 +122,54 @@ def simulate(frame_bytes, rate_bps, seconds, buffers=384 * 1024, limit=256 * 102
         rates.append((start, pacer.rate, pacer.paced))
     half = seconds / 2
     backlog = [q for s, q in starts if s >= half]
-    return [(r, p) for s, r, p in rates if s >= half], len(backlog) / half, sum(backlog) / len(backlog)
+    out = [(r, p) for s, r, p in rates if s >= half], len(backlog) / half, sum(backlog) / len(backlog)
+    return (*out, [(s, q) for s, q in starts if s >= half]) if starts_too else out
 
 
-@pytest.mark.parametrize("frame_bytes", [921_700, FRAG])
-def test_a_paced_client_gets_most_of_its_rate_and_its_buffers_stay_nearly_empty(frame_bytes):
+def test_a_paced_client_gets_most_of_its_rate_in_fragments_and_its_buffers_stay_nearly_empty():
     rate = 6e6
-    rates, frames_per_s, backlog = simulate(frame_bytes, rate, 60.0)
+    rates, frames_per_s, backlog = simulate(FRAG, rate, 60.0)
     assert all(paced for _r, paced in rates)
     rates = [r for r, _p in rates]
-    _, unpaced, unpaced_backlog = simulate(frame_bytes, rate, 60.0, paced=False)
-    print(f"{frame_bytes}: rate {min(rates) / rate:.2f}-{max(rates) / rate:.2f} of the client's, "
-          f"{frames_per_s:.2f} frames/s of {unpaced:.2f}, backlog {backlog:.0f} B of {unpaced_backlog:.0f}")
+    _, unpaced, unpaced_backlog = simulate(FRAG, rate, 60.0, paced=False)
+    print(
+        f"rate {min(rates) / rate:.2f}-{max(rates) / rate:.2f} of the client's, "
+        f"{frames_per_s:.2f} frames/s of {unpaced:.2f}, backlog {backlog:.0f} B of {unpaced_backlog:.0f}"
+    )
     # measured, and not talked down by its own pauses: it gets most of the frames it could take
     assert min(rates) > 0.75 * rate
     assert frames_per_s > 0.7 * unpaced
     # what a small message waits behind, on average: a fraction of the unpaced backlog
     assert backlog < 0.5 * unpaced_backlog
+
+
+def waited_over(starts, frame_bytes, rate_bps, wait_s):
+    """The share of the time a small message sent then would wait longer than ``wait_s``: behind
+    each frame, every byte queued when it started and the frame itself."""
+    over = sum(max(0.0, (queued + frame_bytes) / rate_bps - wait_s) for _s, queued in starts)
+    return over / (starts[-1][0] - starts[0][0])
+
+
+@pytest.mark.parametrize("rate", [6e6, 2e6])
+def test_a_frame_that_holds_the_wire_too_long_is_spaced_so_small_messages_wait_little(rate):
+    """A 640x480 frame as JSON, unfragmented, to a client reading 6 (2) MB/s holds everything behind
+    it 150 (460) ms: spaced so that a small message waits over WAIT_S at most OVER_WAIT_SHARE of the
+    time, its estimate kept by the lone frames' own writes, never talked down to nothing."""
+    frame = 921_700
+    rates, frames_per_s, _backlog, starts = simulate(frame, rate, 120.0, starts_too=True)
+    _, _, _, unpaced = simulate(frame, rate, 120.0, paced=False, starts_too=True)
+    rates = [r for r, _p in rates]
+    over = waited_over(starts, frame, rate, P.WAIT_S)
+    print(
+        f"rate {min(rates) / rate:.2f}-{max(rates) / rate:.2f} of the client's, {frames_per_s:.2f} "
+        f"frames/s, over {P.WAIT_S * 1e3:.0f} ms {over:.3f} of the time "
+        f"(unpaced {waited_over(unpaced, frame, rate, P.WAIT_S):.3f})"
+    )
+    assert 0.75 * rate < min(rates) and max(rates) < 1.3 * rate
+    assert over <= 0.05  # the small topic's p95 stays within WAIT_S
+    assert waited_over(unpaced, frame, rate, P.WAIT_S) > 0.5  # which it did not without pacing
+    hold = frame / rate - P.WAIT_S
+    assert frames_per_s > 0.5 * P.OVER_WAIT_SHARE / hold  # and frames still come, as many as that allows
 
 
 def test_a_client_that_keeps_up_on_average_is_not_paced_for_lagging_a_moment():
