@@ -13,10 +13,16 @@ between which the small topic's messages go). The slow client reads its socket a
 image frames' worth of bytes a second (a link or
 a client that cannot take the camera's rate; its receive buffer is ``SLOW_RCVBUF``), and asks for
 ``queue_length: 1`` on the camera, as a viewer of the latest frame would. Every row runs ``--repeat``
-times; the table shows medians. The stock rosbridge_server is not installed here, so it is not
-measured (the issue's figures for it: cbor 30 frames/s, small p95 1.13 ms).
+times; the table shows medians.
 
-    python bench/bigmsg.py --transport both --seconds 15 --repeat 3
+``--stock CMD`` adds rows for the stock rosbridge_server, side by side, with the same rclpy publisher:
+CMD starts it with ``{port}`` where its port goes (it must be installed, with its ``rosbridge_msgs``),
+for example::
+
+    python bench/bigmsg.py --transport both --seconds 15 --repeat 3 \
+        --stock 'ros2 run rosbridge_server rosbridge_websocket --ros-args -p port:={port}'
+
+Its server CPU is that of the process CMD starts; it reports no drops.
 
 Last line: one JSON object with every row.
 """
@@ -28,6 +34,8 @@ import base64
 import json
 import os
 import random
+import re
+import shlex
 import socket
 import statistics
 import struct
@@ -47,6 +55,7 @@ IMAGE = "/bench/image"
 WARMUP_S = 2.0
 SLOW_RCVBUF = 128 * 1024
 FRAGMENT = 64 * 1024  # fragment_size of the json-frag rows
+FRAGMENT_OP = re.compile(rb'"op":\s*"fragment"')  # ours writes no spaces, the stock server does
 TICK = os.sysconf("SC_CLK_TCK")
 
 
@@ -135,17 +144,16 @@ class Reader(threading.Thread):
             now = time.time_ns()
             if opcode in (1, 2):
                 head = bytes(buf[i : i + 80])
-                if SMALL.encode() in head:
+                if FRAGMENT_OP.search(head):  # only the camera's: whole at its last fragment
+                    frag = json.loads(bytes(buf[i : i + n]))
+                    if frag["num"] == frag["total"] - 1:
+                        self.images.append(now)
+                elif SMALL.encode() in head:
                     payload = bytes(buf[i : i + n])
                     frame = json.loads(payload) if opcode == 1 else cbor2.loads(payload)
                     self.small.append((int(frame["msg"]["data"]), now))
                 elif IMAGE.encode() in head:
-                    if b'"op":"fragment"' in head:  # fragment_size: a frame is whole at its last fragment
-                        frag = json.loads(bytes(buf[i : i + n]))
-                        if frag["num"] == frag["total"] - 1:
-                            self.images.append(now)
-                    else:
-                        self.images.append(now)
+                    self.images.append(now)
             elif opcode == 9:
                 self.send(bytes(buf[i : i + n]), opcode=10)
             elif opcode == 8:
@@ -220,6 +228,22 @@ def cpu_s(pid: int) -> float:
     return (int(fields[11]) + int(fields[12])) / TICK
 
 
+def start_stock(cmd: str, env: dict) -> tuple[subprocess.Popen, int]:
+    """The stock rosbridge_server from ``cmd`` on a free port, once that port takes connections."""
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    proc = subprocess.Popen(shlex.split(cmd.replace("{port}", str(port))), env=env, stdout=subprocess.DEVNULL)
+    deadline = time.monotonic() + 30
+    while time.monotonic() < deadline and proc.poll() is None:
+        with socket.socket() as s:
+            if s.connect_ex(("127.0.0.1", port)) == 0:
+                return proc, port
+        time.sleep(0.1)
+    proc.kill()
+    raise RuntimeError(f"the stock server did not listen on {port}: {cmd}")
+
+
 def start_backend(transport: str, env: dict) -> tuple[subprocess.Popen, int, int]:
     cmd = [sys.executable, "-m", "arbiter_backend.cli", "--transport", transport, "--no-sim"]
     cmd += ["--bridge-port", "0", "--api-port", "0", "--max-frame", "16000000", "--log-level", "WARNING"]
@@ -241,19 +265,25 @@ def run_row(
     seconds: float,
     slow: float | None,
     rcvbuf: int = SLOW_RCVBUF,
+    stock: str | None = None,
 ) -> dict:
     env = {
         **os.environ,
         "ROS_DOMAIN_ID": str(random.randint(1, 100)),
         "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST",
     }
-    env["PYTHONPATH"] = str(Path(__file__).resolve().parent.parent)
-    proc, port, api_port = start_backend(transport, env)
+    here = str(Path(__file__).resolve().parent.parent)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (here, env.get("PYTHONPATH")) if p)
+    if transport == "stock":
+        proc, port = start_stock(stock or "", env)
+        api_port = None
+    else:
+        proc, port, api_port = start_backend(transport, env)
     me = [
         sys.executable,
         __file__,
         "--publisher",
-        transport,
+        "embedded" if transport == "embedded" else "ros",
         "--size",
         f"{width}x{height}",
         "--port",
@@ -289,6 +319,8 @@ def run_row(
         try:
             import httpx
 
+            if api_port is None:
+                raise LookupError("the stock server has no /api/health")
             dropped = httpx.get(f"http://127.0.0.1:{api_port}/api/health", timeout=5).json()["bridge"][
                 "dropped"
             ]
@@ -331,6 +363,11 @@ def median_row(rows: list[dict]) -> dict:
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--transport", choices=("embedded", "ros", "both"), default="both")
+    p.add_argument(
+        "--stock",
+        metavar="CMD",
+        help="also measure the stock rosbridge_server that CMD starts ('{port}' in CMD: its port)",
+    )
     p.add_argument("--sizes", default="640x480,1280x720")
     p.add_argument("--encodings", default="json,cbor")
     p.add_argument("--seconds", type=float, default=15.0)
@@ -353,6 +390,8 @@ def main() -> None:
         publish_ros(w, h) if args.publisher == "ros" else publish_ws(args.port, w, h)
         return
     transports = ("embedded", "ros") if args.transport == "both" else (args.transport,)
+    if args.stock:
+        transports = (*transports, "stock")
     sizes = [tuple(map(int, s.split("x"))) for s in args.sizes.split(",")]
     encodings = args.encodings.split(",")
     cases = [(t, w, h, e, None) for t in transports for (w, h) in sizes for e in encodings]
@@ -364,7 +403,10 @@ def main() -> None:
     print(head + f" {'max ms':>8} {'small':>9} {'cpu %':>6}  dropped", flush=True)
     for t, w, h, e, slow in cases:
         row = median_row(
-            [run_row(t, w, h, e, args.seconds, slow, args.slow_rcvbuf) for _ in range(args.repeat)]
+            [
+                run_row(t, w, h, e, args.seconds, slow, args.slow_rcvbuf, args.stock)
+                for _ in range(args.repeat)
+            ]
         )
         rows.append(row)
         print(
@@ -374,7 +416,8 @@ def main() -> None:
             f"{row['server_cpu_pct']:6.1f}  {row['dropped']}",
             flush=True,
         )
-    print("stock rosbridge_server: not measured (not installed here; run it with a publisher and compare)")
+    if not args.stock:
+        print("stock rosbridge_server: not measured (--stock CMD measures it where it is installed)")
     emit({"bench": "bigmsg", "seconds": args.seconds, "repeat": args.repeat, "rows": rows})
 
 
