@@ -848,10 +848,12 @@ class RosbridgeEndpoint:
         if cached is not None and cached[0] is msg:
             return cached[1]
         frame: Payload
+        if key[1] in ("none", "png"):  # ROS mode: the JSON form is made on first use (ros/bus.py)
+            json_form = getattr(self.bus, "json_form", None)
+            text = _dumps({"op": "publish", "topic": sub.topic, "msg": json_form(msg) if json_form else msg})
         if key[1] == "none":
-            frame = _dumps({"op": "publish", "topic": sub.topic, "msg": msg})
+            frame = text
         elif key[1] == "png":
-            text = _dumps({"op": "publish", "topic": sub.topic, "msg": msg})
             frame = _dumps({"op": "png", "data": pngtext.encode(text)})
         elif key[1] == "cbor":
             convert = getattr(self.bus, "cbor_values", None) or cborenc.values_of

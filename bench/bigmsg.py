@@ -36,6 +36,7 @@ import os
 import random
 import re
 import shlex
+import signal
 import socket
 import statistics
 import struct
@@ -233,7 +234,9 @@ def start_stock(cmd: str, env: dict) -> tuple[subprocess.Popen, int]:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         port = s.getsockname()[1]
-    proc = subprocess.Popen(shlex.split(cmd.replace("{port}", str(port))), env=env, stdout=subprocess.DEVNULL)
+    # its log (and, stopped, a traceback a spin) would drown the table
+    args = shlex.split(cmd.replace("{port}", str(port)))
+    proc = subprocess.Popen(args, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     deadline = time.monotonic() + 30
     while time.monotonic() < deadline and proc.poll() is None:
         with socket.socket() as s:
@@ -344,11 +347,13 @@ def run_row(
     finally:
         pub.kill()
         pub.wait()
-        proc.terminate()
+        # the stock server stops on SIGINT (rclpy's handler), not on SIGTERM; ours on either
+        proc.send_signal(signal.SIGINT if transport == "stock" else signal.SIGTERM)
         try:
-            proc.wait(10)
+            proc.wait(5)
         except subprocess.TimeoutExpired:
             proc.kill()
+            proc.wait()
 
 
 def median_row(rows: list[dict]) -> dict:
@@ -358,6 +363,11 @@ def median_row(rows: list[dict]) -> dict:
         out[key] = round(statistics.median(vals), 3) if vals else None
     out["runs"] = len(rows)
     return out
+
+
+def _f(value: float | None, width: int, digits: int) -> str:
+    """A figure of the table, or '-' where there is none (no small message came in the window)."""
+    return f"{'-':>{width}}" if value is None else f"{value:{width}.{digits}f}"
 
 
 def main() -> None:
@@ -411,9 +421,10 @@ def main() -> None:
         rows.append(row)
         print(
             f"{row['transport']:9} {row['size']:9} {row['encoding']:9} {row['client']:18} "
-            f"{row['frames_per_s']:8.2f} {row['small_p50_ms']:8.2f} {row['small_p95_ms']:8.2f} "
-            f"{row['small_max_ms']:8.2f} {row['small_received']:4}/{row['small_expected']:<4} "
-            f"{row['server_cpu_pct']:6.1f}  {row['dropped']}",
+            f"{_f(row['frames_per_s'], 8, 2)} {_f(row['small_p50_ms'], 8, 2)} "
+            f"{_f(row['small_p95_ms'], 8, 2)} {_f(row['small_max_ms'], 8, 2)} "
+            f"{row['small_received']:4}/{row['small_expected']:<4} "
+            f"{_f(row['server_cpu_pct'], 6, 1)}  {row['dropped']}",
             flush=True,
         )
     if not args.stock:
