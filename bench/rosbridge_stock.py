@@ -10,7 +10,9 @@ wait, as against the stock server, until the two processes have discovered each 
 Needs the ``[ros]`` extra (rclpy, std_msgs, rcl_interfaces, std_srvs) and autobahn/twisted (roslibpy's).
 
 The three action tests (advertise_action, advertise_action_feedback, send_action_goal) import
-``example_interfaces``, which has no wheel on PyPI. ``--fibonacci-from test_msgs`` runs them on a copy
+``example_interfaces``, which has no wheel on PyPI: where it is installed in the Python that runs this
+(a ROS install, or a venv it was built into from ros2/example_interfaces with the rosidl and ament
+wheels, cmake and ninja) they run unmodified. Else ``--fibonacci-from test_msgs`` runs them on a copy
 whose only change is that package name (``test_msgs/action/Fibonacci``, a wheel, is the same action:
 ``int32 order`` / ``int32[] sequence`` / ``int32[] sequence``); the table marks them ``(test_msgs)``.
 
