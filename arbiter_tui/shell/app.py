@@ -54,6 +54,7 @@ from .screens.control import ControlScreen
 from .screens.help import HelpScreen
 from .screens.latency import LatencyScreen
 from .screens.topics import TopicsScreen
+from .theme import RegistryTheme
 
 strips.install()  # Textual's strips freed by reference counting, not by full garbage collections
 
@@ -82,7 +83,7 @@ KEYS = [
 ]
 
 
-class ArbiterApp(App[None]):
+class ArbiterApp(RegistryTheme):
     """The console: four screens over one robot session (one link, one analytics store: the seed's
     singleton, one control loop) and one tracker. The link, tracker, store and clock are injected
     (:func:`make_app`), or the link is made by a ``connector`` in a worker after the first frame. Every
