@@ -82,7 +82,7 @@ class _Swap:
     def admit(self, generation: int, data: dict[str, Any]) -> bool:
         if generation < self.old:
             return False
-        key = json.dumps(data.filled() if isinstance(data, RosMessage) else data, sort_keys=True, default=str)
+        key = json.dumps(json_form(data), sort_keys=True, default=str)
         if generation == self.old:
             if self.new_started:
                 return False  # the new one delivers now
@@ -186,8 +186,6 @@ class RosMessage(dict):  # type: ignore[type-arg]
             other._fill()
         return dict.__eq__(self, other)
 
-    __hash__ = None  # type: ignore[assignment]
-
     def __repr__(self) -> str:
         self._fill()
         return dict.__repr__(self)
@@ -211,6 +209,11 @@ class RosMessage(dict):  # type: ignore[type-arg]
     def copy(self) -> dict[str, Any]:
         self._fill()
         return dict(dict.items(self))
+
+
+def json_form(msg: dict[str, Any]) -> dict[str, Any]:
+    """rosbridge's JSON form of a message the bus delivered, ready for ``json.dumps``."""
+    return msg.filled() if isinstance(msg, RosMessage) else msg
 
 
 def _full(name: str, namespace: str) -> str:
@@ -449,8 +452,8 @@ class RosBus:
         return to_ros(message_class(type_name), msg)  # one handed over in-process (deliver_local)
 
     def json_form(self, msg: dict[str, Any]) -> dict[str, Any]:
-        """rosbridge's JSON form of a message this bus delivered, ready for ``json.dumps``."""
-        return msg.filled() if isinstance(msg, RosMessage) else msg
+        """The endpoint serialises through this (``bridge._encode``): module ``json_form``."""
+        return json_form(msg)
 
     def cbor_values(self, type_name: str | None, msg: dict[str, Any]) -> dict[str, Any]:
         """rosbridge's CBOR form of a message this bus delivered (typed arrays, byte strings)."""
@@ -515,11 +518,7 @@ class RosBus:
         sub = self._subs.get(topic)
         if sub is None:
             return
-        try:
-            data = RosMessage(msg, time.time_ns())
-        except Exception:
-            log.exception("cannot convert a message on %s", topic)
-            return
+        data = RosMessage(msg, time.time_ns())  # its JSON form is made where it is first needed
         swap = sub.swap
         if swap is not None:
             if not swap.admit(generation, data):
