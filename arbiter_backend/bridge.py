@@ -55,7 +55,7 @@ from aiohttp import WSMsgType, web
 from arbiter_core import auth
 from arbiter_core.msgtypes import MessageError, normalize_type
 
-from . import cborenc, pacing, pngtext
+from . import cborenc, jsonframe, pacing, pngtext
 from .bus import Bus
 from .pacing import PACED_BYTES, Pacer
 from .provided import (
@@ -850,7 +850,8 @@ class RosbridgeEndpoint:
         frame: Payload
         if key[1] in ("none", "png"):  # ROS mode: the JSON form is made on first use (ros/bus.py)
             json_form = getattr(self.bus, "json_form", None)
-            text = _dumps({"op": "publish", "topic": sub.topic, "msg": json_form(msg) if json_form else msg})
+            body = {"op": "publish", "topic": sub.topic, "msg": json_form(msg) if json_form else msg}
+            text = jsonframe.dumps(body)  # a camera's base64 spliced in, not scanned for escapes
         if key[1] == "none":
             frame = text
         elif key[1] == "png":
