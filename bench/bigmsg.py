@@ -42,6 +42,7 @@ import statistics
 import struct
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 from pathlib import Path
@@ -50,6 +51,10 @@ import cbor2
 from _common import emit, pct
 
 from arbiter_core.listening import parse_listening
+
+# the servers and the publisher run from a folder with no package in it: ``python -m`` puts the working
+# directory first on sys.path, ahead of PYTHONPATH, so from another checkout it would import that one
+NEUTRAL = tempfile.gettempdir()
 
 SMALL = "/bench/small"
 IMAGE = "/bench/image"
@@ -236,7 +241,7 @@ def start_stock(cmd: str, env: dict) -> tuple[subprocess.Popen, int]:
         port = s.getsockname()[1]
     # its log (and, stopped, a traceback a spin) would drown the table
     args = shlex.split(cmd.replace("{port}", str(port)))
-    proc = subprocess.Popen(args, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    proc = subprocess.Popen(args, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, cwd=NEUTRAL)
     deadline = time.monotonic() + 30
     while time.monotonic() < deadline and proc.poll() is None:
         with socket.socket() as s:
@@ -250,7 +255,7 @@ def start_stock(cmd: str, env: dict) -> tuple[subprocess.Popen, int]:
 def start_backend(transport: str, env: dict) -> tuple[subprocess.Popen, int, int]:
     cmd = [sys.executable, "-m", "arbiter_backend.cli", "--transport", transport, "--no-sim"]
     cmd += ["--bridge-port", "0", "--api-port", "0", "--max-frame", "16000000", "--log-level", "WARNING"]
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, text=True, env=env)
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, text=True, env=env, cwd=NEUTRAL)
     deadline = time.monotonic() + 30
     while time.monotonic() < deadline:
         found = parse_listening(proc.stdout.readline())
@@ -292,7 +297,7 @@ def run_row(
         "--port",
         str(port),
     ]
-    pub = subprocess.Popen(me, env=env)
+    pub = subprocess.Popen(me, env=env, cwd=NEUTRAL)
     try:
         extra = {"compression": "cbor"} if encoding == "cbor" else {}
         cam = {"op": "subscribe", "topic": IMAGE, "type": "sensor_msgs/Image", **extra}

@@ -156,10 +156,12 @@ def wait_screen(session: str, text: str, timeout: float) -> bool:
 
 
 def start_backend(python: str, env: dict, group: Cgroup, log: Path) -> tuple[subprocess.Popen, str, int]:
+    # run from a folder with no package in it: ``python -m`` puts the working directory first on
+    # sys.path, ahead of PYTHONPATH, so from a checkout it would import that checkout, not --pythonpath's
     proc = subprocess.Popen(
         [python, "-m", "arbiter_backend.cli", "--bridge-port", "0", "--api-port", "0",
          "--log-file", str(log)],
-        stdout=subprocess.PIPE, text=True, env=env,
+        stdout=subprocess.PIPE, text=True, env=env, cwd=log.parent,
     )  # fmt: skip
     group.add(proc.pid)
     assert proc.stdout is not None
@@ -225,7 +227,7 @@ def main() -> int:
     try:
         # the floor: a plain roslibpy script at 10 Hz, in the console's cgroup
         _, since = records_since(api, None)
-        floor = subprocess.Popen([python, "-c", FLOOR, str(bridge), str(a.seconds + 2)], env=env,
+        floor = subprocess.Popen([python, "-c", FLOOR, str(bridge), str(a.seconds + 2)], env=env, cwd=tmp,
                                  stdout=subprocess.PIPE, text=True)  # fmt: skip
         console_group.add(floor.pid)
         floor.wait(timeout=a.seconds + 60)
@@ -240,7 +242,7 @@ def main() -> int:
             f"--rosbridge ws://127.0.0.1:{bridge} --tracker {api} --export-dir {tmp} "
             f"--log-file {tmp / 'tui.log'}"
         )
-        tmux("new-session", "-d", "-s", session, "-x", cols, "-y", rows, cmd)
+        tmux("new-session", "-d", "-s", session, "-x", cols, "-y", rows, "-c", str(tmp), cmd)
         pane = int(tmux("display-message", "-p", "-t", session, "#{pane_pid}").strip())
         for pid in tree(pane):
             console_group.add(pid)
@@ -299,7 +301,7 @@ def main() -> int:
             raw_session = f"arbiter-pi-raw-{tag}"
             script = tmp / "raw.py"
             script.write_text(RAW_TTY)
-            tmux("new-session", "-d", "-s", raw_session, "-x", cols, "-y", rows,
+            tmux("new-session", "-d", "-s", raw_session, "-x", cols, "-y", rows, "-c", str(tmp),
                  f"env PYTHONPATH={env.get('PYTHONPATH', '')} {python} {script} {bridge}")  # fmt: skip
             raw_pane = int(tmux("display-message", "-p", "-t", raw_session, "#{pane_pid}").strip())
             for pid in tree(raw_pane):

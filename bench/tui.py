@@ -80,7 +80,9 @@ def run(cmd: str, first_marker: str, ready_marker: str, steps: list, size: tuple
     session = f"arbiter-bench-{uuid.uuid4().hex[:8]}"
     out = tmp / f"{session}.bytes"
     out.touch()
-    tmux("new-session", "-d", "-s", session, "-x", str(size[0]), "-y", str(size[1]), cmd)
+    # from a folder with no package in it: ``python -m`` puts the working directory first on sys.path,
+    # ahead of PYTHONPATH, so from a checkout it would measure that checkout instead of --pythonpath's
+    tmux("new-session", "-d", "-s", session, "-x", str(size[0]), "-y", str(size[1]), "-c", str(tmp), cmd)
     result: dict = {}
     try:
         tmux("pipe-pane", "-t", session, "-o", f"cat >> {out}")
