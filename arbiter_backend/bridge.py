@@ -107,8 +107,7 @@ def _reject_constant(token: str) -> Any:
 _DECODER = json.JSONDecoder(parse_constant=_reject_constant)  # made once: json.loads(kw) makes one per call
 
 
-def _dumps(obj: Any) -> str:
-    return json.dumps(obj, separators=(",", ":"), allow_nan=False)
+_dumps = jsonframe.compact
 
 
 @dataclass
@@ -850,8 +849,10 @@ class RosbridgeEndpoint:
         frame: Payload
         if key[1] in ("none", "png"):  # ROS mode: the JSON form is made on first use (ros/bus.py)
             json_form = getattr(self.bus, "json_form", None)
-            body = {"op": "publish", "topic": sub.topic, "msg": json_form(msg) if json_form else msg}
-            text = jsonframe.dumps(body)  # a camera's base64 spliced in, not scanned for escapes
+            if json_form is None:  # the embedded bus: no ROS converter, so no base64 to splice
+                text = _dumps({"op": "publish", "topic": sub.topic, "msg": msg})
+            else:  # a camera's base64 spliced in, not scanned for escapes
+                text = jsonframe.dumps({"op": "publish", "topic": sub.topic, "msg": json_form(msg)})
         if key[1] == "none":
             frame = text
         elif key[1] == "png":

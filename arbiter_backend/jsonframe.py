@@ -26,7 +26,8 @@ class Base64Text(str):
     __slots__ = ()
 
 
-def _dumps(obj: Any) -> str:
+def compact(obj: Any) -> str:
+    """The endpoint's JSON text: no spaces, non-finite numbers refused (``ValueError``)."""
     return json.dumps(obj, separators=(",", ":"), allow_nan=False)
 
 
@@ -60,14 +61,15 @@ def dumps(obj: Any) -> str:
     found: list[str] = []
     swapped = _swap(obj, found)
     if not found:
-        return _dumps(obj)
-    text = _dumps(swapped)
-    # each placeholder is in the text once, as a JSON string; in the order json.dumps wrote them
-    spots = sorted((text.index(f'"{_TOKEN}:{i}"'), i) for i in range(len(found)))
+        return compact(obj)
+    text = compact(swapped)
+    # each placeholder is in the text once, as a JSON string; taken in the order json.dumps wrote them
+    quoted = [f'"{_TOKEN}:{i}"' for i in range(len(found))]
+    spots = sorted((text.index(q), i) for i, q in enumerate(quoted))
     parts: list[str] = []
     start = 0
     for at, i in spots:
         parts += (text[start:at], '"', found[i], '"')
-        start = at + len(f'"{_TOKEN}:{i}"')
+        start = at + len(quoted[i])
     parts.append(text[start:])
     return "".join(parts)
