@@ -94,6 +94,8 @@ class RosBackend(Servers):
     async def start(self) -> None:
         if self.bridge_node is not None:
             self.bus = RosBus(self.bridge_node, asyncio.get_running_loop())
+            # a topic the relay reads is measured on its reader, not on a second one (ros/topicwatch.py)
+            self.bus.tap, self.topics.relayed = self.topics.took, self.bus.relayed
             # services and actions across the bridge: the provided servers on a node of their own
             self.bus.interfaces = RosInterfaces(self.bridge_node, asyncio.get_running_loop(), self.context)
             self.tracker_node.local_report = self.bus.deliver_local

@@ -4,9 +4,14 @@ Same interface as ``bus.TopicBus`` (declare, type_of, topics, subscribe,
 publish, plus advertise/unadvertise), so ``bridge.RosbridgeEndpoint`` relays
 WebSocket <-> DDS unchanged. One publisher per advertised topic and one
 subscription per subscribed topic are shared by all clients. Subscription
-callbacks run on the executor's thread; each message is converted to JSON
-there, once, and handed to the asyncio loop with ``call_soon_threadsafe``, where
-the endpoint's callbacks run, as they do on the embedded bus.
+callbacks run on the executor's thread; each message is taken serialized (CDR),
+deserialized there, and handed to the asyncio loop with ``call_soon_threadsafe``,
+where the endpoint's callbacks run, as they do on the embedded bus (its JSON form
+is made on first use, see ``RosMessage``).
+
+The relay's reader also measures its topic for the topic monitor (``tap``,
+``relayed``): a second reader of a camera in this process made DDS deliver the
+small topics beside it up to 0.46 s late (docs/BENCHMARKS.md, session 16).
 """
 
 from __future__ import annotations
@@ -26,7 +31,7 @@ from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.node import Node
 from rclpy.publisher import Publisher
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
-from rclpy.serialization import serialize_message
+from rclpy.serialization import deserialize_message, serialize_message
 from rclpy.subscription import Subscription
 
 from arbiter_core.msgtypes import MessageError, normalize_type
@@ -146,12 +151,13 @@ class RosMessage(dict):  # type: ignore[type-arg]
     unfilled). ``json.dumps`` reads a dict's storage directly, subclass or not: what serialises one
     calls ``filled()`` first (the endpoint through ``RosBus.json_form``)."""
 
-    __slots__ = ("_filled", "received_ns", "ros")
+    __slots__ = ("_filled", "raw", "received_ns", "ros")
 
-    def __init__(self, ros: Any, received_ns: int) -> None:
+    def __init__(self, ros: Any, received_ns: int, raw: bytes | None = None) -> None:
         super().__init__()
         self.ros = ros
         self.received_ns = received_ns
+        self.raw = raw  # its CDR bytes as DDS delivered them (``cbor-raw`` sends them as they are)
         self._filled = False
 
     def _fill(self) -> None:
@@ -234,6 +240,9 @@ class RosBus:
         self.local_delivered = 0
         self.local_handlers: dict[str, Callable[[str], None]] = {}
         self.interfaces: Any = None  # RosInterfaces: services and actions across the bridge (backend.py)
+        # the topic monitor's share of the relay's readers (see ``relayed``): each message the relay takes
+        # on a volatile reader, as (topic, CDR bytes, receive time in ns); executor thread
+        self.tap: Callable[[str, bytes, int], None] | None = None
         self._clients: dict[
             str, tuple[type, Any]
         ] = {}  # service -> (its type's class, the rclpy client)  # topic -> a node's in-process handler
@@ -364,12 +373,14 @@ class RosBus:
             ),
             incompatible_qos=lambda info: self._on_incompatible(topic, info),
         )
+        cls = message_class(type_name)
         return self.node.create_subscription(
-            message_class(type_name),
+            cls,
             topic,
-            lambda m: self._on_message(topic, m, generation),
+            lambda raw, info: self._on_message(topic, cls, raw, info, generation),
             qos,
             event_callbacks=events,
+            raw=True,  # the CDR bytes: their size for the topic monitor (``tap``), as is for cbor-raw
         )
 
     def _on_incompatible(self, topic: str, info: Any) -> None:  # executor thread
@@ -461,7 +472,10 @@ class RosBus:
 
     def cdr(self, type_name: str | None, msg: dict[str, Any]) -> tuple[bytes, int]:
         """The CDR serialisation of a message this bus delivered (``cbor-raw``) and when it came (ns)."""
-        return serialize_message(self._ros_of(type_name, msg)), getattr(msg, "received_ns", time.time_ns())
+        raw = getattr(msg, "raw", None)
+        if raw is None:  # one handed over in-process (deliver_local)
+            raw = serialize_message(self._ros_of(type_name, msg))
+        return raw, getattr(msg, "received_ns", time.time_ns())
 
     # -- services ------------------------------------------------------------------------------
     async def call_service(self, service: str, args: Any) -> dict[str, Any]:  # asyncio loop
@@ -498,6 +512,17 @@ class RosBus:
             raise
         return to_json(response)
 
+    def relayed(self) -> dict[str, tuple[str, bool]]:
+        """The topics the relay reads with a volatile reader, as (type, best effort): the topic monitor
+        measures these through ``tap`` instead of a reader of its own. Any thread (a copy, made in
+        one step under the GIL)."""
+        subs = dict(self._subs)
+        return {
+            topic: (sub.type_name, sub.qos.reliability == ReliabilityPolicy.BEST_EFFORT)
+            for topic, sub in subs.items()
+            if sub.latched is None
+        }
+
     def subscriber_count(self, topic: str) -> int:
         sub = self._subs.get(topic)
         return len(sub.callbacks) if sub else 0
@@ -514,11 +539,15 @@ class RosBus:
         with contextlib.suppress(RuntimeError):  # the loop is closed: shutting down
             self.loop.call_soon_threadsafe(self._fanout, topic, {"data": text})
 
-    def _on_message(self, topic: str, msg: Any, generation: int = 0) -> None:  # executor thread
+    def _on_message(
+        self, topic: str, cls: type, raw: bytes, info: dict[str, Any], generation: int = 0
+    ) -> None:  # executor thread
         sub = self._subs.get(topic)
         if sub is None:
             return
-        data = RosMessage(msg, time.time_ns())  # its JSON form is made where it is first needed
+        received_ns = info.get("received_timestamp") or time.time_ns()  # the middleware's, wall clock
+        msg = deserialize_message(raw, cls)
+        data = RosMessage(msg, received_ns, raw)  # its JSON form is made where it is first needed
         swap = sub.swap
         if swap is not None:
             if not swap.admit(generation, data):
@@ -531,6 +560,9 @@ class RosBus:
                 sub.swap = None
         elif generation != sub.generation:
             return  # a replaced subscription's last messages, after the swap ended
+        tap = self.tap
+        if tap is not None and sub.latched is None:  # a transient-local reader's history is no arrival
+            tap(topic, raw, received_ns)
         text = getattr(msg, "data", None)
         handled = self._local.get(topic)
         if handled is not None and isinstance(text, str) and handled.take(text):

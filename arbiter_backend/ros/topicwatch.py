@@ -17,14 +17,25 @@ type whose first field is a ``std_msgs/Header`` the stamp is read from the bytes
 4-byte encapsulation header (``int32 sec, uint32 nanosec``, in the byte order the encapsulation
 names). A type not installed here cannot be subscribed (rclpy has no generic subscription): it is
 listed with its type, counts and "type not installed here".
+
+A topic the rosbridge relay reads with a volatile reader of the same reliability (a WebSocket client
+subscribed to it) gets no reader of the monitor's own: the relay's messages are measured instead
+(``relayed``, ``took``; the relay's reader takes the CDR bytes too, with the middleware's receive time).
+Two readers of a 1280x720 camera in this process made DDS deliver a 20 Hz topic beside it up to 0.46 s
+late, p95 27-218 ms, against 9-10 ms with one (docs/BENCHMARKS.md, session 16); one reader also
+takes each message once instead of twice. The switch happens at the next look at the graph: when the
+relay stops reading a topic, the monitor subscribes again within ``GRAPH_S``, and the topic's window
+misses what came between (its rate, over the window, dips for that second).
 """
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import struct
 import threading
 import time
+from collections.abc import Callable
 from typing import Any
 
 from rclpy.node import Node
@@ -86,6 +97,9 @@ class RosTopics:
         self._subs: dict[str, tuple[str, bool, Subscription | None, bool]] = {}
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
+        # what the relay reads (``RosBus.relayed``): topic -> (type, best effort); set by the backend
+        self.relayed: Callable[[], dict[str, tuple[str, bool]]] = dict
+        self._shared: dict[str, bool] = {}  # topics measured on the relay's reader -> stamped
 
     def start(self) -> None:
         self._thread = threading.Thread(target=self._run, name="topic-monitor", daemon=True)
@@ -114,15 +128,30 @@ class RosTopics:
             with sub.handle:
                 while (taken := sub.handle.take_message(sub.msg_type, True)) is not None:
                     raw, info = taken
-                    received = info.get("received_timestamp", 0) / 1e9 or time.time()
-                    if not stamped:
-                        note(topic, len(raw), at=received + offset)
-                        continue
-                    stamp = cdr_stamp(raw)
-                    if stamp is None:
-                        note(topic, len(raw), None, True, at=received + offset)
-                    else:
-                        note(topic, len(raw), received - stamp, at=received + offset)
+                    self._note(note, topic, raw, info.get("received_timestamp", 0), stamped, offset)
+
+    @staticmethod
+    def _note(
+        note: Callable[..., None], topic: str, raw: bytes, received_ns: int, stamped: bool, offset: float
+    ) -> None:
+        """One message: its size, when it came (``received_ns``: the middleware's wall clock, 0 when
+        unknown; ``offset``: monotonic minus wall clock) and, when stamped, its delay."""
+        received = received_ns / 1e9 or time.time()
+        if not stamped:
+            note(topic, len(raw), at=received + offset)
+            return
+        stamp = cdr_stamp(raw)
+        if stamp is None:
+            note(topic, len(raw), None, True, at=received + offset)
+        else:
+            note(topic, len(raw), received - stamp, at=received + offset)
+
+    def took(self, topic: str, raw: bytes, received_ns: int) -> None:  # executor thread
+        """The relay took a message of ``topic`` (``RosBus.tap``): measured if the monitor shares its
+        reader, ignored while the monitor still has a reader of its own (no message counted twice)."""
+        stamped = self._shared.get(topic)
+        if stamped is not None:
+            self._note(self.watch.note, topic, raw, received_ns, stamped, time.monotonic() - time.time())
 
     def answer(self) -> dict[str, Any]:
         return self.watch.answer()
@@ -135,6 +164,7 @@ class RosTopics:
             log.exception("reading the graph failed")
             return
         me = self.node.get_name()
+        relayed = self.relayed()
         for name, types in graph.items():
             if not self.watch.filter.wants(name):
                 continue
@@ -149,6 +179,10 @@ class RosTopics:
             nodes = (_node_names(pubs), _node_names(subs))
             self.watch.set_graph(name, len(pubs), len(subs), qos_mismatch(offered, requested), nodes)
             best_effort = any(r == "best_effort" for r, _ in offered)
+            if relayed.get(name) == (type_name, best_effort):
+                self._share(name, type_name)
+                continue
+            self._shared.pop(name, None)  # the relay stopped reading it, or reads it otherwise
             have = self._subs.get(name)
             if have is None or have[:2] != (type_name, best_effort):
                 if have is not None and have[2] is not None:
@@ -160,6 +194,24 @@ class RosTopics:
             if sub is not None:
                 self.node.destroy_subscription(sub)
             self.watch.forget(name)
+        for name in [n for n in self._shared if n not in graph]:
+            del self._shared[name]
+            self.watch.forget(name)
+
+    def _share(self, topic: str, type_name: str) -> None:
+        """Measure ``topic`` on the relay's reader: the monitor's own goes (its messages taken first)."""
+        if topic in self._shared:
+            return
+        have = self._subs.get(topic)
+        if have is not None and have[2] is not None:
+            with contextlib.suppress(Exception):  # as in ``_run``: a handle that went away
+                self.take()  # what it holds still counts
+            self.node.destroy_subscription(have[2])
+        self._subs.pop(topic, None)
+        stamped = has_header(message_class(type_name))  # the relay reads it: its type is installed
+        self.watch.watch(topic, type_name, stamped=stamped)
+        self._shared[topic] = stamped
+        log.debug("%s: measured on the relay's reader", topic)
 
     def _subscribe(self, topic: str, type_name: str, best_effort: bool) -> tuple[Subscription | None, bool]:
         try:

@@ -240,3 +240,71 @@ def test_a_type_not_installed_is_listed_and_a_malformed_stamp_is_counted(peer, t
         assert backend.proc.poll() is None
     finally:
         backend.stop()
+
+
+def test_a_topic_the_relay_reads_is_measured_on_its_reader_not_a_second_one(peer):
+    """A WebSocket client subscribes to a stamped topic the monitor measures: the monitor's own reader
+    goes (two readers of a camera in one process stall DDS, docs/BENCHMARKS.md session 16) and the
+    relay's messages are measured instead, each once (counted twice, the rate would double); when the
+    client leaves, the monitor's reader comes back and the topic stays measured."""
+    import roslibpy
+
+    topic = "/arbiter_test/shared_odom"
+    backend = start_backend(
+        "--transport", "ros", "--no-sim", "--topics-window", str(WINDOW), "--topics", "/arbiter_test/*",
+        timeout=30,
+    )  # fmt: skip
+    sent: list[float] = []
+    pub = peer.node.create_publisher(Odometry, topic, 10)
+
+    def tick() -> None:
+        msg = Odometry()
+        now = time.time() - OFFSET
+        msg.header.stamp.sec, msg.header.stamp.nanosec = int(now), int((now % 1) * 1e9)
+        pub.publish(msg)
+        sent.append(time.monotonic())
+
+    timer = peer.node.create_timer(1 / 25, tick)
+    from rclpy.serialization import serialize_message
+
+    size = (len(serialize_message(Odometry())) + 3) // 4 * 4
+
+    def readers() -> set[str]:
+        return {i.node_name for i in peer.node.get_subscriptions_info_by_topic(topic)}
+
+    def row() -> dict:
+        return topics(backend.api).get(topic, {})
+
+    def rate_is_true() -> bool:
+        end = time.monotonic()
+        got = row()
+        rate, _ = truth(list(sent), size, end - WINDOW, end)
+        return got.get("rate_hz") is not None and got["rate_hz"] == pytest.approx(rate, rel=0.05)
+
+    ros = roslibpy.Ros("127.0.0.1", backend.bridge_port)
+    try:
+        assert wait_for(lambda: "arbiter_topic_monitor" in readers(), 20), readers()
+        assert wait_for(rate_is_true, 4 * WINDOW), row()
+
+        ros.run(timeout=10)
+        got: list = []
+        sub = roslibpy.Topic(ros, topic, "nav_msgs/msg/Odometry")
+        sub.subscribe(got.append)
+        assert wait_for(lambda: readers() == {"arbiter_bridge"} and len(got) > 5, 20), readers()
+        shared_from = row()["total"]
+        assert wait_for(lambda: row()["total"] >= shared_from + 2 * WINDOW * 25, 4 * WINDOW)
+        assert wait_for(rate_is_true, 4 * WINDOW), row()  # each message counted once
+        measured = row()
+        assert measured["mean_size_bytes"] == pytest.approx(size)
+        assert measured["stamped"] and measured["delay_mean_ms"] >= OFFSET * 1e3 - 1.0
+        assert measured["subscribers"] == 1  # the relay's reader: a client's, counted as before
+
+        sub.unsubscribe()
+        assert wait_for(lambda: "arbiter_topic_monitor" in readers(), 20), readers()
+        back_from = row()["total"]
+        assert wait_for(lambda: row()["total"] >= back_from + 25, 4 * WINDOW)
+        assert wait_for(rate_is_true, 4 * WINDOW), row()
+    finally:
+        timer.cancel()
+        ros.close()
+        backend.stop()
