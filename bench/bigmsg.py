@@ -24,6 +24,14 @@ for example::
 
 Its server CPU is that of the process CMD starts; it reports no drops.
 
+``--floor`` adds a ``dds`` row per size: no server and no WebSocket client, but an rclpy node in its
+own process subscribing to both topics as the ROS relay does (deserialised messages, default QoS)
+and noting each small message's latency when its callback runs. It is the floor any server in front
+of DDS stands on, on this machine and under this load: the publisher, DDS's transport and rclpy's
+executor. Its "server CPU" is that node's. ``--floor-readers 2`` gives that node a second reader of
+the camera, as a relay and a topic monitor each with its own reader would be (session 16: the small
+topic's p95 then went from 7 to 60-160 ms).
+
 Last line: one JSON object with every row.
 """
 
@@ -31,6 +39,7 @@ from __future__ import annotations
 
 import argparse
 import base64
+import contextlib
 import json
 import os
 import random
@@ -187,6 +196,56 @@ def publish_ros(width: int, height: int) -> None:
     _loop(lambda: cam.publish(img), lambda: small.publish(String(data=str(time.time_ns()))))
 
 
+def floor_subscriber(readers: int = 1) -> None:
+    """The ``dds`` row's process: subscribe to both topics as the relay does; one line per message.
+    ``readers`` > 1: that many readers of the camera in this process (the others do nothing)."""
+    import rclpy
+    from sensor_msgs.msg import Image
+    from std_msgs.msg import String
+
+    rclpy.init()
+    node = rclpy.create_node("bigmsg_floor")
+    out = sys.stdout
+
+    def on_small(m: String) -> None:
+        out.write(f"S {m.data} {time.time_ns()}\n")
+        out.flush()
+
+    def on_image(_m: Image) -> None:
+        out.write(f"I {time.time_ns()}\n")
+        out.flush()
+
+    node.create_subscription(Image, IMAGE, on_image, 10)
+    node.create_subscription(String, SMALL, on_small, 10)
+    for _ in range(readers - 1):
+        node.create_subscription(Image, IMAGE, lambda _m: None, 10)
+    from rclpy.executors import ExternalShutdownException
+
+    with contextlib.suppress(KeyboardInterrupt, ExternalShutdownException):  # stopped by SIGINT
+        rclpy.spin(node)
+
+
+class FloorReader(threading.Thread):
+    """What the ``dds`` row's process saw, in the :class:`Reader`'s terms."""
+
+    def __init__(self, proc: subprocess.Popen) -> None:
+        super().__init__(daemon=True)
+        self.proc = proc
+        self.images: list[int] = []
+        self.small: list[tuple[int, int]] = []
+
+    def run(self) -> None:
+        for line in self.proc.stdout:
+            kind, *nums = line.split()
+            if kind == "I":
+                self.images.append(int(nums[0]))
+            elif kind == "S":
+                self.small.append((int(nums[0]), int(nums[1])))
+
+    def close(self) -> None:
+        pass
+
+
 def publish_ws(port: int, width: int, height: int) -> None:
     sock = Reader(port, [])
     for topic, type_name in ((IMAGE, "sensor_msgs/Image"), (SMALL, "std_msgs/String")):
@@ -252,9 +311,10 @@ def start_stock(cmd: str, env: dict) -> tuple[subprocess.Popen, int]:
     raise RuntimeError(f"the stock server did not listen on {port}: {cmd}")
 
 
-def start_backend(transport: str, env: dict) -> tuple[subprocess.Popen, int, int]:
+def start_backend(transport: str, env: dict, extra: str = "") -> tuple[subprocess.Popen, int, int]:
     cmd = [sys.executable, "-m", "arbiter_backend.cli", "--transport", transport, "--no-sim"]
     cmd += ["--bridge-port", "0", "--api-port", "0", "--max-frame", "16000000", "--log-level", "WARNING"]
+    cmd += shlex.split(extra)
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, text=True, env=env, cwd=NEUTRAL)
     deadline = time.monotonic() + 30
     while time.monotonic() < deadline:
@@ -274,6 +334,8 @@ def run_row(
     slow: float | None,
     rcvbuf: int = SLOW_RCVBUF,
     stock: str | None = None,
+    backend_args: str = "",
+    floor_readers: int = 1,
 ) -> dict:
     env = {
         **os.environ,
@@ -282,11 +344,15 @@ def run_row(
     }
     here = str(Path(__file__).resolve().parent.parent)
     env["PYTHONPATH"] = os.pathsep.join(p for p in (here, env.get("PYTHONPATH")) if p)
-    if transport == "stock":
+    if transport == "dds":
+        floor = [sys.executable, __file__, "--floor-subscriber", str(floor_readers)]
+        proc = subprocess.Popen(floor, env=env, cwd=NEUTRAL, stdout=subprocess.PIPE, text=True)
+        port, api_port = 0, None
+    elif transport == "stock":
         proc, port = start_stock(stock or "", env)
         api_port = None
     else:
-        proc, port, api_port = start_backend(transport, env)
+        proc, port, api_port = start_backend(transport, env, backend_args)
     me = [
         sys.executable,
         __file__,
@@ -305,13 +371,17 @@ def run_row(
             cam["queue_length"] = 1
         if encoding == "json-frag":
             cam["fragment_size"] = FRAGMENT
-        reader = Reader(
-            port,
-            [cam, {"op": "subscribe", "topic": SMALL, "type": "std_msgs/String", **extra}],
-            rate_bytes=None
-            if slow is None
-            else slow * width * height * 3 * (1 if encoding == "cbor" else 4 / 3),
-            rcvbuf=rcvbuf,
+        reader: Reader | FloorReader = (
+            FloorReader(proc)
+            if transport == "dds"
+            else Reader(
+                port,
+                [cam, {"op": "subscribe", "topic": SMALL, "type": "std_msgs/String", **extra}],
+                rate_bytes=None
+                if slow is None
+                else slow * width * height * 3 * (1 if encoding == "cbor" else 4 / 3),
+                rcvbuf=rcvbuf,
+            )
         )
         reader.start()
         deadline = time.monotonic() + 30
@@ -328,7 +398,7 @@ def run_row(
             import httpx
 
             if api_port is None:
-                raise LookupError("the stock server has no /api/health")
+                raise LookupError("the stock server and the floor have no /api/health")
             dropped = httpx.get(f"http://127.0.0.1:{api_port}/api/health", timeout=5).json()["bridge"][
                 "dropped"
             ]
@@ -353,7 +423,7 @@ def run_row(
         pub.kill()
         pub.wait()
         # the stock server stops on SIGINT (rclpy's handler), not on SIGTERM; ours on either
-        proc.send_signal(signal.SIGINT if transport == "stock" else signal.SIGTERM)
+        proc.send_signal(signal.SIGINT if transport in ("stock", "dds") else signal.SIGTERM)
         try:
             proc.wait(5)
         except subprocess.TimeoutExpired:
@@ -396,10 +466,32 @@ def main() -> None:
         default=SLOW_RCVBUF,
         help="the slow client's SO_RCVBUF (Linux doubles it): bytes a small message may wait behind there",
     )
+    p.add_argument(
+        "--backend-args",
+        default="",
+        metavar="ARGS",
+        help="more arguments for arbiter-backend, e.g. \"--topics-exclude '*'\" (our rows only)",
+    )
+    p.add_argument(
+        "--floor",
+        action="store_true",
+        help="add a 'dds' row per size: an rclpy node subscribing to both topics, no server (the floor)",
+    )
     p.add_argument("--publisher", help=argparse.SUPPRESS)
+    p.add_argument(
+        "--floor-readers",
+        type=int,
+        default=1,
+        metavar="N",
+        help="the 'dds' row's readers of the camera in its one process (2: as a relay beside a monitor)",
+    )
+    p.add_argument("--floor-subscriber", type=int, help=argparse.SUPPRESS)
     p.add_argument("--size", help=argparse.SUPPRESS)
     p.add_argument("--port", type=int, help=argparse.SUPPRESS)
     args = p.parse_args()
+    if args.floor_subscriber:
+        floor_subscriber(args.floor_subscriber)
+        return
     if args.publisher:
         w, h = map(int, args.size.split("x"))
         publish_ros(w, h) if args.publisher == "ros" else publish_ws(args.port, w, h)
@@ -410,6 +502,8 @@ def main() -> None:
     sizes = [tuple(map(int, s.split("x"))) for s in args.sizes.split(",")]
     encodings = args.encodings.split(",")
     cases = [(t, w, h, e, None) for t in transports for (w, h) in sizes for e in encodings]
+    if args.floor:
+        cases = [("dds", w, h, "-", None) for (w, h) in sizes] + cases
     if args.slow:
         slow_encodings = [*encodings, "json-frag"] if "json" in encodings else encodings
         cases += [(t, *sizes[0], e, args.slow) for t in transports for e in slow_encodings]
@@ -419,7 +513,18 @@ def main() -> None:
     for t, w, h, e, slow in cases:
         row = median_row(
             [
-                run_row(t, w, h, e, args.seconds, slow, args.slow_rcvbuf, args.stock)
+                run_row(
+                    t,
+                    w,
+                    h,
+                    e,
+                    args.seconds,
+                    slow,
+                    args.slow_rcvbuf,
+                    args.stock,
+                    args.backend_args,
+                    args.floor_readers,
+                )
                 for _ in range(args.repeat)
             ]
         )
