@@ -293,6 +293,21 @@ def cpu_s(pid: int) -> float:
     return (int(fields[11]) + int(fields[12])) / TICK
 
 
+def foreign_env(env: dict) -> dict:
+    """``env`` for a program of another install (the stock server, perhaps in a venv of its own): without
+    what this venv's ROS wheels set at start (``ros_wheels_bootstrapper`` puts its libraries on
+    LD_LIBRARY_PATH and marks the environment done), so that the other install's own libraries load."""
+    out = dict(env)
+    out.pop("_ROS_WHEELS_BOOTSTRAP_COMPLETE", None)
+    ours = sys.prefix
+    parts = [p for p in out.get("LD_LIBRARY_PATH", "").split(os.pathsep) if p and not p.startswith(ours)]
+    if parts:
+        out["LD_LIBRARY_PATH"] = os.pathsep.join(parts)
+    else:
+        out.pop("LD_LIBRARY_PATH", None)
+    return out
+
+
 def start_stock(cmd: str, env: dict) -> tuple[subprocess.Popen, int]:
     """The stock rosbridge_server from ``cmd`` on a free port, once that port takes connections."""
     with socket.socket() as s:
@@ -300,7 +315,8 @@ def start_stock(cmd: str, env: dict) -> tuple[subprocess.Popen, int]:
         port = s.getsockname()[1]
     # its log (and, stopped, a traceback a spin) would drown the table
     args = shlex.split(cmd.replace("{port}", str(port)))
-    proc = subprocess.Popen(args, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, cwd=NEUTRAL)
+    quiet = subprocess.DEVNULL
+    proc = subprocess.Popen(args, env=foreign_env(env), stdout=quiet, stderr=quiet, cwd=NEUTRAL)
     deadline = time.monotonic() + 30
     while time.monotonic() < deadline and proc.poll() is None:
         with socket.socket() as s:
