@@ -243,6 +243,7 @@ class RosBus:
         # the topic monitor's share of the relay's readers (see ``relayed``): each message the relay takes
         # on a volatile reader, as (topic, CDR bytes, receive time in ns); executor thread
         self.tap: Callable[[str, bytes, int], None] | None = None
+        self.undecodable: dict[str, int] = {}  # topic -> messages whose bytes did not fit its type
         self._clients: dict[
             str, tuple[type, Any]
         ] = {}  # service -> (its type's class, the rclpy client)  # topic -> a node's in-process handler
@@ -546,7 +547,15 @@ class RosBus:
         if sub is None:
             return
         received_ns = info.get("received_timestamp") or time.time_ns()  # the middleware's, wall clock
-        msg = deserialize_message(raw, cls)
+        try:
+            msg = deserialize_message(raw, cls)
+        except Exception:  # bytes that do not fit the type (a foreign publisher): skipped, never fatal
+            self.undecodable[topic] = self.undecodable.get(topic, 0) + 1
+            if self.undecodable[topic] == 1:
+                log.warning("%s: a message that does not deserialise as %s (skipped)", topic, cls.__name__)
+            if self.tap is not None and sub.latched is None and generation == sub.generation:
+                self.tap(topic, raw, received_ns)  # it still arrived: the monitor counts it
+            return
         data = RosMessage(msg, received_ns, raw)  # its JSON form is made where it is first needed
         swap = sub.swap
         if swap is not None:

@@ -657,3 +657,67 @@ async def test_a_namespaced_diff_drive_robot_is_driven_from_the_console(peer, tm
     finally:
         link.close()
         assert backend.stop() == 0
+
+
+def test_bytes_that_do_not_fit_the_topics_type_are_skipped_not_fatal(peer):
+    """A publisher whose bytes do not deserialise as the topic's type (another definition of it, a
+    broken driver): the relay skips those messages, tells the log once, keeps relaying the ones that fit,
+    and the topic monitor (on the relay's reader) still counts every arrival. (The relay deserialises
+    the bytes itself now; ``deserialize_message`` raises on such bytes, which on the executor's thread
+    would stop every node of the backend. rmw's own take skipped them without a word.)"""
+    import struct
+
+    topic = "/arbiter_test/garbled"
+    backend = ros_backend("--no-sim", "--topics", "/arbiter_test/*")
+    ros = roslibpy.Ros("127.0.0.1", backend.bridge_port)
+    ros.run(timeout=10)
+    try:
+        got: list[str] = []
+        roslibpy.Topic(ros, topic, "std_msgs/String").subscribe(lambda m: got.append(m["data"]))
+        pub = peer.node.create_publisher(String, topic, 10)
+        wait_matched(pub)
+        garbled = b"\x00\x01\x00\x00" + struct.pack("<I", 0x7FFFFFFF)  # a string 2 GB long, and no bytes
+
+        def pair() -> None:
+            pub.publish(garbled)
+            pub.publish(String(data="fits"))
+
+        def relayed_after_garbage() -> bool:
+            pair()
+            return "fits" in got
+
+        assert wait_for(relayed_after_garbage, 15)
+
+        def readers() -> set[str]:
+            return {i.node_name for i in peer.node.get_subscriptions_info_by_topic(topic)}
+
+        def total() -> int:
+            rows = get_json(f"{backend.api}/api/topics")["topics"]
+            return {t["name"]: t["total"] for t in rows}.get(topic, 0)
+
+        def measured() -> bool:  # the monitor measures the topic, on the relay's reader
+            pair()
+            return total() > 0 and readers() == {"arbiter_bridge"}
+
+        assert wait_for(measured, 15), readers()
+        seen: list[tuple[float, int]] = []
+
+        def settled() -> bool:  # what was published so far, all counted: no change for 0.5 s
+            now, n = time.monotonic(), total()
+            if not seen or seen[-1][1] != n:
+                seen.append((now, n))
+            return now - seen[-1][0] >= 0.5
+
+        assert wait_for(settled, 10, interval=0.1)
+        start, relayed = seen[-1][1], len(got)
+        for _ in range(10):
+            pair()
+            time.sleep(0.01)
+        assert wait_for(lambda: len(got) == relayed + 10, 10), len(got) - relayed
+        assert wait_for(lambda: total() >= start + 20, 10), total() - start  # each garbled one too
+        assert set(got) == {"fits"} and backend.proc.poll() is None
+    finally:
+        ros.close()
+        backend.stop()
+    err = backend.proc.stderr.read()
+    assert err.count("does not deserialise as String") == 1, err[-2000:]
