@@ -32,7 +32,10 @@ class Settings:
     repeat_rate: float | None = 10.0  # the ceiling on commands a second (None: none, as in `compare`)
     key_timeout: float = 0.6
     ui_rate: float = 5.0  # redraws per second, however fast data arrives
-    analytics_rate: float = 2.0  # analytics and latency figures (screens 2, 3, the dashboard): no flicker
+    # analytics and latency figures (screens 2, 3, the dashboard): once a second, as system monitors
+    # refresh (htop 1.5 s, glances 2 s); at 2 Hz the analytics screen cost the console 17 % more CPU
+    # (bench/tui.py, session 16, docs/BENCHMARKS.md) and read no better
+    analytics_rate: float = 1.0
     poll_period: float = 0.5  # tracker API poll, 2 Hz, while a screen shows the latency figures...
     idle_poll_period: float = 2.0  # ...and every 2 s while none does (the status line's reachability)
     live: bool = True  # timers and workers on; snapshot tests turn it off for still frames
