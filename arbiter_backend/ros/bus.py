@@ -243,7 +243,7 @@ class RosBus:
         # the topic monitor's share of the relay's readers (see ``relayed``): each message the relay takes
         # on a volatile reader, as (topic, CDR bytes, receive time in ns); executor thread
         self.tap: Callable[[str, bytes, int], None] | None = None
-        self.undecodable: dict[str, int] = {}  # topic -> messages whose bytes did not fit its type
+        self._undecodable: set[str] = set()  # topics whose bytes did not fit their type (told once)
         self._clients: dict[
             str, tuple[type, Any]
         ] = {}  # service -> (its type's class, the rclpy client)  # topic -> a node's in-process handler
@@ -550,11 +550,11 @@ class RosBus:
         try:
             msg = deserialize_message(raw, cls)
         except Exception:  # bytes that do not fit the type (a foreign publisher): skipped, never fatal
-            self.undecodable[topic] = self.undecodable.get(topic, 0) + 1
-            if self.undecodable[topic] == 1:
+            if topic not in self._undecodable:
+                self._undecodable.add(topic)
                 log.warning("%s: a message that does not deserialise as %s (skipped)", topic, cls.__name__)
-            if self.tap is not None and sub.latched is None and generation == sub.generation:
-                self.tap(topic, raw, received_ns)  # it still arrived: the monitor counts it
+            if generation == sub.generation:
+                self._measure(sub, topic, raw, received_ns)  # it still arrived: the monitor counts it
             return
         data = RosMessage(msg, received_ns, raw)  # its JSON form is made where it is first needed
         swap = sub.swap
@@ -569,15 +569,19 @@ class RosBus:
                 sub.swap = None
         elif generation != sub.generation:
             return  # a replaced subscription's last messages, after the swap ended
-        tap = self.tap
-        if tap is not None and sub.latched is None:  # a transient-local reader's history is no arrival
-            tap(topic, raw, received_ns)
+        self._measure(sub, topic, raw, received_ns)
         text = getattr(msg, "data", None)
         handled = self._local.get(topic)
         if handled is not None and isinstance(text, str) and handled.take(text):
             return  # already delivered in-process
         with contextlib.suppress(RuntimeError):  # the loop is closed: shutting down
             self.loop.call_soon_threadsafe(self._fanout, topic, data)
+
+    def _measure(self, sub: _Sub, topic: str, raw: bytes, received_ns: int) -> None:  # executor thread
+        """Hand a message the relay took to the topic monitor (``tap``); not from a transient-local
+        reader, whose history replayed on subscribing is no arrival."""
+        if self.tap is not None and sub.latched is None:
+            self.tap(topic, raw, received_ns)
 
     def _replay(self, topic: str, callback: Callback, kept: tuple[dict[str, Any], ...]) -> None:  # loop
         current = self._subs.get(topic)
