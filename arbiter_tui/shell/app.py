@@ -37,7 +37,7 @@ from ..session.link_sweep import sweep_curve
 from ..session.pollers import poll_forever
 from ..session.robot import MissionFinished, RobotSession
 from ..session.settings import Settings
-from . import lifecycle, palette, strips
+from . import canvas_rows, lifecycle, palette, strips
 from .heap import freeze_heap
 from .keys import KeyRouter, direct_keys
 from .messages import (
@@ -57,6 +57,7 @@ from .screens.topics import TopicsScreen
 from .theme import RegistryTheme
 
 strips.install()  # Textual's strips freed by reference counting, not by full garbage collections
+canvas_rows.install()  # a plot's unchanged rows keep their strips
 
 log = logging.getLogger(__name__)
 NOTICE_AFTER_STOP_S = 0.1  # a run's end is told once its stop command has reached the robot
