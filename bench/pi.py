@@ -36,7 +36,7 @@ import urllib.request
 import uuid
 from pathlib import Path
 
-from _common import emit, pct
+from _common import compile_checkout, emit, pct
 
 from arbiter_core.listening import parse_listening
 
@@ -213,6 +213,7 @@ def main() -> int:
     if os.geteuid() != 0:
         print("pi: needs root (cgroups)", file=sys.stderr)
         return 1
+    compile_checkout(a.pythonpath)  # compiled, as an installed copy is
     env = dict(os.environ)
     if a.pythonpath:
         env["PYTHONPATH"] = a.pythonpath

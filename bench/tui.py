@@ -35,7 +35,7 @@ import time
 import uuid
 from pathlib import Path
 
-from _common import emit
+from _common import compile_checkout, emit
 
 TICK = os.sysconf("SC_CLK_TCK")
 HERE = Path(__file__).resolve().parent
@@ -126,6 +126,7 @@ def main() -> int:
     if shutil.which("tmux") is None:
         print("tui: tmux is not installed", file=sys.stderr)
         return 1
+    compile_checkout(a.pythonpath)  # compiled, as an installed copy is
     size = tuple(int(n) for n in a.size.split("x"))
     tmp = Path(tempfile.mkdtemp())
     s = a.seconds
