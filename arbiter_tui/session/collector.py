@@ -26,7 +26,12 @@ import time
 from collections.abc import Callable
 
 PERIOD_S = 1.0  # a full collection at most this often; at least this often while ticks run
-WHOLE_PERIOD_S = 30.0  # the whole heap, frozen part included, at most this often, and only while idle
+# The whole heap, frozen part included, at most this often, and only once nothing was driven for QUIET_S.
+# It walks every object (~180,000): 780-910 ms of wall time at a Pi-class quota (bench/gcprobe, the
+# console idle at 200x60), during which a key waits. What it frees is little: frozen objects that later
+# ended in a cycle, about one a second on the dashboard (docs/BENCHMARKS.md).
+WHOLE_PERIOD_S = 300.0
+QUIET_S = 10.0  # not right after a mission or a key: the user is likely to drive again soon
 NEVER = 1 << 30  # a generation-2 threshold that the young collections never reach
 
 _lock = threading.Lock()
@@ -54,9 +59,10 @@ def collect_everything() -> None:
 
 class TickCollector:
     """``after_tick`` runs on the session's thread after each control tick; ``begin``/``end`` bracket
-    the thread's life. Once a ``period_s`` it collects what is not frozen (``collect``); while the
-    console sends no commands (``driving`` false) and ``whole_period_s`` has passed, the whole heap
-    instead (``collect_all``), so nothing frozen stays uncollected past the next idle moment.
+    the thread's life. Once a ``period_s`` it collects what is not frozen (``collect``); once the
+    console has sent no commands (``driving`` false) for ``quiet_s`` and ``whole_period_s`` has passed,
+    the whole heap instead (``collect_all``), so nothing frozen stays uncollected past the next quiet
+    spell.
     ``clock`` and the two collections are injected for tests."""
 
     def __init__(
@@ -66,15 +72,17 @@ class TickCollector:
         collect: Callable[[], object] = collect_and_freeze,
         collect_all: Callable[[], object] = collect_everything,
         whole_period_s: float = WHOLE_PERIOD_S,
+        quiet_s: float = QUIET_S,
     ) -> None:
         self.period_s = period_s
         self.whole_period_s = whole_period_s
+        self.quiet_s = quiet_s
         self.clock = clock
         self.collect = collect
         self.collect_all = collect_all
         self.collections = 0  # full collections run after a tick (the bench and tests read it)
         self.whole_collections = 0  # of which over the whole heap
-        self._last = self._last_whole = clock()
+        self._last = self._last_whole = self._last_driving = clock()
         self._begun = False
 
     def begin(self) -> None:
@@ -97,10 +105,13 @@ class TickCollector:
         if not self._begun:
             return False
         now = self.clock()
+        if driving:
+            self._last_driving = now
         if now - self._last < self.period_s:
             return False
         self._last = now
-        if not driving and now - self._last_whole >= self.whole_period_s:
+        quiet = not driving and now - self._last_driving >= self.quiet_s
+        if quiet and now - self._last_whole >= self.whole_period_s:
             self._last_whole = now
             self.collect_all()
             self.whole_collections += 1

@@ -93,13 +93,13 @@ def test_collected_survivors_are_frozen_and_still_freed_when_dropped(
         gc.unfreeze()
 
 
-def test_the_whole_heap_only_while_idle_and_at_most_once_a_whole_period(
+def test_the_whole_heap_only_after_a_quiet_spell_and_at_most_once_a_whole_period(
     thresholds: tuple[int, int, int],
 ) -> None:
     clock, calls = Clock(), []
     collector = TickCollector(
         1.0, clock, collect=lambda: calls.append("young"), collect_all=lambda: calls.append("whole"),
-        whole_period_s=30.0,
+        whole_period_s=30.0, quiet_s=5.0,
     )
     collector.begin()
     try:
@@ -108,11 +108,17 @@ def test_the_whole_heap_only_while_idle_and_at_most_once_a_whole_period(
             collector.after_tick(driving=True)
         assert calls == ["young"] * 40
         calls.clear()
-        for _ in range(40):  # then 40 s idle: the whole heap at once, then not before 30 s more
+        for _ in range(40):  # then 40 s idle: the whole heap once 5 s were quiet, then not before 30 s more
             clock.t += 1.0
             collector.after_tick(driving=False)
-        assert calls.count("whole") == 2 and calls[0] == "whole" and calls[30] == "whole"
+        assert calls.count("whole") == 2 and calls[4] == "whole" and calls[34] == "whole"
+        assert "whole" not in calls[:4]
         assert collector.whole_collections == 2
+        calls.clear()
+        for step in range(60):  # a key every 4 s: never quiet for 5 s, so never the whole heap
+            clock.t += 1.0
+            collector.after_tick(driving=step % 4 == 0)
+        assert calls == ["young"] * 60
     finally:
         collector.end()
 
