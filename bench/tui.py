@@ -20,6 +20,7 @@ medians. Last line: JSON with both apps' figures and the ratios.
 
     python bench/tui.py --seconds 10 --repeat 3
     python bench/tui.py --seconds 10 --repeat 3 --pythonpath /path/to/another/checkout
+    python bench/tui.py --first-frame-only --repeat 5      # only the first frames
 """
 
 from __future__ import annotations
@@ -122,6 +123,7 @@ def main() -> int:
     p.add_argument("--size", default="100x30", help="terminal size, COLSxROWS")
     p.add_argument("--repeat", type=int, default=3, help="runs of each app, alternating; medians reported")
     p.add_argument("--pythonpath", help="measure the code of another checkout (its root)")
+    p.add_argument("--first-frame-only", action="store_true", help="time the first frames, no phases")
     a = p.parse_args()
     if shutil.which("tmux") is None:
         print("tui: tmux is not installed", file=sys.stderr)
@@ -140,6 +142,8 @@ def main() -> int:
         ("topics_screen", ["4"], None, s),  # GET /api/topics at 2 Hz while shown
         ("analytics_collecting", ["1", "a", "g", "2"], None, s),  # recording is on from the start
     ]
+    if a.first_frame_only:
+        steps = []
     bare_cmd = f"{sys.executable} {HERE / 'bare_app.py'}"
     tui_runs, bare_runs = [], []
     for _ in range(a.repeat):  # alternating, so slow spells of a shared machine hit both alike
@@ -148,7 +152,7 @@ def main() -> int:
         bare_runs.append(run(bare_cmd, "bare ready", "bare ready", steps, size, tmp))
     tui, bare = median_of(tui_runs), median_of(bare_runs)
     ratios: dict = {}
-    for name in ("control_key_held", "latency_screen", "topics_screen", "analytics_collecting"):
+    for name in [step[0] for step in steps]:
         t, b = tui[name], bare[name]
         cpu_t, cpu_b = t["cpu_percent_of_core"], b["cpu_percent_of_core"]
         ratios[name] = {
