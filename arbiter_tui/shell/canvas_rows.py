@@ -20,6 +20,8 @@ release keeps its own code.
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Iterator
+from contextlib import contextmanager
 from importlib.metadata import PackageNotFoundError, version
 from typing import Any
 
@@ -32,6 +34,7 @@ SEP = "\x00"  # between styles: no style string holds it
 
 _render_line = Canvas.render_line
 _render_lines = Canvas.render_lines
+_installed = False
 
 
 def _render_lines_once(self: Canvas, crop: Region) -> list[Strip]:
@@ -50,7 +53,7 @@ def _render_line_cached(self: Canvas, y: int) -> Strip:
     base = self.__dict__.get("_arbiter_base")
     if base is None:  # asked for one row outside a paint
         base = self.rich_style
-    key = (base, "".join(self._buffer[y]), SEP.join(self._styles[y]))
+    key = (base, *_content(self, y))
     rows: dict[int, tuple[Any, Strip]] | None = self.__dict__.get("_arbiter_rows")
     if rows is None:
         rows = self.__dict__["_arbiter_rows"] = {}
@@ -62,6 +65,50 @@ def _render_line_cached(self: Canvas, y: int) -> Strip:
     return strip
 
 
+def _content(canvas: Canvas, y: int) -> tuple[str, str]:
+    """Row ``y``'s characters and styles, each as one string."""
+    return "".join(canvas._buffer[y]), SEP.join(canvas._styles[y])
+
+
+def _changed_rows(canvas: Canvas) -> list[int]:
+    """The rows whose content differs from what was last painted (never painted: changed)."""
+    rows: dict[int, tuple[Any, Strip]] = canvas.__dict__.get("_arbiter_rows", {})
+    changed = []
+    for y in range(canvas._canvas_size.height):
+        kept = rows.get(y)
+        if kept is None or kept[0][1:] != _content(canvas, y):
+            changed.append(y)
+    return changed
+
+
+@contextmanager
+def changed_rows_only(canvases: Iterable[Canvas]) -> Iterator[None]:
+    """Draw on ``canvases`` inside this block: each is then refreshed on the rows that changed only
+    (the library refreshes the whole canvas on every change, and Textual then styles and composes
+    every row again). A canvas whose size changed is refreshed whole. Without :func:`install`, or on
+    another release, it does nothing special."""
+    held = list(canvases) if _installed else []
+    sizes = [canvas._canvas_size for canvas in held]
+    for canvas in held:
+        canvas._refreshes_pending += 1  # the library's own batching: refresh() does nothing meanwhile
+    try:
+        yield
+    finally:
+        for canvas, size in zip(held, sizes, strict=True):
+            canvas._refreshes_pending -= 1
+            if canvas._refreshes_pending:
+                continue
+            if canvas._canvas_size != size:
+                canvas.refresh()
+                continue
+            if not canvas._canvas_size.area:  # a margin of no rows: nothing to paint
+                continue
+            width = max(canvas.size.width, canvas._canvas_size.width)
+            regions = [Region(0, y, width, 1) for y in _changed_rows(canvas)]
+            if regions:
+                canvas.refresh(*regions)
+
+
 def install() -> bool:
     """Patch ``Canvas.render_line`` (once; idempotent). False when this release was not checked."""
     try:
@@ -70,6 +117,8 @@ def install() -> bool:
         return False
     if release not in CHECKED:
         return False
+    global _installed
+    _installed = True
     Canvas.render_line = _render_line_cached  # type: ignore[method-assign]
     Canvas.render_lines = _render_lines_once  # type: ignore[method-assign]
     return True

@@ -17,6 +17,7 @@ from typing import Any, Generic, TypeVar
 import numpy as np
 from textual import events
 from textual.reactive import reactive
+from textual_hires_canvas.canvas import Canvas
 from textual_plot import HiResMode, PlotWidget
 from textual_plot.axis_formatter import AxisFormatter
 
@@ -26,6 +27,7 @@ from ..analytics.runs import MANUAL
 from ..analytics.styles import GOAL, ROBOT_ARROWS, WAYPOINT, style_of
 from ..session.frames import Frame
 from ..session.views import PLOT_PERIOD_S, AnalyticsView, LatencySnapshot, MapView, thin
+from .canvas_rows import changed_rows_only
 from .messages import GoalPicked
 from .screens.base import BaseScreen
 
@@ -125,12 +127,13 @@ class Plot(PlotWidget, Generic[V, K], can_focus=False):
         self._key = key
         self._drawn_at = time.monotonic()
         self.draws += 1
-        self.clear()
-        self.draw(view)
-        if self.size.area:
-            # Draw onto the canvases now rather than in the next paint: textual-plot does it in render(),
-            # during a frame, and the canvases it dirties then take a frame of their own.
-            self.render()
+        with changed_rows_only(self.query(Canvas)):  # only the rows that changed are painted again
+            self.clear()
+            self.draw(view)
+            if self.size.area:
+                # Draw onto the canvases now rather than in the next paint: textual-plot does it in
+                # render(), during a frame, and the canvases it dirties then take a frame of their own.
+                self.render()
 
     def _waiting(self) -> None:
         if isinstance(self.screen, BaseScreen):

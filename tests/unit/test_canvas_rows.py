@@ -63,3 +63,40 @@ async def test_any_change_to_a_row_builds_it_again() -> None:
         canvas.reset()  # cleared: blank rows, none of the old strips
         assert [cells(canvas.render_line(y)) for y in range(H)] == library(canvas)
         assert "x" not in canvas.render_line(2).text
+
+
+def shown(app: App[None]) -> str:
+    """What the screen shows: its text, from each widget's painted (cached) lines."""
+    return "\n".join(strip.text for strip in app.screen._compositor.render_strips())
+
+
+async def test_a_redraw_marks_only_the_rows_that_changed_and_the_screen_shows_them() -> None:
+    async with One().run_test(size=(20, 6)) as pilot:
+        canvas = pilot.app.query_one(Canvas)
+        canvas.draw_line(0, 0, W - 1, 0, char="#", style="red")
+        canvas.set_pixel(3, 2, char="o", style="green")
+        await pilot.pause()  # painted: every row's strip kept, nothing dirty
+        assert not canvas._styles_cache._dirty_lines
+
+        with canvas_rows.changed_rows_only([canvas]):  # as a plot redraws: cleared, all drawn again
+            canvas.reset()
+            canvas.draw_line(0, 0, W - 1, 0, char="#", style="red")
+            canvas.set_pixel(3, 2, char="o", style="green")
+            canvas.set_pixel(7, 3, char="x", style="green")  # the one change
+        assert canvas._styles_cache._dirty_lines == {3}
+        await pilot.pause()
+        assert "x" in shown(pilot.app) and "o" in shown(pilot.app)
+
+        with canvas_rows.changed_rows_only([canvas]):  # nothing changed: nothing to paint
+            canvas.reset()
+            canvas.draw_line(0, 0, W - 1, 0, char="#", style="red")
+            canvas.set_pixel(3, 2, char="o", style="green")
+            canvas.set_pixel(7, 3, char="x", style="green")
+        assert not canvas._styles_cache._dirty_lines
+
+        with canvas_rows.changed_rows_only([canvas]):  # the line gone: row 0 repainted, blank on screen
+            canvas.reset()
+            canvas.set_pixel(3, 2, char="o", style="green")
+        assert canvas._styles_cache._dirty_lines == {0, 3}
+        await pilot.pause()
+        assert "#" not in shown(pilot.app) and "x" not in shown(pilot.app)
