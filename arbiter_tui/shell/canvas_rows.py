@@ -2,20 +2,25 @@
 
 textual-plot clears and redraws a plot's canvases whenever its data changes (the map at every frame
 while the robot moves, the analytics plots once a second), and ``textual_hires_canvas.Canvas``
-refreshes the whole widget on every change. Textual then asks for every row again, and
-``Canvas.render_line`` walks each cell of the row in Python to build its strip. Most rows come out as
-they were: the map's grid and the trail behind the robot, the axes' tick labels, the empty part of
-every plot. On the control screen with a held key that walk was a third of all painting (py-spy,
+refreshes the whole widget on every change. Textual then styles, filters and composes every row again,
+and ``Canvas.render_line`` walks each cell of each row in Python to build its strip. Most rows come
+out as they were: the map's grid and the trail behind the robot, the axes' tick labels, the empty part
+of every plot. On the control screen with a held key that walk was a third of all painting (py-spy,
 docs/BENCHMARKS.md, session 17).
 
-:func:`install` keeps, per canvas and row, the strip last built and the row's content it was built from
-(its characters and their styles, each joined into one string, which Python does at C speed, and the
-widget's base style); a row whose content is the same gets that same strip back. The base style
-(``rich_style``, which walks the widget's ancestors: most of what the library's ``render_line`` cost)
-is worked out once per paint of the canvas, not once per row. Any change, whatever
-drew it, changes the key, so the strip is built again by the library's own code: nothing is ever shown
-stale. Applied only to the textual-hires-canvas release it was checked against (``CHECKED``); another
-release keeps its own code.
+* :func:`changed_rows_only` wraps a redraw: the canvases' refreshes are held (the library's own
+  batching counter) and then each canvas is refreshed on the rows whose content differs from what was
+  painted, so Textual paints those rows only.
+* :func:`install` keeps, per canvas and row, the strip last built and the row's content it was built
+  from (its characters and their styles, each joined into one string, which Python does at C speed,
+  and the widget's base style); a row whose content is the same gets that same strip back. The base
+  style (``rich_style``, which walks the widget's ancestors: most of what the library's
+  ``render_line`` cost) is worked out once per paint of the canvas, not once per row.
+
+Any change, whatever drew it, changes a row's content, so the row is refreshed and its strip built
+again by the library's own code: nothing is shown stale (``tests/unit/test_canvas_rows.py`` reads the
+screen back). Applied only to the textual-hires-canvas release it was checked against (``CHECKED``);
+another release keeps its own code and whole refreshes.
 """
 
 from __future__ import annotations
