@@ -65,6 +65,18 @@ DEFAULT_CONTROL_HZ = 10.0  # the control tick when no --repeat-rate ceiling is s
 NO_LINK_WORDS = "The link to the robot is down: nothing can be sent. Press g once it is back."
 
 
+def next_due(due: float, started: float, period: float) -> float:
+    """When a clocked job that was due at ``due`` and started at ``started`` runs next (monotonic s).
+
+    One period after ``due`` (its grid) when it started less than half a period late, so wake-up delays
+    never slow the rate. One period after it *started* when it started later than that: after a stall
+    (the process stopped, the CPU quota spent, the garbage collection after the last control tick ran
+    past this one's time) the next command leaves a period after the late one, never in a burst behind
+    it -- and never a whole extra period later, as when the grid restarted from the end of the job."""
+    on_grid = due + period
+    return on_grid if started - due <= period / 2 else started + period
+
+
 class RobotSession:
     def __init__(
         self,
@@ -210,19 +222,16 @@ class RobotSession:
             wait = due[job] - time.monotonic()
             if wait > 0 and self._stopping.wait(wait):
                 break
+            started = time.monotonic()
             job()
             if job == self.tick_control:
                 self.tick_late_s = self._lateness(due[job], last_due)
                 last_due = due[job]
                 self.collector.after_tick(driving=self.loop.running or self.teleop.moving)
                 self.on_tick()
-            period = periods[job]
-            due[job] += period
-            behind = time.monotonic() - due[job]
-            if behind > 0:  # late by more than a period: start again from now, never a burst
-                if job == self.tick_control:
+                if started - due[job] > periods[job]:
                     self.late_ticks += 1
-                due[job] = time.monotonic() + period
+            due[job] = next_due(due[job], started, periods[job])
 
     def close(self) -> None:
         """Stop the robot (one zero) and the clocked work."""
