@@ -10,8 +10,12 @@ command by as much (``bench/pi.py`` with ``bench/gcprobe``: every gap over 200 m
 
 :class:`TickCollector` takes the oldest generation off the automatic schedule while the session's
 thread runs, and collects it there instead, right after a control tick, once a ``period``, then freezes
-what survived (:func:`collect_and_freeze`), so each walk covers only a second's new objects: 0.5 ms
-instead of 150-260 ms on that dashboard, and it starts with the rest of a control period ahead of it.
+what survived (:func:`collect_and_freeze`), so each walk covers only the objects made since the last:
+0.5 ms instead of 150-260 ms on that dashboard, and it starts with the rest of a control period ahead of
+it. The period is 0.2 s, not a second: in the first seconds of the analytics screen at 200x60 a second's
+new objects took 60-150 ms of wall time to walk at a Pi-class quota, past the next command's time;
+walks five times as often took 3-50 ms (``bench/pi.py`` with a tick probe, docs/BENCHMARKS.md session
+18). Freezing more often froze ~2 % more objects, and their count was level after 30 s.
 A frozen object that later ends in a cycle (a closed dialog's widgets) is freed by the next
 whole-heap collection, which waits for a moment when the console sends no commands.
 The young generations stay automatic (their collections are short). Thresholds are process-wide, so
@@ -25,7 +29,7 @@ import threading
 import time
 from collections.abc import Callable
 
-PERIOD_S = 1.0  # a full collection at most this often; at least this often while ticks run
+PERIOD_S = 0.2  # a full collection at most this often; at least this often while ticks run
 # The whole heap, frozen part included, at most this often, and only once nothing was driven for QUIET_S.
 # It walks every object (~180,000): 780-910 ms of wall time at a Pi-class quota (bench/gcprobe, the
 # console idle at 200x60), during which a key waits. What it frees is little: frozen objects that later
