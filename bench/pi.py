@@ -142,6 +142,12 @@ def gaps_ms(records: list[dict]) -> list[float]:
     return [(b - a) * 1000.0 for a, b in itertools.pairwise(t)]
 
 
+def stamp_gaps_ms(records: list[dict]) -> list[float]:
+    """Gaps between the senders' stamps (receive time less the one-way latency): when commands *left*."""
+    t = sorted(r["timestamp"] * 1000.0 - r["latency_ms"] for r in records)
+    return [b - a for a, b in itertools.pairwise(t)]
+
+
 def top(values: list[float]) -> float | None:
     return round(max(values), 4) if values else None
 
@@ -280,6 +286,11 @@ def main() -> int:
                 "gap_p50_ms": pct(g, 0.5), "gap_p95_ms": pct(g, 0.95), "gap_max_ms": top(g),
                 # a steadier figure than one run's p95 (the 6th largest of 120 gaps)
                 "gaps_over_110_ms_percent": round(100 * sum(x > 110 for x in g) / max(1, len(g)), 1),
+                # where a long gap came from: the command left late (the stamps' gaps) or was slow on
+                # its way (the one-way latency: the link's thread, the socket, the backend's loop)
+                "stamp_gap_p95_ms": pct(sg := stamp_gaps_ms(recs), 0.95), "stamp_gap_max_ms": top(sg),
+                "one_way_p50_ms": pct(ow := [r["latency_ms"] for r in recs], 0.5),
+                "one_way_p95_ms": pct(ow, 0.95), "one_way_max_ms": top(ow),
                 "cpu_percent_of_quota": round(100 * cpu / dt / a.quota, 1),
                 "throttled_percent_of_periods": round(100 * (th1 - th0) / max(1, n1 - n0), 1),
                 # the backend receives the commands: its own quota can stretch the gaps too
