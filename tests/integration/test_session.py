@@ -120,4 +120,3 @@ async def test_the_ui_gives_way_when_commands_leave_late(tmp_path):
         asked = frames.asked  # ...and frames still come, each drawn before the next is asked for
         assert await async_until(lambda: frames.asked >= asked + 2, timeout=5)
         await pilot.press("space")
-

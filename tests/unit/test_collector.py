@@ -98,8 +98,12 @@ def test_the_whole_heap_only_after_a_quiet_spell_and_at_most_once_a_whole_period
 ) -> None:
     clock, calls = Clock(), []
     collector = TickCollector(
-        1.0, clock, collect=lambda: calls.append("young"), collect_all=lambda: calls.append("whole"),
-        whole_period_s=30.0, quiet_s=5.0,
+        1.0,
+        clock,
+        collect=lambda: calls.append("young"),
+        collect_all=lambda: calls.append("whole"),
+        whole_period_s=30.0,
+        quiet_s=5.0,
     )
     collector.begin()
     try:

@@ -27,7 +27,7 @@ def test_a_camera_frame_is_the_same_text():
 
 def test_several_long_strings_nested_in_dicts_and_lists_keep_their_places():
     a, b, c = _b64(SPLICE_MIN), _b64(SPLICE_MIN + 7), _b64(3 * SPLICE_MIN)
-    msg = {"first": {"data": a}, "clouds": [{"data": b, "n": 1}, {"data": c}], "after": "x\"y"}
+    msg = {"first": {"data": a}, "clouds": [{"data": b, "n": 1}, {"data": c}], "after": 'x"y'}
     text = jsonframe.dumps(msg)
     assert text == _plain(msg)
     assert json.loads(text)["clouds"][1]["data"] == c

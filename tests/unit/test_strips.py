@@ -60,9 +60,7 @@ def texts(strip: Strip) -> list[tuple[str, Style | None]]:
     return [(seg.text, seg.style) for seg in strip]
 
 
-@pytest.mark.parametrize(
-    "cuts", [[7], [7, 9], [2, 7], [0, 3, 7], [3], [1, 2, 3, 4, 5, 6, 7], [10]]
-)
+@pytest.mark.parametrize("cuts", [[7], [7, 9], [2, 7], [0, 3, 7], [3], [1, 2, 3, 4, 5, 6, 7], [10]])
 def test_divide_gives_what_textual_gives(cuts: list[int]) -> None:
     ours = make("abc", "defg").divide(cuts)
     theirs = strips._divide(make("abc", "defg"), cuts)
