@@ -138,6 +138,7 @@ class LatencyMeter:
         max_expired: int = 10_000,
     ) -> None:
         self._lock = threading.Lock()
+        self._written = threading.Condition(self._lock)  # a command was written (``on_send``)
         self._pending: dict[int, tuple[float, float]] = {}  # seq -> (send monotonic s, stamp ms)
         self.clock = ClockModel(window_s=max(offset_window_s, 2.0))
         self._last_at: float | None = None
@@ -167,6 +168,12 @@ class LatencyMeter:
             self._pending[seq] = (send_mono, stamp_ms)
             self.sent += 1
             self.last_send_mono = send_mono
+            self._written.notify_all()
+
+    def wait_sent(self, count: int, timeout_s: float) -> bool:
+        """Wait (at most ``timeout_s``) until more than ``count`` commands were written; True if so."""
+        with self._written:
+            return self._written.wait_for(lambda: self.sent > count, timeout_s)
 
     def on_report(self, record: LatencyRecord, arrival_mono: float) -> Sample | None:
         """Match a tracker record to our send; None when it is not one of ours (or has no ``seq``,

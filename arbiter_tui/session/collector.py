@@ -103,6 +103,10 @@ class TickCollector:
             _holders += 1
         self._last = self.clock()
 
+    def due(self) -> bool:
+        """A collection would run at the next :meth:`after_tick`."""
+        return self._begun and self.clock() - self._last >= self.period_s
+
     def after_tick(self, driving: bool = True) -> bool:
         """Collect every generation if a period has passed since the last time; True when it did.
         ``driving``: the console is sending commands (a mission, a held key), so no whole-heap walk."""

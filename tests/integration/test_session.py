@@ -11,6 +11,8 @@ from arbiter_tui.analytics.runs import COMPLETED
 from arbiter_tui.latency.tracker_client import TrackerClient
 from arbiter_tui.link.base import CONNECTED, Telemetry
 from arbiter_tui.link.rosbridge import RosLink
+from arbiter_tui.session import robot
+from arbiter_tui.session.collector import TickCollector
 from arbiter_tui.session.robot import MissionFinished, RobotSession
 from arbiter_tui.session.settings import Settings
 from arbiter_tui.shell.app import make_app
@@ -120,3 +122,39 @@ async def test_the_ui_gives_way_when_commands_leave_late(tmp_path):
         asked = frames.asked  # ...and frames still come, each drawn before the next is asked for
         assert await async_until(lambda: frames.asked >= asked + 2, timeout=5)
         await pilot.press("space")
+
+
+def test_a_collection_waits_until_the_ticks_command_is_on_the_socket(tmp_path, monkeypatch):
+    """The session thread collects garbage just after a control tick; RosLink writes the command on its
+    reactor's thread. A collection that started first would hold the command between its stamp and the
+    socket for the whole walk (at a Pi-class quota: one-way latency 19 ms instead of under 2)."""
+    monkeypatch.setattr(robot, "WRITE_WAIT_S", 5.0)  # the order is under test, not the bound (a loaded CI)
+    backend = start_backend()
+    link = RosLink("127.0.0.1", backend.bridge_port)
+    session = RobotSession(Settings(export_dir=tmp_path), link)
+    handed: list[int] = []  # commands the control loop handed the link
+    send = link.send
+
+    def counted(v, w):
+        ok = send(v, w)
+        if ok:
+            handed.append(1)
+        return ok
+
+    link.send = counted
+    seen: list[tuple[int, int]] = []  # at each collection: (commands written, commands handed over)
+    session.collector = TickCollector(
+        period_s=0.2, collect=lambda: seen.append((link.telemetry.meter.sent, len(handed)))
+    )
+    try:
+        assert wait_for(lambda: link.state == CONNECTED and link.telemetry.odom_count > 0, timeout=15)
+        session.start()
+        session.select_algorithm("go_to_goal")
+        assert session.go() is None
+        assert wait_for(lambda: len([s for s in seen if s[1] >= 2]) >= 8, timeout=30)
+        driving = [s for s in seen if s[1] >= 2]
+        assert all(written == handed_over for written, handed_over in driving), driving
+    finally:
+        session.close()
+        link.close()
+        backend.stop()
