@@ -89,10 +89,16 @@ class LinkSweepView:
     curve: LinkCurve | None = None
     p95_ms: float | None = None
     error: str = ""
+    paused: bool = False  # the sweep waits while the robot drives (a console with no core to spare)
 
     def text(self, width: int | None = None, rows: int = 2) -> str:
         """In words; with ``width``, fitted to ``rows`` lines of that many cells (word-wrapped): the
         controllers that do not fit are left out whole, and an ellipsis says so."""
+        if self.state == RUNNING and self.paused:
+            return (
+                f"latency sweep for {self.mission} paused while the robot drives (no core to spare: the "
+                "robot's commands come first); it goes on once the robot stops"
+            )
         if self.state == RUNNING:
             return f"sweeping latency {_range()} for {self.mission} in the background (arbiter-tui compare)…"
         if self.state == FAILED:

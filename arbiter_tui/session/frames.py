@@ -21,6 +21,8 @@ from ..analytics.linkcurve import RUNNING, LinkSweepView, measured_p95
 from ..latency.topics_client import TopicsState
 from ..latency.tracker_client import LatencyView, TrackerClient
 from ..link.base import STARTING
+from .cpu_share import cores_available
+from .link_sweep import SweepPause
 from .robot import RobotSession
 from .settings import SIM, Settings
 from .views import (
@@ -152,6 +154,7 @@ class FrameSampler:
         settings: Settings,
         clock: Callable[[], float] = time.monotonic,
         tracker: TrackerClient | None = None,
+        sweep_pause: SweepPause | None = None,
     ):
         self.session = session
         self.settings = settings
@@ -163,6 +166,8 @@ class FrameSampler:
         self._count_at = float("-inf")
         self._topics: TopicsState | None = None  # the last topics answer, for the next slow frame
         self._sweep_version = -1  # the store version the measured p95 is from
+        # holds the sweep's child while the robot drives, where the console has no core to spare
+        self.sweep_pause = sweep_pause if sweep_pause is not None else SweepPause(cores_available())
 
     # -- what the pollers and workers bring -----------------------------------------------------------
     def topics_polled(self, state: TopicsState) -> None:
@@ -170,7 +175,10 @@ class FrameSampler:
         self._topics = state
 
     def sweep_changed(self, view: LinkSweepView) -> None:
-        self.frame = replace(self.frame, link_sweep=view)
+        """The sweep started, ended or failed (only a running sweep is ever paused)."""
+        self.frame = replace(
+            self.frame, link_sweep=replace(view, paused=view.paused and view.state == RUNNING)
+        )
 
     def sweep_wanted(self) -> str | None:
         """The mission whose error-vs-latency sweep the analytics screen needs and has not (live only);
@@ -210,6 +218,8 @@ class FrameSampler:
         if ANALYTICS in slow and shown.shows(ANALYTICS):
             analytics = analytics_view(s.store, f.analytics, s.loop)
             sweep = self._measured_p95(sweep)
+            if sweep.paused != (self.sweep_pause.paused and sweep.state == RUNNING):
+                sweep = replace(sweep, paused=not sweep.paused)
         if LATENCY in slow and shown.shows(LATENCY):
             # not at the UI rate: the console's own figures change with every round trip, and a line
             # repainted at the UI rate made every frame span the screen below it (bench/pi.py)

@@ -10,24 +10,39 @@ deterministic (seeded, simulated time), runs **once per setting**: its answer is
 cache directory (``platformdirs``: ``~/.cache/arbiter-tui/sweeps`` on Linux), keyed by its command
 and a fingerprint of the code that computes it (controllers, simulator, link model, compare), and every
 later session reads the file instead of running the child. A damaged file is computed again.
+
+The first sweep of a setting (and the first after the code changed) still has to run somewhere. On a
+console with no core to spare (``cpu_share.cores_available`` under ``SPARE_CORES``: one CPU, or a
+cgroup quota) :class:`SweepPause` stops the child (``SIGSTOP``) while the robot drives and lets it go
+on (``SIGCONT``) once the robot has stood still for ``RESUME_S``: the sweep then costs the robot
+nothing, and the analytics screen says it waits. With a core to spare the child just runs, niced.
+The child dies with the console (``PR_SET_PDEATHSIG``): a stopped orphan would wait forever.
 """
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
+import ctypes
 import functools
 import hashlib
 import json
 import os
+import signal
 import sys
 import tempfile
+import threading
+import time
+from collections.abc import Callable
 from pathlib import Path
 
 from ..analytics.linkcurve import SWEEP_LATENCIES_MS, CurveError, LinkCurve, curve_of
 
 NICE = 10
-TIMEOUT_S = 120.0
+TIMEOUT_S = 120.0  # of the child's running time (not the time it was paused)
+SPARE_CORES = 2.0  # a console with fewer has none to spare for a sweep while the robot drives
+RESUME_S = 1.0  # still this long, the robot lets a paused sweep go on
+POLL_S = 0.25  # how often the wait for the child looks at the clock
 _MAIN = "import sys; from arbiter_tui.cli import main; sys.exit(main(sys.argv[1:]))"
 
 
@@ -88,15 +103,85 @@ def _keep(path: Path, body: bytes) -> None:
                 os.unlink(tmp)
 
 
-def _lower_priority() -> None:
+class SweepPause:
+    """Holds the sweep's child while the robot drives, where the console has no core to spare.
+
+    ``driving`` runs on the session's thread after every control tick; ``child`` on the UI's when the
+    child starts and ends. The signal goes out on a change only (and at once when a child starts while
+    the robot drives). ``shares`` False (a core to spare): never held."""
+
+    def __init__(self, cores: float, clock: Callable[[], float] = time.monotonic) -> None:
+        self.cores = cores
+        self.shares = cores < SPARE_CORES
+        self.clock = clock
+        self.holds = 0  # times the child was stopped (tests and the bench read it)
+        self._lock = threading.Lock()
+        self._pid: int | None = None
+        self._held = False
+        self._driving = False
+        self._still_since = float("-inf")
+
+    @property
+    def paused(self) -> bool:
+        return self._held
+
+    def child(self, pid: int | None) -> None:
+        """The child now running (None: it ended, or was killed)."""
+        with self._lock:
+            self._pid = pid
+            self._held = False
+            if pid is not None and self.shares and self._driving:
+                self._signal(signal.SIGSTOP)
+
+    def driving(self, moving: bool) -> None:
+        """The robot is (or is not) being driven, as of the control tick that just ran."""
+        now = self.clock()
+        with self._lock:
+            if moving:
+                self._driving = True
+                if self.shares and not self._held:
+                    self._signal(signal.SIGSTOP)
+                return
+            if self._driving:
+                self._driving = False
+                self._still_since = now
+            if self._held and now - self._still_since >= RESUME_S:
+                self._signal(signal.SIGCONT)
+
+    def _signal(self, sig: signal.Signals) -> None:
+        if self._pid is None:
+            return
+        try:
+            os.kill(self._pid, sig)
+        except OSError:  # gone already: the wait for it sees that
+            self._pid = None
+            self._held = False
+            return
+        self._held = sig == signal.SIGSTOP
+        self.holds += self._held
+
+
+_PR_SET_PDEATHSIG = 1
+try:
+    _prctl = ctypes.CDLL(None, use_errno=True).prctl
+except (AttributeError, OSError):  # not Linux
+    _prctl = None
+
+
+def _child_setup() -> None:
+    """In the child, before it runs: a lower priority, and death with the console."""
     with contextlib.suppress(OSError):
         os.nice(NICE)
+    if _prctl is not None:
+        _prctl(_PR_SET_PDEATHSIG, signal.SIGKILL)
 
 
-async def sweep_curve(mission: str, speed: float, turn: float, cache: bool = True) -> LinkCurve:
+async def sweep_curve(
+    mission: str, speed: float, turn: float, cache: bool = True, pause: SweepPause | None = None
+) -> LinkCurve:
     """Every controller on ``mission`` at each of ``SWEEP_LATENCIES_MS``; CurveError says why not. From
     the cache when this setting was swept before (``cache``), else from the child, which is killed if
-    this is cancelled (the screen closed, the app quit)."""
+    this is cancelled (the screen closed, the app quit) and held by ``pause`` while the robot drives."""
     path = await asyncio.to_thread(cache_path, mission, speed, turn) if cache else None
     if path is not None:
         curve = await asyncio.to_thread(_cached, path, mission)
@@ -107,16 +192,21 @@ async def sweep_curve(mission: str, speed: float, turn: float, cache: bool = Tru
         stdout=asyncio.subprocess.PIPE,
         stderr=asyncio.subprocess.PIPE,
         stdin=asyncio.subprocess.DEVNULL,
-        preexec_fn=_lower_priority,
+        preexec_fn=_child_setup,
     )
+    if pause is not None:
+        pause.child(proc.pid)
     try:
-        out, err = await asyncio.wait_for(proc.communicate(), TIMEOUT_S)
+        out, err = await _answer(proc, pause)
     except (asyncio.CancelledError, TimeoutError):
         with contextlib.suppress(ProcessLookupError):
-            proc.kill()
+            proc.kill()  # a stopped process dies of SIGKILL too
         with contextlib.suppress(Exception):
             await asyncio.shield(proc.wait())
         raise
+    finally:
+        if pause is not None:
+            pause.child(None)
     if proc.returncode != 0:
         line = err.decode(errors="replace").strip().splitlines()
         raise CurveError(line[-1] if line else f"compare exited with {proc.returncode}")
@@ -128,3 +218,21 @@ async def sweep_curve(mission: str, speed: float, turn: float, cache: bool = Tru
     if path is not None:
         await asyncio.to_thread(_keep, path, out)
     return curve
+
+
+async def _answer(proc: asyncio.subprocess.Process, pause: SweepPause | None) -> tuple[bytes, bytes]:
+    """The child's output; TimeoutError after ``TIMEOUT_S`` of its running (not paused) time."""
+    answer = asyncio.ensure_future(proc.communicate())
+    ran, last = 0.0, time.monotonic()
+    try:
+        while True:
+            done, _ = await asyncio.wait({answer}, timeout=POLL_S)
+            if done:
+                return answer.result()
+            now = time.monotonic()
+            ran += 0.0 if pause is not None and pause.paused else now - last
+            last = now
+            if ran > TIMEOUT_S:
+                raise TimeoutError
+    finally:
+        answer.cancel()

@@ -117,6 +117,7 @@ class RobotSession:
         self.ticks = 0  # control ticks run (tests and the bench read it)
         self.late_ticks = 0  # ticks that ran more than one period late
         self.published = False  # the last control tick handed the link a command
+        self.driving = False  # a mission runs or a key drives, as of the last control tick
         self.tick_late_s = 0.0  # how late the newest command left, after its tick's due time
         self.collector = TickCollector()  # full garbage collections just after a tick (the thread's own)
         self._was_running = False
@@ -233,7 +234,8 @@ class RobotSession:
                 last_due = due[job]
                 if self.collector.due():
                     self._written_before_collecting(written)
-                self.collector.after_tick(driving=self.loop.running or self.teleop.moving)
+                self.driving = self.loop.running or self.teleop.moving
+                self.collector.after_tick(driving=self.driving)
                 self.on_tick()
                 if started - due[job] > periods[job]:
                     self.late_ticks += 1

@@ -137,7 +137,7 @@ class ArbiterApp(RegistryTheme):
         self.call_after_refresh(freeze_heap)  # what start made, once it is on screen
         if self.settings.live:
             # the robot's clock (control, sampling, simulation, on their own thread) says when to paint
-            self.frame_clock = lifecycle.frames_after_ticks(self, self.session, self.settings)
+            self.frame_clock = lifecycle.frames_after_ticks(self, self.sampler)
             self.session.start()
             if self._connector is not None:  # the link (and the backend) start after the first frame
                 connect = partial(lifecycle.connect, self._connector, self)
@@ -243,7 +243,7 @@ class ArbiterApp(RegistryTheme):
         """The analytics screen's error-vs-latency sweep for ``mission`` (cached on disk: link_sweep.py)."""
         teleop = self.session.teleop
         try:
-            curve = await sweep_curve(mission, teleop.speed, teleop.turn)
+            curve = await sweep_curve(mission, teleop.speed, teleop.turn, pause=self.sampler.sweep_pause)
         except (CurveError, OSError) as exc:
             self.sampler.sweep_changed(replace(self.frame.link_sweep, state=FAILED, error=str(exc)))
             self.post_message(LinkSweepFailed(str(exc)))

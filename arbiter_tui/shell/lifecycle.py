@@ -15,9 +15,8 @@ from textual.app import App
 
 from ..latency.tracker_client import TrackerClient
 from ..link.base import Link
-from ..session.frames import FrameClock
-from ..session.robot import DEFAULT_CONTROL_HZ, RobotSession
-from ..session.settings import Settings
+from ..session.frames import FrameClock, FrameSampler
+from ..session.robot import DEFAULT_CONTROL_HZ
 from .messages import BackendFailed, BackendStarted, FrameDue
 
 log = logging.getLogger(__name__)
@@ -41,13 +40,16 @@ def connect(connector: Connector, app: App[object]) -> None:
     app.post_message(BackendStarted(link, tracker, cleanup))
 
 
-def frames_after_ticks(app: App[object], session: RobotSession, settings: Settings) -> FrameClock:
+def frames_after_ticks(app: App[object], sampler: FrameSampler) -> FrameClock:
     """Frames at ``ui_rate``, each asked for just after a control tick (``FrameClock``), fewer while
     commands leave late (the session's ``tick_late_s``): the session's thread posts ``FrameDue``
-    (``post_message`` is thread-safe)."""
+    (``post_message`` is thread-safe). The analytics sweep's child is held while the robot drives
+    (the sampler's ``sweep_pause``: where the console has no core to spare)."""
+    session, settings, pause = sampler.session, sampler.settings, sampler.sweep_pause
     frames = FrameClock(1.0 / settings.ui_rate, 1.0 / (settings.repeat_rate or DEFAULT_CONTROL_HZ))
 
     def ticked() -> None:
+        pause.driving(session.driving)
         if frames.ticked(session.tick_late_s):
             app.post_message(FrameDue(frames))
 
