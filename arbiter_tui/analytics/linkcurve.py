@@ -95,10 +95,7 @@ class LinkSweepView:
         """In words; with ``width``, fitted to ``rows`` lines of that many cells (word-wrapped): the
         controllers that do not fit are left out whole, and an ellipsis says so."""
         if self.state == RUNNING and self.paused:
-            return (
-                f"latency sweep for {self.mission} paused while the robot drives (no core to spare: the "
-                "robot's commands come first); it goes on once the robot stops"
-            )
+            return "latency sweep paused while the robot drives: no core to spare (goes on once it stops)"
         if self.state == RUNNING:
             return f"sweeping latency {_range()} for {self.mission} in the background (arbiter-tui compare)…"
         if self.state == FAILED:

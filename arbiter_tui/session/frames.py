@@ -167,7 +167,7 @@ class FrameSampler:
         self._topics: TopicsState | None = None  # the last topics answer, for the next slow frame
         self._sweep_version = -1  # the store version the measured p95 is from
         # holds the sweep's child while the robot drives, where the console has no core to spare
-        self.sweep_pause = sweep_pause if sweep_pause is not None else SweepPause(cores_available())
+        self.sweep_pause = sweep_pause if sweep_pause is not None else SweepPause(cores_available)
 
     # -- what the pollers and workers bring -----------------------------------------------------------
     def topics_polled(self, state: TopicsState) -> None:

@@ -110,9 +110,9 @@ class SweepPause:
     child starts and ends. The signal goes out on a change only (and at once when a child starts while
     the robot drives). ``shares`` False (a core to spare): never held."""
 
-    def __init__(self, cores: float, clock: Callable[[], float] = time.monotonic) -> None:
-        self.cores = cores
-        self.shares = cores < SPARE_CORES
+    def __init__(self, cores: Callable[[], float], clock: Callable[[], float] = time.monotonic) -> None:
+        self.cores = cores  # asked when a child starts: a process may be moved into a cgroup
+        self.shares = False  # the console has no core to spare for the child now running
         self.clock = clock
         self.holds = 0  # times the child was stopped (tests and the bench read it)
         self._lock = threading.Lock()
@@ -130,6 +130,8 @@ class SweepPause:
         with self._lock:
             self._pid = pid
             self._held = False
+            if pid is not None:
+                self.shares = self.cores() < SPARE_CORES
             if pid is not None and self.shares and self._driving:
                 self._signal(signal.SIGSTOP)
 

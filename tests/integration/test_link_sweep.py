@@ -122,7 +122,7 @@ class StepClock:
 
 def test_no_core_to_spare_holds_the_child_while_the_robot_drives():
     clock = StepClock()
-    pause = link_sweep.SweepPause(0.25, clock)
+    pause = link_sweep.SweepPause(lambda: 0.25, clock)
     child = subprocess.Popen(cpu_bound_child(60, BODY), stdout=subprocess.DEVNULL)
     try:
         pause.child(child.pid)
@@ -149,12 +149,12 @@ def test_no_core_to_spare_holds_the_child_while_the_robot_drives():
 
 
 def test_a_core_to_spare_never_holds_the_child():
-    pause = link_sweep.SweepPause(4.0)  # a Raspberry Pi 4's four cores
+    pause = link_sweep.SweepPause(lambda: 4.0)  # a Raspberry Pi 4's four cores
     child = subprocess.Popen(["sleep", "30"])
     try:
         pause.child(child.pid)
         pause.driving(True)
-        assert not pause.paused and pause.holds == 0 and state(child.pid) == "S"
+        assert wait_for(lambda: state(child.pid) == "S") and not pause.paused and pause.holds == 0
     finally:
         child.kill()
         child.wait()
@@ -167,7 +167,7 @@ def test_a_held_sweep_ends_once_the_robot_stands_still_and_its_pause_is_not_a_ti
     monkeypatch.setattr(link_sweep, "TIMEOUT_S", 1.0)
     monkeypatch.setattr(link_sweep, "POLL_S", 0.05)
     clock = StepClock()
-    pause = link_sweep.SweepPause(0.25, clock)
+    pause = link_sweep.SweepPause(lambda: 0.25, clock)
     pause.driving(True)
     pids: list[int] = []
     real_child = pause.child
@@ -200,7 +200,7 @@ def test_a_running_child_that_outlives_its_limit_is_killed(monkeypatch):
     monkeypatch.setattr(link_sweep, "command", lambda m, s, t: cpu_bound_child(60, BODY))
     monkeypatch.setattr(link_sweep, "TIMEOUT_S", 0.5)
     monkeypatch.setattr(link_sweep, "POLL_S", 0.05)
-    pause = link_sweep.SweepPause(0.25)
+    pause = link_sweep.SweepPause(lambda: 0.25)
     pids: list[int] = []
     real_child = pause.child
     pause.child = lambda pid: (pids.append(pid), real_child(pid))
@@ -215,7 +215,7 @@ def test_the_child_dies_with_the_console():
         "import asyncio, os, sys\n"
         "from arbiter_tui.session import link_sweep\n"
         "link_sweep.command = lambda m, s, t: ['sleep', '60']\n"
-        "pause = link_sweep.SweepPause(0.25)\n"
+        "pause = link_sweep.SweepPause(lambda: 0.25)\n"
         "pause.driving(True)\n"
         "real = pause.child\n"
         "def child(pid):\n"

@@ -17,7 +17,7 @@ from ..support.tui import until
 async def test_a_mission_holds_the_sweep_and_the_screen_says_so(monkeypatch, tmp_path):
     monkeypatch.setattr(link_sweep, "command", lambda m, s, t: cpu_bound_child(0.3, BODY))
     pids: list[int] = []
-    pause = SweepPause(0.25)  # a Pi stand-in's quota, whatever this machine has
+    pause = SweepPause(lambda: 0.25)  # a Pi stand-in's quota, whatever this machine has
     real_child = pause.child
     pause.child = lambda pid: (pids.append(pid), real_child(pid))
     app = make_app(Settings(mode="sim", live=True, handle_signals=False, export_dir=tmp_path), SimLink())
