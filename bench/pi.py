@@ -215,6 +215,7 @@ def main() -> int:
         help="screens measured, in order (control is the dashboard at 160x45 and more)",
     )
     p.add_argument("--no-key-to-wire", action="store_true", help="skip the key-to-wire comparison")
+    p.add_argument("--records", type=Path, help="the tracker's records of each screen, as JSON lines")
     p.add_argument(
         "--cold-sweep",
         action="store_true",
@@ -292,6 +293,9 @@ def main() -> int:
             bcpu = cpu_seconds(bpids) - b0
             bn1, bth1 = backend_group.throttling()
             recs, since = records_since(api, since)
+            if a.records:
+                with a.records.open("a") as f:
+                    f.writelines(json.dumps({"size": a.size, "screen": name, **r}) + "\n" for r in recs)
             g = gaps_ms(recs)
             # on a terminal of 160x45 and more the control screen is the dashboard
             big = int(cols) >= 160 and int(rows) >= 45

@@ -61,7 +61,7 @@ class MissionFinished:
 
 
 SWITCH_INTERVAL_S = 0.001
-WRITE_WAIT_S = 0.02  # a collection waits at most this long for the tick's command to be written
+WRITE_WAIT_S = 0.02  # a tick waits at most this long for its command to be written (_written)
 DEFAULT_CONTROL_HZ = 10.0  # the control tick when no --repeat-rate ceiling is set
 NO_LINK_WORDS = "The link to the robot is down: nothing can be sent. Press g once it is back."
 
@@ -230,10 +230,9 @@ class RobotSession:
             written = self.link.telemetry.meter.sent
             job()
             if job == self.tick_control:
+                self._written(written)  # before the frame and the collection that follow take the GIL
                 self.tick_late_s = self._lateness(due[job], last_due)
                 last_due = due[job]
-                if self.collector.due():
-                    self._written_before_collecting(written)
                 self.driving = self.loop.running or self.teleop.moving
                 self.collector.after_tick(driving=self.driving)
                 self.on_tick()
@@ -241,13 +240,17 @@ class RobotSession:
                     self.late_ticks += 1
             due[job] = next_due(due[job], started, periods[job])
 
-    def _written_before_collecting(self, written: int) -> None:
-        """The command this tick published is on the socket before the collection takes the GIL.
+    def _written(self, written: int) -> None:
+        """The command this tick published is on the socket before anything else of this thread's
+        tick takes the GIL: the frame it asks for (``on_tick``) and a garbage collection.
 
-        ``RosLink`` stamps and writes each command on its reactor's thread; a collection that starts
-        first holds that thread between the stamp and the write (measured: one-way latency up to 19 ms
-        instead of under 2 ms at a Pi-class quota, collections every 0.2 s). A link that writes in the
-        call (the simulator) or meters nothing has ``sent`` 0 and is not waited for."""
+        ``RosLink`` stamps and writes each command on its reactor's thread. A collection that started
+        first held that thread between the stamp and the write (measured: one-way latency up to 19 ms
+        instead of under 2 ms at a Pi-class quota, collections every 0.2 s); a frame asked for first
+        woke the UI thread, which then took the GIL before the reactor's thread (and, under a quota,
+        the rest of the scheduling period): the command left late, or stalled between its stamp and
+        the socket (bench/pi.py, a packet capture on the loopback: 9-19 ms). A link that writes in
+        the call (the simulator) or meters nothing has ``sent`` 0 and is not waited for."""
         meter = self.link.telemetry.meter
         if self.published and meter.sent > 0:
             meter.wait_sent(written, WRITE_WAIT_S)
