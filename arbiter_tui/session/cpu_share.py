@@ -19,6 +19,7 @@ from collections.abc import Callable
 from pathlib import Path, PurePosixPath
 
 CGROUP_ROOT = Path("/sys/fs/cgroup")
+SPARE_CORES = 2.0  # a console with fewer has no core to spare: the UI and any child take the robot's
 PROC_CGROUP = Path("/proc/self/cgroup")
 
 

@@ -37,10 +37,10 @@ from collections.abc import Callable
 from pathlib import Path
 
 from ..analytics.linkcurve import SWEEP_LATENCIES_MS, CurveError, LinkCurve, curve_of
+from .cpu_share import SPARE_CORES
 
 NICE = 10
 TIMEOUT_S = 120.0  # of the child's running time (not the time it was paused)
-SPARE_CORES = 2.0  # a console with fewer has none to spare for a sweep while the robot drives
 RESUME_S = 1.0  # still this long, the robot lets a paused sweep go on
 POLL_S = 0.25  # how often the wait for the child looks at the clock
 _MAIN = "import sys; from arbiter_tui.cli import main; sys.exit(main(sys.argv[1:]))"

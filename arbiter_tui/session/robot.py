@@ -123,6 +123,10 @@ class RobotSession:
         self._was_running = False
         self._thread: threading.Thread | None = None
         self._stopping = threading.Event()
+        self.tick_due_s = float("inf")  # when the next control tick is due (monotonic; the loop's)
+        self.ticks_written = 0  # control ticks whose command is written (or that published none)
+        self._tick_written = threading.Condition(threading.Lock())
+        self.gave_way = 0  # times the UI waited for a tick (give_way: tests and the bench read it)
 
     # -- the link ---------------------------------------------------------------------------------
     def attach(self, link: Link) -> None:
@@ -220,6 +224,7 @@ class RobotSession:
         }
         now = time.monotonic()
         due = {job: now + period for job, period in periods.items()}
+        self.tick_due_s = due[self.tick_control]
         last_due: float | None = None
         while not self._stopping.is_set():
             job = min(due, key=due.__getitem__)
@@ -231,6 +236,10 @@ class RobotSession:
             job()
             if job == self.tick_control:
                 self._written(written)  # before the frame and the collection that follow take the GIL
+                with self._tick_written:  # a paint that gave way goes on (give_way)
+                    self.tick_due_s = next_due(due[job], started, periods[job])
+                    self.ticks_written += 1
+                    self._tick_written.notify_all()
                 self.tick_late_s = self._lateness(due[job], last_due)
                 last_due = due[job]
                 self.driving = self.loop.running or self.teleop.moving
@@ -254,6 +263,26 @@ class RobotSession:
         meter = self.link.telemetry.meter
         if self.published and meter.sent > 0:
             meter.wait_sent(written, WRITE_WAIT_S)
+
+    def give_way(self, guard_s: float) -> bool:
+        """On the UI's thread, between the widgets of a paint: when the next control tick is due within
+        ``guard_s``, wait until it has run and its command is written (at most ``guard_s`` more than
+        its due time). True when it waited.
+
+        A paint at 200x60 on a Pi-class quota takes 60-100 ms of wall time, most of a control period,
+        and one that was still running at a tick's time spent the quota of that scheduling period: the
+        tick waited for the next one, then for the GIL, 10-40 ms in all (bench/render_overlap.py). A
+        paint that stops short of the tick instead leaves the quota and the GIL to the session's and
+        the link's threads. The shell asks only where the console has no core to spare."""
+        now = time.monotonic()
+        due = self.tick_due_s
+        if not 0.0 < due - now <= guard_s or self._stopping.is_set():
+            return False
+        with self._tick_written:
+            seen = self.ticks_written
+            self._tick_written.wait_for(lambda: self.ticks_written != seen, due - now + guard_s)
+        self.gave_way += 1
+        return True
 
     def close(self) -> None:
         """Stop the robot (one zero) and the clocked work."""

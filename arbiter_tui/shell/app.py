@@ -37,7 +37,7 @@ from ..session.link_sweep import sweep_curve
 from ..session.pollers import poll_forever
 from ..session.robot import MissionFinished, RobotSession
 from ..session.settings import Settings
-from . import canvas_rows, lifecycle, palette, strips
+from . import canvas_rows, give_way, lifecycle, palette, strips
 from .heap import freeze_heap
 from .keys import KeyRouter, direct_keys
 from .messages import (
@@ -191,6 +191,7 @@ class ArbiterApp(RegistryTheme):
 
     async def on_unmount(self) -> None:
         self.session.close()  # one zero, and the clocked work ends
+        give_way.install(None)
         if self.tracker is not None:
             with contextlib.suppress(Exception):
                 await self.tracker.aclose()

@@ -34,6 +34,8 @@ from textual.geometry import Region
 from textual.strip import Strip
 from textual_hires_canvas.canvas import Canvas
 
+from . import give_way
+
 CHECKED = ("0.14.0",)
 SEP = "\x00"  # between styles: no style string holds it
 
@@ -43,7 +45,9 @@ _installed = False
 
 
 def _render_lines_once(self: Canvas, crop: Region) -> list[Strip]:
-    """One paint of the canvas: its base style looked up once for all its rows."""
+    """One paint of the canvas: its base style looked up once for all its rows (after giving way to
+    a control tick that is due: ``give_way.py``)."""
+    give_way.now()
     self.__dict__["_arbiter_base"] = self.rich_style
     try:
         return _render_lines(self, crop)

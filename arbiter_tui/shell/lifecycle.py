@@ -10,13 +10,16 @@ import os
 import signal
 import threading
 from collections.abc import Callable
+from functools import partial
 
 from textual.app import App
 
 from ..latency.tracker_client import TrackerClient
 from ..link.base import Link
+from ..session.cpu_share import SPARE_CORES, cores_available
 from ..session.frames import FrameClock, FrameSampler
 from ..session.robot import DEFAULT_CONTROL_HZ
+from . import give_way
 from .messages import BackendFailed, BackendStarted, FrameDue
 
 log = logging.getLogger(__name__)
@@ -46,6 +49,8 @@ def frames_after_ticks(app: App[object], sampler: FrameSampler) -> FrameClock:
     (``post_message`` is thread-safe). The analytics sweep's child is held while the robot drives
     (the sampler's ``sweep_pause``: where the console has no core to spare)."""
     session, settings, pause = sampler.session, sampler.settings, sampler.sweep_pause
+    if cores_available() < SPARE_CORES:  # paints give way to the ticks (give_way.py)
+        give_way.install(partial(session.give_way, give_way.GUARD_S))
     frames = FrameClock(1.0 / settings.ui_rate, 1.0 / (settings.repeat_rate or DEFAULT_CONTROL_HZ))
 
     def ticked() -> None:

@@ -23,6 +23,7 @@ from ..control.teleop import legend_compact
 from ..latency.clocksync import OffsetEstimate
 from ..session.frames import Frame
 from ..session.views import AnalyticsView, LatencySnapshot, RobotView, StatusView
+from . import give_way
 
 LINK_DOWN = (  # two lines of the 36 columns inside the panel: the rows below stay in view
     "LINK DOWN: nothing is sent.\nThe robot stops on its own timeout.\n"
@@ -111,6 +112,7 @@ class Bound(Widget, Generic[V]):
 
     def render(self) -> Text:
         self.renders += 1
+        give_way.now()
         return self.draw()
 
     def draw(self) -> Text:

@@ -162,3 +162,31 @@ def test_a_frame_and_a_collection_wait_until_the_ticks_command_is_on_the_socket(
         session.close()
         link.close()
         backend.stop()
+
+
+def test_a_paint_gives_way_to_a_tick_that_is_due_and_goes_on_once_it_ran(tmp_path):
+    """The UI's thread, between widgets of a paint, asks ``give_way``: with the next control tick due
+    within the guard it waits until that tick has run, and not otherwise (the session's own thread)."""
+    from arbiter_tui.link.sim import SimLink
+
+    session = RobotSession(Settings(export_dir=tmp_path), SimLink())
+    guard = 0.01
+    try:
+        session.start()
+        assert wait_for(lambda: session.ticks_written >= 2, timeout=10)
+        # far from the next tick: no wait
+        assert wait_for(lambda: session.tick_due_s - time.monotonic() > 3 * guard, timeout=5)
+        assert not session.give_way(guard) and session.gave_way == 0
+        waited = 0
+        for _ in range(30):  # close to it: the call returns once the tick has run
+            assert wait_for(lambda: 0 < session.tick_due_s - time.monotonic() <= guard / 2, 5, 0.0005)
+            due, seen = session.tick_due_s, session.ticks_written
+            if session.give_way(guard):  # (False: on a loaded machine the tick ran before the call)
+                waited += 1
+                assert session.ticks_written > seen and time.monotonic() >= due
+                if waited == 3:
+                    break
+        assert waited == 3 and session.gave_way == 3
+    finally:
+        session.close()
+    assert not session.give_way(guard)  # a closed session never holds the UI
