@@ -33,11 +33,15 @@ def cores_available(proc_cgroup: Path = PROC_CGROUP, root: Path = CGROUP_ROOT) -
 
 
 def cgroup_quota(proc_cgroup: Path = PROC_CGROUP, root: Path = CGROUP_ROOT) -> float:
-    """The smallest CPU quota on this process's cgroup path, in cores (``inf``: none found)."""
+    """The smallest CPU quota on this process's cgroup path, in cores (``inf``: none found, or a file
+    system that cannot be read)."""
     try:
-        lines = proc_cgroup.read_text().splitlines()
-    except OSError:
+        return _quota(proc_cgroup.read_text().splitlines(), root)
+    except OSError:  # e.g. a cgroup mount that refuses to be looked at (EACCES)
         return math.inf
+
+
+def _quota(lines: list[str], root: Path) -> float:
     quota = math.inf
     for line in lines:
         parts = line.split(":", 2)

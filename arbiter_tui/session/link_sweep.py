@@ -120,19 +120,31 @@ class SweepPause:
         self._held = False
         self._driving = False
         self._still_since = float("-inf")
+        self._pidfd: int | None = None  # the child's, so a reused pid is never signalled
+        self._held_s = 0.0  # the time the children were held (monotonic seconds)
+        self._held_since: float | None = None
 
     @property
     def paused(self) -> bool:
         return self._held
 
-    def child(self, pid: int | None) -> None:
-        """The child now running (None: it ended, or was killed)."""
+    def held_s(self) -> float:
+        """How long the children were held so far (the child's time limit leaves it out)."""
         with self._lock:
+            since = self._held_since
+            return self._held_s + (time.monotonic() - since if since is not None else 0.0)
+
+    def child(self, pid: int | None) -> None:
+        """The child now running, just started (None: it ended, or was killed)."""
+        with self._lock:
+            self._release()
             self._pid = pid
-            self._held = False
-            if pid is not None:
-                self.shares = self.cores() < SPARE_CORES
-            if pid is not None and self.shares and self._driving:
+            if pid is None:
+                return
+            with contextlib.suppress(AttributeError, OSError):  # Linux 5.3+; else the pid itself
+                self._pidfd = os.pidfd_open(pid)
+            self.shares = self.cores() < SPARE_CORES
+            if self.shares and self._driving:
                 self._signal(signal.SIGSTOP)
 
     def driving(self, moving: bool) -> None:
@@ -154,13 +166,32 @@ class SweepPause:
         if self._pid is None:
             return
         try:
-            os.kill(self._pid, sig)
+            if self._pidfd is not None:
+                signal.pidfd_send_signal(self._pidfd, sig)
+            else:
+                os.kill(self._pid, sig)
         except OSError:  # gone already: the wait for it sees that
+            self._release()
             self._pid = None
-            self._held = False
             return
-        self._held = sig == signal.SIGSTOP
-        self.holds += self._held
+        if sig == signal.SIGSTOP:
+            self._held, self._held_since = True, time.monotonic()
+            self.holds += 1
+        else:
+            self._count_held()
+
+    def _count_held(self) -> None:
+        if self._held_since is not None:
+            self._held_s += time.monotonic() - self._held_since
+        self._held, self._held_since = False, None
+
+    def _release(self) -> None:
+        """The current child is no longer ours to signal."""
+        self._count_held()
+        if self._pidfd is not None:
+            with contextlib.suppress(OSError):
+                os.close(self._pidfd)
+            self._pidfd = None
 
 
 _PR_SET_PDEATHSIG = 1
@@ -170,12 +201,15 @@ except (AttributeError, OSError):  # not Linux
     _prctl = None
 
 
-def _child_setup() -> None:
-    """In the child, before it runs: a lower priority, and death with the console."""
+def _child_setup(console: int) -> None:
+    """In the child, before it runs: a lower priority, and death with the ``console`` (its pid; one
+    that died between the fork and the ``prctl`` is seen at once)."""
     with contextlib.suppress(OSError):
         os.nice(NICE)
     if _prctl is not None:
         _prctl(_PR_SET_PDEATHSIG, signal.SIGKILL)
+        if os.getppid() != console:
+            os._exit(1)
 
 
 async def sweep_curve(
@@ -194,11 +228,11 @@ async def sweep_curve(
         stdout=asyncio.subprocess.PIPE,
         stderr=asyncio.subprocess.PIPE,
         stdin=asyncio.subprocess.DEVNULL,
-        preexec_fn=_child_setup,
+        preexec_fn=functools.partial(_child_setup, os.getpid()),
     )
-    if pause is not None:
-        pause.child(proc.pid)
     try:
+        if pause is not None:
+            pause.child(proc.pid)
         out, err = await _answer(proc, pause)
     except (asyncio.CancelledError, TimeoutError):
         with contextlib.suppress(ProcessLookupError):
@@ -225,15 +259,14 @@ async def sweep_curve(
 async def _answer(proc: asyncio.subprocess.Process, pause: SweepPause | None) -> tuple[bytes, bytes]:
     """The child's output; TimeoutError after ``TIMEOUT_S`` of its running (not paused) time."""
     answer = asyncio.ensure_future(proc.communicate())
-    ran, last = 0.0, time.monotonic()
+    started = time.monotonic()
+    held = pause.held_s() if pause is not None else 0.0
     try:
         while True:
             done, _ = await asyncio.wait({answer}, timeout=POLL_S)
             if done:
                 return answer.result()
-            now = time.monotonic()
-            ran += 0.0 if pause is not None and pause.paused else now - last
-            last = now
+            ran = time.monotonic() - started - ((pause.held_s() - held) if pause is not None else 0.0)
             if ran > TIMEOUT_S:
                 raise TimeoutError
     finally:

@@ -124,7 +124,7 @@ class RobotSession:
         self._thread: threading.Thread | None = None
         self._stopping = threading.Event()
         self.tick_due_s = float("inf")  # when the next control tick is due (monotonic; the loop's)
-        self.ticks_written = 0  # control ticks whose command is written (or that published none)
+        self.ticks_written = 0  # control ticks done with their command (written, none, or waited 20 ms for)
         self._tick_written = threading.Condition(threading.Lock())
         self.gave_way = 0  # times the UI waited for a tick (give_way: tests and the bench read it)
 
@@ -160,7 +160,11 @@ class RobotSession:
             self.published = False
             try:
                 self.link.telemetry.meter.expire(time.monotonic())  # unreported commands become "lost"
-                self.published = self.loop.tick_control(self.clock()) is not None
+                refused = self.loop.unsent
+                # handed to the link, and taken (a link that is down refuses: nothing to wait for)
+                self.published = (
+                    self.loop.tick_control(self.clock()) is not None and self.loop.unsent == refused
+                )
             except Exception:  # a failing link must not take the session (and its stop keys) down
                 log.exception("control tick failed")
             self.ticks += 1
@@ -267,22 +271,21 @@ class RobotSession:
     def give_way(self, guard_s: float) -> bool:
         """On the UI's thread, between the widgets of a paint: when the next control tick is due within
         ``guard_s``, wait until it has run and its command is written (at most ``guard_s`` more than
-        its due time). True when it waited.
+        its due time). True when it saw the tick run; False when it did not wait, or gave up.
 
         A paint at 200x60 on a Pi-class quota takes 60-100 ms of wall time, most of a control period,
         and one that was still running at a tick's time spent the quota of that scheduling period: the
         tick waited for the next one, then for the GIL, 10-40 ms in all (bench/render_overlap.py). A
         paint that stops short of the tick instead leaves the quota and the GIL to the session's and
         the link's threads. The shell asks only where the console has no core to spare."""
-        now = time.monotonic()
-        due = self.tick_due_s
-        if not 0.0 < due - now <= guard_s or self._stopping.is_set():
-            return False
-        with self._tick_written:
-            seen = self.ticks_written
-            self._tick_written.wait_for(lambda: self.ticks_written != seen, due - now + guard_s)
+        with self._tick_written:  # the due time and the count read together: no wake-up is missed
+            now = time.monotonic()
+            due, seen = self.tick_due_s, self.ticks_written
+            if not 0.0 < due - now <= guard_s or self._stopping.is_set():
+                return False
+            ran = self._tick_written.wait_for(lambda: self.ticks_written != seen, due - now + guard_s)
         self.gave_way += 1
-        return True
+        return ran
 
     def close(self) -> None:
         """Stop the robot (one zero) and the clocked work."""

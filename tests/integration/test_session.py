@@ -170,23 +170,28 @@ def test_a_paint_gives_way_to_a_tick_that_is_due_and_goes_on_once_it_ran(tmp_pat
     from arbiter_tui.link.sim import SimLink
 
     session = RobotSession(Settings(export_dir=tmp_path), SimLink())
-    guard = 0.01
+    guard = 0.02
     try:
         session.start()
         assert wait_for(lambda: session.ticks_written >= 2, timeout=10)
-        # far from the next tick: no wait
-        assert wait_for(lambda: session.tick_due_s - time.monotonic() > 3 * guard, timeout=5)
-        assert not session.give_way(guard) and session.gave_way == 0
-        waited = 0
+        far = 0
+        for _ in range(30):  # far from the next tick: no wait (a stall between two lines may bring it near)
+            assert wait_for(lambda: session.tick_due_s - time.monotonic() > 3 * guard, timeout=5)
+            calls = session.gave_way
+            far += not session.give_way(guard) and session.gave_way == calls
+            if far == 3:
+                break
+        assert far == 3
+        saw, calls = 0, session.gave_way
         for _ in range(30):  # close to it: the call returns once the tick has run
             assert wait_for(lambda: 0 < session.tick_due_s - time.monotonic() <= guard / 2, 5, 0.0005)
             due, seen = session.tick_due_s, session.ticks_written
-            if session.give_way(guard):  # (False: on a loaded machine the tick ran before the call)
-                waited += 1
+            if session.give_way(guard):  # False: the tick ran before the call, or ran too late
+                saw += 1
                 assert session.ticks_written > seen and time.monotonic() >= due
-                if waited == 3:
+                if saw == 3:
                     break
-        assert waited == 3 and session.gave_way == 3
+        assert saw == 3 and session.gave_way >= calls + 3
     finally:
         session.close()
     assert not session.give_way(guard)  # a closed session never holds the UI

@@ -14,6 +14,9 @@ from ..support.tui import until
 @pytest.mark.parametrize("cores", [0.25, 4.0])
 async def test_paints_wait_for_a_due_tick_only_without_a_core_to_spare(monkeypatch, tmp_path, cores):
     monkeypatch.setattr(lifecycle, "cores_available", lambda: cores)
+    # a guard of most of a period: frames start just after a tick, and a fast machine paints them
+    # long before the next one (the 10 ms guard is for a paint that runs late, on a slow one)
+    monkeypatch.setattr(give_way, "GUARD_S", 0.09)
     app = make_app(Settings(mode="sim", live=True, handle_signals=False, export_dir=tmp_path), SimLink())
     async with app.run_test(size=(200, 60)) as pilot:  # the dashboard: many widgets a paint
         await pilot.press("a", "g")  # a mission: the map and the panel repaint at every frame
