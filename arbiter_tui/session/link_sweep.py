@@ -138,9 +138,9 @@ class SweepPause:
         """The child now running, just started (None: it ended, or was killed)."""
         with self._lock:
             self._release()
-            self._pid = pid
             if pid is None:
                 return
+            self._pid = pid
             with contextlib.suppress(AttributeError, OSError):  # Linux 5.3+; else the pid itself
                 self._pidfd = os.pidfd_open(pid)
             self.shares = self.cores() < SPARE_CORES
@@ -172,7 +172,6 @@ class SweepPause:
                 os.kill(self._pid, sig)
         except OSError:  # gone already: the wait for it sees that
             self._release()
-            self._pid = None
             return
         if sig == signal.SIGSTOP:
             self._held, self._held_since = True, time.monotonic()
@@ -187,6 +186,7 @@ class SweepPause:
 
     def _release(self) -> None:
         """The current child is no longer ours to signal."""
+        self._pid = None
         self._count_held()
         if self._pidfd is not None:
             with contextlib.suppress(OSError):

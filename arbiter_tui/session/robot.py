@@ -238,10 +238,11 @@ class RobotSession:
             started = time.monotonic()
             written = self.link.telemetry.meter.sent
             job()
+            upcoming = next_due(due[job], started, periods[job])
             if job == self.tick_control:
                 self._written(written)  # before the frame and the collection that follow take the GIL
                 with self._tick_written:  # a paint that gave way goes on (give_way)
-                    self.tick_due_s = next_due(due[job], started, periods[job])
+                    self.tick_due_s = upcoming
                     self.ticks_written += 1
                     self._tick_written.notify_all()
                 self.tick_late_s = self._lateness(due[job], last_due)
@@ -251,7 +252,7 @@ class RobotSession:
                 self.on_tick()
                 if started - due[job] > periods[job]:
                     self.late_ticks += 1
-            due[job] = next_due(due[job], started, periods[job])
+            due[job] = upcoming
 
     def _written(self, written: int) -> None:
         """The command this tick published is on the socket before anything else of this thread's

@@ -7,13 +7,16 @@ import os
 import signal
 import subprocess
 import sys
-import time
+from functools import partial
 
 import pytest
 
 from arbiter_tui.analytics.linkcurve import SWEEP_LATENCIES_MS, CurveError
 from arbiter_tui.session import link_sweep
 from arbiter_tui.session.compare import AUTONOMOUS
+
+from ..support.tui import FakeClock
+from ..support.waits import wait_for as poll_until
 
 
 def test_the_child_process_answers_a_curve_per_controller():
@@ -105,25 +108,11 @@ def state(pid: int) -> str:
         return ""
 
 
-def wait_for(predicate, timeout: float = 10.0) -> bool:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if predicate():
-            return True
-        time.sleep(0.01)
-    return predicate()
-
-
-class StepClock:
-    def __init__(self) -> None:
-        self.t = 0.0
-
-    def __call__(self) -> float:
-        return self.t
+wait_for = partial(poll_until, timeout=10.0, interval=0.01)
 
 
 def test_no_core_to_spare_holds_the_child_while_the_robot_drives():
-    clock = StepClock()
+    clock = FakeClock(0.0)
     pause = link_sweep.SweepPause(lambda: 0.25, clock)
     child = subprocess.Popen(cpu_bound_child(60, BODY), stdout=subprocess.DEVNULL)
     try:
@@ -168,7 +157,7 @@ def test_a_held_sweep_ends_once_the_robot_stands_still_and_its_pause_is_not_a_ti
     monkeypatch.setattr(link_sweep, "command", lambda m, s, t: cpu_bound_child(0.3, BODY))
     monkeypatch.setattr(link_sweep, "TIMEOUT_S", 2.5)  # the child's start and 0.3 s of CPU, on a loaded CI
     monkeypatch.setattr(link_sweep, "POLL_S", 0.05)
-    clock = StepClock()
+    clock = FakeClock(0.0)
     pause = link_sweep.SweepPause(lambda: 0.25, clock)
     pause.driving(True)
     pids: list[int] = []
@@ -186,7 +175,8 @@ def test_a_held_sweep_ends_once_the_robot_stands_still_and_its_pause_is_not_a_ti
         while not pids:
             await asyncio.sleep(0.01)
         assert pause.paused and wait_for(lambda: state(pids[0]) == "T")  # held from its first instruction
-        await asyncio.sleep(3.0)  # held past the time limit
+        while pause.held_s() <= link_sweep.TIMEOUT_S + 0.5:  # held past the time limit
+            await asyncio.sleep(0.05)
         assert not task.done() and state(pids[0]) == "T"
         pause.driving(False)
         clock.t += link_sweep.RESUME_S
