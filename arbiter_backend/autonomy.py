@@ -22,25 +22,33 @@ from __future__ import annotations
 
 import math
 import threading
+import time
 from dataclasses import dataclass, replace
 from typing import Any
 
-from arbiter_core.controllers import CONTROLLERS, MISSIONS, MissionProgress, make_controller
+from arbiter_core.controllers import CONTROLLERS, MISSIONS, make_controller
 from arbiter_core.kinematics import (
     DEFAULT_LIMITS,
     Limits,
     Pose,
     clamp_twist,
     distance_error,
+    odometry_jumped,
     pose_of_odometry,
     yaw_to_quaternion,
 )
+from arbiter_core.mission import Mission, Phase
 
 CONTROL_PERIOD = 5  # odometry messages per command (the simulator's 50 Hz -> 10 Hz)
-IDLE, RUNNING, COMPLETED, ABORTED = "idle", "running", "completed", "aborted"
+IDLE = "idle"  # before the first run; then the run's phase (arbiter_core.mission.Phase)
+RUNNING, COMPLETED, ABORTED = Phase.RUNNING.value, Phase.COMPLETED.value, Phase.ABORTED.value
 TYPE_PATH = "nav_msgs/msg/Path"
 TYPE_POSE_STAMPED = "geometry_msgs/msg/PoseStamped"
 PLAN, GOAL = "plan", "goal_pose"
+
+
+def _wall_ms() -> float:
+    return time.time_ns() / 1e6
 
 
 class AutonomyError(ValueError):
@@ -58,7 +66,7 @@ class Request:
     def from_json(cls, raw: Any) -> Request:
         """ValueError naming the field that is wrong."""
         if not isinstance(raw, dict):
-            raise AutonomyError("the body must be a JSON object: {\"algorithm\": ..., \"mission\": ...}")
+            raise AutonomyError('the body must be a JSON object: {"algorithm": ..., "mission": ...}')
         algorithm, mission = raw.get("algorithm"), raw.get("mission", "square")
         if algorithm not in CONTROLLERS:
             raise AutonomyError(f"algorithm must be one of {', '.join(CONTROLLERS)}")
@@ -88,8 +96,7 @@ class Autonomy:
     def __init__(self, frame_id: str = "odom") -> None:
         self.frame_id = frame_id
         self.request: Request | None = None
-        self.outcome = IDLE
-        self.mission: MissionProgress | None = None
+        self.mission: Mission | None = None  # the run in progress, or the last one
         self._controller: Any = None
         self._limits: Limits = DEFAULT_LIMITS
         self._count = 0
@@ -97,15 +104,19 @@ class Autonomy:
         self.final_error_m: float | None = None
 
     @property
-    def running(self) -> bool:
-        return self.outcome == RUNNING
+    def outcome(self) -> str:
+        return IDLE if self.mission is None else self.mission.phase.value
 
-    def start(self, request: Request, pose: Pose, stamp: dict[str, int]) -> list[tuple[str, dict[str, Any]]]:
+    @property
+    def running(self) -> bool:
+        return self.mission is not None and self.mission.running
+
+    def start(
+        self, request: Request, pose: Pose, stamp: dict[str, int], now_ms: float = 0.0
+    ) -> list[tuple[str, dict[str, Any]]]:
         """Start ``request`` from ``pose``; returns the messages to publish first (plan, goal)."""
-        mission = MissionProgress.named(request.mission)
-        mission.waypoints = [(pose.x + x, pose.y + y) for x, y in mission.waypoints]
-        mission.start = (pose.x, pose.y)
-        self.request, self.mission, self.outcome = request, mission, RUNNING
+        mission = Mission.named(request.mission, request.algorithm, pose, now_ms)
+        self.request, self.mission = request, mission
         self._limits = replace(DEFAULT_LIMITS, max_linear=request.speed, max_angular=request.turn)
         self._controller = make_controller(request.algorithm, self._limits)
         self._count, self.commands, self.final_error_m = 0, 0, None
@@ -119,28 +130,28 @@ class Autonomy:
         goal = poses[-1]
         return [(PLAN, plan), (GOAL, goal)]
 
-    def on_odometry(self, pose: Pose) -> tuple[float, float] | None:
+    def on_odometry(self, pose: Pose, now_ms: float = 0.0) -> tuple[float, float] | None:
         """Every odometry message; the command to send, on every ``CONTROL_PERIOD``-th while running."""
-        if not self.running:
+        mission = self.mission
+        if mission is None or not mission.running:
             return None
-        assert self.mission is not None
         self._count += 1
         if (self._count - 1) % CONTROL_PERIOD:
             return None
-        self.mission.update(pose)
-        if self.mission.done:
-            self.outcome = COMPLETED
-            self.final_error_m = distance_error(pose, self.mission.waypoints[-1])
+        mission = self.mission = mission.advanced(pose)
+        if mission.done:
+            self.mission = mission.ended(Phase.COMPLETED, now_ms)
+            self.final_error_m = distance_error(pose, mission.waypoints[-1])
             return (0.0, 0.0)
-        v, w = clamp_twist(*self._controller.command(pose, self.mission), self._limits)
+        v, w = clamp_twist(*self._controller.command(pose, mission), self._limits)
         self.commands += 1
         return v, w
 
-    def stop(self) -> tuple[float, float] | None:
+    def stop(self, now_ms: float = 0.0) -> tuple[float, float] | None:
         """Abort a run in progress: the zero command to send (None when nothing runs)."""
-        if not self.running:
+        if self.mission is None or not self.mission.running:
             return None
-        self.outcome = ABORTED
+        self.mission = self.mission.ended(Phase.ABORTED, now_ms)
         return (0.0, 0.0)
 
     def status(self) -> dict[str, Any]:
@@ -152,8 +163,8 @@ class Autonomy:
             "mission": None if r is None else r.mission,
             "speed": None if r is None else r.speed,
             "turn": None if r is None else r.turn,
-            "waypoint": None if m is None else min(m.index, len(m.waypoints)),
-            "waypoints": None if m is None else len(m.waypoints),
+            "waypoint": None if m is None else m.reached,
+            "waypoints": None if m is None else m.total,
             "commands": self.commands,
             "final_error_m": None if self.final_error_m is None else round(self.final_error_m, 4),
         }
@@ -173,6 +184,7 @@ class AutonomyService:
         self.autonomy = Autonomy(frame_id)
         self._publish, self._send, self._stamp = publish, send, stamp
         self.pose: Pose | None = None
+        self._pose_at: float | None = None  # monotonic s of the last pose
         # ROS mode: odometry on the executor's thread, requests on the API's loop
         self._lock = threading.Lock()
 
@@ -185,10 +197,18 @@ class AutonomyService:
         self.on_pose(pose)
 
     def on_pose(self, pose: Pose) -> None:
-        """The robot's pose from its odometry; the command, when one is due, is sent from here."""
+        """The robot's pose from its odometry; the command, when one is due, is sent from here. A pose
+        that jumped further than the robot can drive (its odometry reset or restarted) ends a run in
+        progress as aborted, with a zero: its waypoints are in a frame that no longer exists."""
+        now = time.monotonic()
         with self._lock:
-            self.pose = pose
-            cmd = self.autonomy.on_odometry(pose)
+            before, at = self.pose, self._pose_at
+            self.pose, self._pose_at = pose, now
+            if before is not None and at is not None and odometry_jumped(before, pose, now - at):
+                if (zero := self.autonomy.stop(_wall_ms())) is not None:
+                    self._send(*zero)
+                return
+            cmd = self.autonomy.on_odometry(pose, _wall_ms())
             if cmd is not None:
                 self._send(*cmd)
 
@@ -198,17 +218,19 @@ class AutonomyService:
         with self._lock:
             if self.pose is None:
                 raise RuntimeError("no odometry yet: the robot's pose is unknown")
-            if (zero := self.autonomy.stop()) is not None:
+            if (zero := self.autonomy.stop(_wall_ms())) is not None:
                 self._send(*zero)  # the run in progress ends first
-            for key, msg in self.autonomy.start(request, self.pose, self._stamp()):
+            for key, msg in self.autonomy.start(request, self.pose, self._stamp(), _wall_ms()):
                 self._publish(key, msg)
             return self.autonomy.status()
 
     def stop(self) -> dict[str, Any]:
+        """Abort the run in progress (one zero); ``stopped`` in the answer says whether one was."""
         with self._lock:
-            if (zero := self.autonomy.stop()) is not None:
+            zero = self.autonomy.stop(_wall_ms())
+            if zero is not None:
                 self._send(*zero)
-            return self.autonomy.status()
+            return {**self.autonomy.status(), "stopped": zero is not None}
 
     def status(self) -> dict[str, Any]:
         with self._lock:

@@ -10,7 +10,9 @@ so that both run the same control law.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Protocol
 
 from .kinematics import (
     DEFAULT_LIMITS,
@@ -72,46 +74,21 @@ def choose_controller_hint() -> str:
     return f"Select a controller with [b]a[/b] first ({', '.join(CONTROLLERS)})"
 
 
-@dataclass
-class MissionProgress:
-    """Which waypoint is the current goal; advances when the robot is within ``tolerance``."""
-
-    waypoints: list[Point]
-    tolerance: float = 0.15
-    index: int = 0
-    start: Point = (0.0, 0.0)
-    laps: int = 0
-    loop: bool = False
-
-    @classmethod
-    def named(cls, name: str, tolerance: float = 0.15, loop: bool = False) -> MissionProgress:
-        if name not in MISSIONS:
-            raise ValueError(f"unknown mission {name!r}; choose from {', '.join(MISSIONS)}")
-        return cls(list(MISSIONS[name]), tolerance=tolerance, loop=loop)
+class Route(Protocol):
+    """What a controller reads of the mission it drives (``arbiter_core.mission.Mission``): the waypoints,
+    the one driven to, and the leg from the previous one."""
 
     @property
-    def done(self) -> bool:
-        return self.index >= len(self.waypoints)
+    def waypoints(self) -> Sequence[Point]: ...
 
     @property
-    def goal(self) -> Point:
-        """The current goal (the last waypoint once the mission is done)."""
-        return self.waypoints[min(self.index, len(self.waypoints) - 1)]
+    def done(self) -> bool: ...
 
     @property
-    def previous(self) -> Point:
-        return self.start if self.index == 0 else self.waypoints[min(self.index, len(self.waypoints)) - 1]
+    def goal(self) -> Point: ...
 
-    def update(self, pose: Pose) -> Point:
-        """Advance past every waypoint already within tolerance; return the current goal."""
-        while not self.done and distance_error(pose, self.goal) <= self.tolerance:
-            self.index += 1
-            if self.done and self.loop:
-                self.laps += 1
-                self.start = self.waypoints[-1]
-                self.index = 0
-                break
-        return self.goal
+    @property
+    def previous(self) -> Point: ...
 
 
 @dataclass
@@ -122,7 +99,7 @@ class ManualController:
     w: float = 0.0
     name: str = MANUAL
 
-    def command(self, pose: Pose, mission: MissionProgress) -> tuple[float, float]:
+    def command(self, pose: Pose, mission: Route) -> tuple[float, float]:
         return self.v, self.w
 
 
@@ -135,7 +112,7 @@ class GoToGoalController:
     limits: Limits = field(default_factory=lambda: DEFAULT_LIMITS)
     name: str = "go_to_goal"
 
-    def command(self, pose: Pose, mission: MissionProgress) -> tuple[float, float]:
+    def command(self, pose: Pose, mission: Route) -> tuple[float, float]:
         if mission.done:
             return 0.0, 0.0
         goal = mission.goal
@@ -163,18 +140,18 @@ class PurePursuitController:
         """The lookahead distance for this step (fixed here; the regulated variant grows it with speed)."""
         return self.lookahead
 
-    def target(self, pose: Pose, mission: MissionProgress) -> Point:
+    def target(self, pose: Pose, mission: Route) -> Point:
         a, (bx, by), ux, uy, seg = _segment(mission)
         if seg == 0.0:
             return (bx, by)
         s_target = min(seg, _along(pose, a, ux, uy, seg) + self.lookahead_now())
         return (a[0] + ux * s_target, a[1] + uy * s_target)
 
-    def speed(self, pose: Pose, mission: MissionProgress, curvature: float) -> float:
+    def speed(self, pose: Pose, mission: Route, curvature: float) -> float:
         """The cruise speed, slowed approaching the goal (the regulated variant regulates it more)."""
         return _approach_speed(pose, mission.goal, self.limits)
 
-    def command(self, pose: Pose, mission: MissionProgress) -> tuple[float, float]:
+    def command(self, pose: Pose, mission: Route) -> tuple[float, float]:
         if mission.done:
             return 0.0, 0.0
         tx, ty = self.target(pose, mission)
@@ -190,7 +167,7 @@ class PurePursuitController:
         return _capped(v, v * curvature, self.limits)
 
 
-def _segment(mission: MissionProgress) -> tuple[Point, Point, float, float, float]:
+def _segment(mission: Route) -> tuple[Point, Point, float, float, float]:
     """The leg being driven: from the previous waypoint a to the goal b, its unit direction and length."""
     (ax, ay), (bx, by) = mission.previous, mission.goal
     seg = math.hypot(bx - ax, by - ay)
@@ -233,7 +210,7 @@ class StanleyController:
     limits: Limits = field(default_factory=lambda: DEFAULT_LIMITS)
     name: str = "stanley"
 
-    def command(self, pose: Pose, mission: MissionProgress) -> tuple[float, float]:
+    def command(self, pose: Pose, mission: Route) -> tuple[float, float]:
         if mission.done:
             return 0.0, 0.0
         (ax, ay), goal, ux, uy, seg = _segment(mission)
@@ -272,7 +249,7 @@ class RegulatedPurePursuitController(PurePursuitController):
         v_max = self.limits.max_linear
         return min(self.max_lookahead, max(self.min_lookahead, self.lookahead_time * v_max))
 
-    def speed(self, pose: Pose, mission: MissionProgress, curvature: float) -> float:
+    def speed(self, pose: Pose, mission: Route, curvature: float) -> float:
         v = self.limits.max_linear
         radius = 1.0 / abs(curvature) if curvature else math.inf
         if radius < self.min_radius:  # curvature regulation
@@ -300,7 +277,7 @@ class KanayamaController:
     limits: Limits = field(default_factory=lambda: DEFAULT_LIMITS)
     name: str = "kanayama"
 
-    def command(self, pose: Pose, mission: MissionProgress) -> tuple[float, float]:
+    def command(self, pose: Pose, mission: Route) -> tuple[float, float]:
         if mission.done:
             return 0.0, 0.0
         (ax, ay), (bx, by), ux, uy, seg = _segment(mission)

@@ -99,6 +99,19 @@ def step(
     return RobotState(Pose(x, y, wrap_angle(theta)), v, w)
 
 
+JUMP_SLACK_M = 0.25  # odometry jitter and a late message: a step up to this much more is no jump
+
+
+def odometry_jumped(
+    before: Pose, after: Pose, dt_s: float, max_speed: float = DEFAULT_LIMITS.max_linear
+) -> bool:
+    """A step between two odometry poses ``dt_s`` apart that the robot cannot have driven: farther than
+    twice its top speed for that time, plus ``JUMP_SLACK_M``. What a restarted odometry (a backend or a
+    driver restarted: back to the origin) or a reset looks like from outside."""
+    step = math.hypot(after.x - before.x, after.y - before.y)
+    return step > 2.0 * max_speed * max(dt_s, 0.0) + JUMP_SLACK_M
+
+
 def distance_error(pose: Pose, goal: tuple[float, float]) -> float:
     """Euclidean distance from the robot to the goal (m)."""
     return math.hypot(goal[0] - pose.x, goal[1] - pose.y)

@@ -114,13 +114,20 @@ def _kth_smallest(a: FloatArray, k: int) -> float:
     return float(np.partition(a, k)[k])
 
 
-def path_length(xs: ArrayLike, ys: ArrayLike) -> float:
-    """Sum of Euclidean distances between consecutive (x, y) samples."""
+def path_length(xs: ArrayLike, ys: ArrayLike, gaps: ArrayLike | None = None) -> float:
+    """Sum of Euclidean distances between consecutive (x, y) samples. ``gaps`` (booleans, one per
+    sample): a sample that follows a gap in the recording (the link was down, the odometry stale or
+    reset); the step into it is not counted, since nobody saw the way the robot took."""
     x = _arr(xs)
     y = _arr(ys)
     if x.size < 2:
         return 0.0
-    return float(step_lengths(x, y).sum())
+    steps = step_lengths(x, y)
+    if gaps is not None:
+        into_gap = np.asarray(gaps, dtype=bool)[1:]
+        if into_gap.any():
+            return float(steps[~into_gap].sum())
+    return float(steps.sum())
 
 
 def step_lengths(xs: ArrayLike, ys: ArrayLike) -> FloatArray:

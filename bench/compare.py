@@ -19,9 +19,10 @@ import time
 
 from _common import emit
 
-from arbiter_core.controllers import MissionProgress, make_controller
+from arbiter_core.controllers import make_controller
 from arbiter_core.kinematics import Pose
 from arbiter_core.linkmodel import LinkModel
+from arbiter_core.mission import Mission
 from arbiter_tui.commands.compare import Sweep, run_sweep
 from arbiter_tui.session.compare import AUTONOMOUS, MISSION_NAMES
 
@@ -36,7 +37,7 @@ def sweep(trials: int) -> int:
 
 def step_cost_us(name: str, calls: int = 20_000) -> float:
     controller = make_controller(name)
-    mission = MissionProgress.named("square")
+    mission = Mission.named("square", name)
     pose = Pose(0.8, 0.12, 0.1)
     timings = []
     for _ in range(7):

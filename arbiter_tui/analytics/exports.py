@@ -1,7 +1,8 @@
 """Serialise and parse analytics exports (pure: text/bytes in and out, no files).
 
 * CSV: the seed's ten columns in its order, numbers as JavaScript prints them, then ours: ``runId``
-  (empty outside a run). The seed's own CSV (ten columns) reads back too.
+  (empty outside a run) and ``gap`` (``1`` where the sample follows a gap in the recording, else
+  empty). The seed's own CSV (ten columns) and ours before ``gap`` (eleven) read back too.
 * JSON: ``{"dataPoints": [...], "stats": {...}, "runs": [...]}`` with the seed's camelCase keys (each
   point also carries ``runId``); strict (no NaN/Infinity tokens; an unknown latency is ``null``).
 * MCAP (ROS 2 CDR, explicit message definitions): the data points on ``/arbiter/data_point``, the stats
@@ -26,6 +27,8 @@ from .tracking import TRACKING_FIELDS, TrackingStats
 
 SEED_CSV_HEADER = ",".join(FIELDS)
 CSV_HEADER = ",".join(FIELDS + EXTRA_FIELDS)
+RUNS_CSV_HEADER = ",".join((*FIELDS, "runId"))  # ours before the gap column
+CSV_HEADERS = (CSV_HEADER, RUNS_CSV_HEADER, SEED_CSV_HEADER)
 MCAP_RUNS_TOPIC = "/arbiter/runs"
 MCAP_ALGORITHMS_TOPIC = "/arbiter/algorithms"
 MCAP_ALGORITHM_TYPE = "arbiter_msgs/msg/AlgorithmSummary"
@@ -50,6 +53,7 @@ MCAP_POINT_DEF = "\n".join(
         "float64 latency_ms  # NaN when unknown",
         "bool has_latency",
         "uint32 run_id  # 0 outside every run",
+        "bool gap  # the sample follows a gap in the recording: no path is counted into it",
     ]
 )
 MCAP_STATS_DEF = "\n".join(
@@ -192,7 +196,7 @@ def to_csv(points: Sequence[DataPoint]) -> str:
     out.write(CSV_HEADER + "\n")
     for p in points:
         row = [p.algorithm if f == "algorithm" else js_number(getattr(p, f)) for f in FIELDS]
-        writer.writerow([*row, "" if p.runId is None else str(p.runId)])
+        writer.writerow([*row, "" if p.runId is None else str(p.runId), "1" if p.gap else ""])
     return out.getvalue()
 
 
@@ -517,6 +521,7 @@ def read_mcap(data: bytes) -> Export:
                 "algorithm": m.algorithm,
                 "latencyMs": m.latency_ms if m.has_latency else None,
                 "runId": getattr(m, "run_id", 0) or None,  # exports before runs had none
+                "gap": bool(getattr(m, "gap", False)),  # nor before gaps
             }
             points.append(_point_from_mapping(row, where))
         if not seen:
@@ -558,6 +563,7 @@ def _mcap_point(p: DataPoint) -> dict[str, Any]:
         "latency_ms": math.nan if p.latencyMs is None else float(p.latencyMs),
         "has_latency": p.latencyMs is not None,
         "run_id": p.runId or 0,
+        "gap": p.gap,
     }
 
 
@@ -598,7 +604,16 @@ def _point_from_mapping(row: dict[str, Any], where: str) -> DataPoint:
         if not math.isfinite(raw):
             raise ExportFormatError(f"{where}: {f} is not finite")
         values[f] = float(raw)
-    return DataPoint(**values, runId=_run_id(row.get("runId"), where))
+    return DataPoint(**values, runId=_run_id(row.get("runId"), where), gap=_gap(row.get("gap"), where))
+
+
+def _gap(raw: Any, where: str) -> bool:
+    """``gap``: true/false (JSON, MCAP), ``1`` or empty (CSV); absent in exports from before it."""
+    if raw is None or raw == "" or raw is False or raw == "0":
+        return False
+    if raw is True or raw == "1":
+        return True
+    raise ExportFormatError(f"{where}: gap must be true, false, 1 or empty, got {str(raw)[:40]!r}")
 
 
 def _run_id(raw: Any, where: str) -> int | None:
@@ -624,13 +639,13 @@ def parse_csv(text: str) -> list[DataPoint]:
     if not lines or not text.strip():
         raise ExportFormatError("empty file")
     header = lines[0].strip().lstrip("\ufeff")
-    if header not in (CSV_HEADER, SEED_CSV_HEADER):
+    if header not in CSV_HEADERS:
         first = header[:60] + ("…" if len(header) > 60 else "")
         if "," not in header:
             raise ExportFormatError(f"text, but not a CSV, JSON or MCAP export: its first line is {first!r}")
         raise ExportFormatError(
             f"{NOT_ARBITER_CSV}: its header is {first!r}; an export's is {CSV_HEADER!r} (the seed's: without "
-            "runId)"
+            "runId and gap)"
         )
     columns = header.count(",") + 1
     reader = csv.DictReader(io.StringIO(text.lstrip("\ufeff")))

@@ -27,8 +27,9 @@ FIELDS = (
     "latencyMs",
 )
 """DataPoint fields in the seed's order -- the CSV header's first ten columns."""
-EXTRA_FIELDS = ("runId",)
-"""Ours, after the seed's: the run id (empty/null outside a run)."""
+EXTRA_FIELDS = ("runId", "gap")
+"""Ours, after the seed's: the run id (empty/null outside a run), and whether the sample follows a gap
+in the recording (CSV ``1`` or empty)."""
 
 NUMERIC = tuple(f for f in FIELDS if f != "algorithm")
 MAX_ALGORITHM_NAME = 64
@@ -49,6 +50,10 @@ class DataPoint:
     # Beyond the seed: the run this sample belongs to (runs.py); None outside every run. Exports carry
     # it after the seed's columns, so a reader of the seed's format still finds its ten fields.
     runId: int | None = None
+    # Beyond the seed: this sample follows a gap in the recording (the link was down, odometry stale, or
+    # its pose jumped: a new odometry life). Nothing was recorded in between, and no path length is
+    # counted across it (``arbiter_core.stats.path_length``).
+    gap: bool = False
 
     def validate(self) -> None:
         for name in NUMERIC:
@@ -67,6 +72,8 @@ class DataPoint:
             isinstance(self.runId, bool) or not isinstance(self.runId, int) or not 1 <= self.runId < 2**32
         ):
             raise ValueError(f"DataPoint.runId must be a positive integer or None, got {self.runId!r}")
+        if not isinstance(self.gap, bool):
+            raise ValueError(f"DataPoint.gap must be true or false, got {self.gap!r}")
 
     def as_dict(self) -> dict[str, float | str | None]:
         return asdict(self)
@@ -100,8 +107,10 @@ def compute_stats(
     e_d: np.ndarray,
     e_th: np.ndarray,
     path: float | None = None,
+    gaps: np.ndarray | None = None,
 ) -> AnalyticsStats:
-    """AnalyticsStats of time-ordered columns (``path`` overrides the path length when given)."""
+    """AnalyticsStats of time-ordered columns (``path`` overrides the path length when given; ``gaps``:
+    the samples that follow a gap, whose step is not counted)."""
     n = int(e_d.size)
     if n == 0:
         return EMPTY_STATS
@@ -115,7 +124,7 @@ def compute_stats(
         avgHeadingError=S.mean(np.abs(e_th)),
         stdDevError=S.pstdev(e_d),
         p95Error=S.p95(e_d),
-        totalPathLength=S.path_length(x, y) if path is None else path,
+        totalPathLength=S.path_length(x, y, gaps) if path is None else path,
     )
 
 
@@ -125,19 +134,25 @@ def stats_of_points(points: Iterable[DataPoint]) -> AnalyticsStats:
     def col(name: str) -> np.ndarray:
         return np.fromiter((getattr(p, name) for p in pts), dtype=np.float64, count=len(pts))
 
+    gaps = np.fromiter((p.gap for p in pts), dtype=bool, count=len(pts))
     return compute_stats(
-        col("x"), col("y"), col("linearVel"), col("angularVel"), col("distanceError"), col("headingError")
-    )
+        col("x"), col("y"), col("linearVel"), col("angularVel"), col("distanceError"), col("headingError"),
+        gaps=gaps,
+    )  # fmt: skip
 
 
 def grouped_stats(
-    cols: dict[str, np.ndarray], labels: Sequence[Hashable], stretch: np.ndarray | None = None
+    cols: dict[str, np.ndarray],
+    labels: Sequence[Hashable],
+    stretch: np.ndarray | None = None,
+    gaps: np.ndarray | None = None,
 ) -> dict[Hashable, AnalyticsStats]:
     """AnalyticsStats per label over time-ordered columns (first-seen order of the labels).
 
     A group's path length counts only steps between two samples that are next to each other in the
     recording, carry the same label and (when ``stretch`` is given, e.g. the run ids) the same stretch: a
-    path never spans a gap between separate stretches, such as idle samples before and after a run.
+    path never spans a gap between separate stretches, such as idle samples before and after a run,
+    nor a gap in the recording (``gaps``: the samples that follow one).
     """
     x, y = cols["x"], cols["y"]
     steps = S.step_lengths(x, y)  # once, shared by every group
@@ -147,6 +162,8 @@ def grouped_stats(
     joined = codes[1:] == codes[:-1]
     if stretch is not None:
         joined &= stretch[1:] == stretch[:-1]
+    if gaps is not None:
+        joined &= ~np.asarray(gaps, dtype=bool)[1:]
     out: dict[Hashable, AnalyticsStats] = {}
     for i, label in enumerate(order):
         mask = codes == i

@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from arbiter_core import stats as S
 from arbiter_core.controllers import MANUAL
 
 from . import tracking as T
@@ -146,7 +147,7 @@ def best_in_columns(
 
 class _Run:
     __slots__ = ("_summary", "algorithm", "cols", "end_ms", "final_error_m", "id", "in_ring", "last_ms",
-                 "mission", "n", "outcome", "path", "start_ms")  # fmt: skip
+                 "mission", "n", "outcome", "path", "start_ms", "unseen_m")  # fmt: skip
 
     def __init__(
         self, run_id: int, algorithm: str, mission: str, start_ms: float, path: np.ndarray | None = None
@@ -163,9 +164,14 @@ class _Run:
         self.n = 0
         self.in_ring = 0
         self.last_ms: float | None = None
+        self.unseen_m = 0.0  # steps into samples that follow a gap: not part of its path length
         self._summary: RunSummary | None = None
 
-    def add(self, t_ms: float, x: float, y: float, v: float, w: float, e_d: float, e_th: float) -> None:
+    def add(
+        self, t_ms: float, x: float, y: float, v: float, w: float, e_d: float, e_th: float, gap: bool = False
+    ) -> None:
+        if gap and self.n:
+            self.unseen_m += float(np.hypot(x - self.cols[0, self.n - 1], y - self.cols[1, self.n - 1]))
         if self.n == self.cols.shape[1]:
             grown = np.empty((7, self.n * 2), dtype=np.float64)
             grown[:, : self.n] = self.cols
@@ -179,7 +185,10 @@ class _Run:
     def summary(self) -> RunSummary:
         if self._summary is None:
             c = self.cols[:, : self.n]
-            stats = compute_stats(c[0], c[1], c[2], c[3], c[4], c[5]) if self.n else EMPTY_STATS
+            stats = EMPTY_STATS
+            if self.n:
+                path = max(0.0, S.path_length(c[0], c[1]) - self.unseen_m) if self.unseen_m else None
+                stats = compute_stats(c[0], c[1], c[2], c[3], c[4], c[5], path=path)
             summary = RunSummary(
                 self.id, self.algorithm, self.mission, self.start_ms, self.end_ms, self.outcome,
                 self.final_error_m, stats, self.in_ring, self.last_ms,
@@ -256,12 +265,12 @@ class RunLog:
         return run.summary()
 
     def add(self, run_id: int, t_ms: float, x: float, y: float, v: float, w: float, e_d: float,
-            e_th: float) -> bool:  # fmt: skip
+            e_th: float, gap: bool = False) -> bool:  # fmt: skip
         """A sample of the active run; False (and nothing kept) for any other id."""
         run = self._active
         if run is None or run.id != run_id:
             return False
-        run.add(t_ms, x, y, v, w, e_d, e_th)
+        run.add(t_ms, x, y, v, w, e_d, e_th, gap)
         return True
 
     def evicted(self, run_id: int, count: int = 1) -> None:

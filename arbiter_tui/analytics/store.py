@@ -4,7 +4,7 @@ The seed keeps its refs at module level so that data survives page navigation; h
 session (``session/robot.py``) owns one store, shared by every screen, so data survives screen switches
 and a second session (another robot, a test) has its own. It is a circular buffer of
 :class:`DataPoint` held column-wise in numpy arrays (9 float64 columns, a one-byte
-algorithm code and a four-byte run id: 77 bytes per point), grown on demand up to
+algorithm code, a four-byte run id and a one-byte gap mark: 78 bytes per point), grown on demand up to
 ``max_data_points``, so statistics over a million points take milliseconds.
 
 Who writes it: the robot session's thread (the control loop samples odometry
@@ -62,6 +62,7 @@ class AnalyticsStore:
         self._num = np.empty((len(NUMERIC), alloc), dtype=np.float64)
         self._alg = np.empty(alloc, dtype=np.uint8)
         self._run = np.empty(alloc, dtype=np.uint32)  # run id, 0 outside every run
+        self._gap = np.empty(alloc, dtype=np.bool_)  # the sample follows a gap in the recording
         self._size = 0
         self._next = 0
 
@@ -81,10 +82,12 @@ class AnalyticsStore:
         num = np.empty((len(NUMERIC), new), dtype=np.float64)
         alg = np.empty(new, dtype=np.uint8)
         run = np.empty(new, dtype=np.uint32)
+        gap = np.empty(new, dtype=np.bool_)
         num[:, : self._size] = self._num[:, : self._size]
         alg[: self._size] = self._alg[: self._size]
         run[: self._size] = self._run[: self._size]
-        self._num, self._alg, self._run = num, alg, run
+        gap[: self._size] = self._gap[: self._size]
+        self._num, self._alg, self._run, self._gap = num, alg, run, gap
 
     # -- settings ----------------------------------------------------------
     @property
@@ -119,6 +122,7 @@ class AnalyticsStore:
                 order = self._order()
                 keep_num = self._num[:, order][:, -n:] if self._size else self._num[:, :0]
                 keep_alg = self._alg[order][-n:] if self._size else self._alg[:0]
+                keep_gap = self._gap[order][-n:] if self._size else self._gap[:0]
                 all_runs = self._run[order] if self._size else self._run[:0]
                 keep_run = all_runs[-n:]
                 dropped = all_runs[: max(0, all_runs.size - n)]
@@ -131,6 +135,7 @@ class AnalyticsStore:
                 self._num[:, :k] = keep_num
                 self._alg[:k] = keep_alg
                 self._run[:k] = keep_run
+                self._gap[:k] = keep_gap
                 self._size = k
                 self._next = k % self._num.shape[1] if k == n else k
                 self._version += 1
@@ -221,7 +226,7 @@ class AnalyticsStore:
             run_id = point.runId or 0
             if run_id and not self._runs.add(
                 run_id, point.timestamp, point.x, point.y, point.linearVel, point.angularVel,
-                point.distanceError, point.headingError,
+                point.distanceError, point.headingError, point.gap,
             ):  # fmt: skip
                 run_id = 0  # not the active run: kept as a plain sample
             col = self._num[:, i]
@@ -236,6 +241,7 @@ class AnalyticsStore:
             col[8] = math.nan if point.latencyMs is None else point.latencyMs
             self._alg[i] = code
             self._run[i] = run_id
+            self._gap[i] = point.gap
             self._next = (i + 1) % self._num.shape[1] if self._num.shape[1] == self._max else i + 1
             if self._size < self._num.shape[1]:
                 self._size += 1
@@ -289,6 +295,7 @@ class AnalyticsStore:
             num = self._num[:, order].copy()
             codes = self._alg[order].copy()
             runs = self._run[order].copy()
+            gaps = self._gap[order].copy()
             names = list(self._algos)
         out = []
         for j in range(num.shape[1]):
@@ -306,6 +313,7 @@ class AnalyticsStore:
                     names[codes[j]],
                     None if math.isnan(lat) else lat,
                     int(runs[j]) or None,
+                    bool(gaps[j]),
                 )
             )
         return out
@@ -320,14 +328,17 @@ class AnalyticsStore:
             if n == 0:
                 return EMPTY_STATS
             num = self._num[:, :n]
-            x, y = num[1], num[2]
-            path = S.path_length(x, y)
+            x, y, gap = num[1], num[2], self._gap[:n]
+            path = S.path_length(x, y, gap)
             if self._wrapped():
-                # Storage order wraps: the pair (newest, oldest) is not a real step,
-                # and the pair (last slot, first slot) is.
+                # Storage order wraps: the pair (newest, oldest) is not a real step, and the pair (last
+                # slot, first slot) is, unless the sample in slot 0 follows a gap (path_length dropped the
+                # step into a gap sample: here, the one into slot h is not counted either way)
                 h = self._next
-                path -= math.hypot(x[h] - x[h - 1], y[h] - y[h - 1])
-                path += math.hypot(x[0] - x[-1], y[0] - y[-1])
+                if not gap[h]:
+                    path -= math.hypot(x[h] - x[h - 1], y[h] - y[h - 1])
+                if not gap[0]:
+                    path += math.hypot(x[0] - x[-1], y[0] - y[-1])
             return compute_stats(x, y, num[4], num[5], num[6], num[7], path=max(path, 0.0))
 
     def stats_by_algorithm(self) -> dict[str, AnalyticsStats]:
@@ -338,13 +349,14 @@ class AnalyticsStore:
             num = self._num[:, order]
             codes = self._alg[order]
             runs = self._run[order]
+            gaps = self._gap[order]
             names = list(self._algos)
         cols = {name: num[i] for name, i in _COL.items()}
-        return grouped_stats(cols, [names[c] for c in codes.tolist()], runs)  # type: ignore[return-value]
+        return grouped_stats(cols, [names[c] for c in codes.tolist()], runs, gaps)  # type: ignore[return-value]
 
     def nbytes(self) -> int:
         """Bytes held by the buffer arrays."""
-        return int(self._num.nbytes + self._alg.nbytes + self._run.nbytes)
+        return int(self._num.nbytes + self._alg.nbytes + self._run.nbytes + self._gap.nbytes)
 
 
 __all__ = [  # the data model lives in model.py; these names are read from here too

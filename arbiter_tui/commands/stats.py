@@ -149,7 +149,8 @@ def _grouped(points: list[DataPoint], labels: list[str]) -> dict[str, AnalyticsS
     if not points:
         return {}
     runs = np.fromiter((p.runId or 0 for p in points), dtype=np.int64, count=len(points))
-    return grouped_stats(columns_of(points), labels, runs)  # type: ignore[return-value]
+    gaps = np.fromiter((p.gap for p in points), dtype=bool, count=len(points))
+    return grouped_stats(columns_of(points), labels, runs, gaps)  # type: ignore[return-value]
 
 
 def run(argv: list[str]) -> int:

@@ -16,21 +16,16 @@ from collections import deque
 from collections.abc import Callable
 from dataclasses import replace
 
-from arbiter_core.controllers import (
-    ALGORITHMS,
-    MISSIONS,
-    MissionProgress,
-    goal_driver,
-    make_controller,
-)
+from arbiter_core.controllers import ALGORITHMS, MISSIONS, goal_driver, make_controller
 from arbiter_core.kinematics import Limits, Pose, clamp_twist, distance_error, heading_error
+from arbiter_core.mission import Mission, Phase
 
 from ..analytics.runs import ABORTED, COMPLETED, ENDED, MANUAL, MANUAL_IDLE_S, OVERRIDDEN
 from ..analytics.store import AnalyticsStore, DataPoint
 from ..analytics.tracking import reference_path
-from ..link.base import Link
+from ..link.base import CONNECTING, DISCONNECTED, RECONNECTING, STARTING, Link
 from . import mission as M
-from .mission import MissionState, Resumable
+from .mission import MissionState
 from .teleop import Teleop
 
 TRAIL_POINTS = 2000
@@ -38,6 +33,7 @@ TRAIL_STEP_M = 0.01  # the trail gets a point when the robot has moved this far:
 STILL_V = 0.005  # m/s: odometry slower than this (and STILL_W) with no command is a robot standing still
 STILL_W = 0.01  # rad/s
 BURST = 2.0  # commands the rate ceiling lets through at once (a key press answered between two ticks)
+NO_ODOMETRY = frozenset({STARTING, CONNECTING, DISCONNECTED, RECONNECTING})  # link states with no live pose
 
 
 class ControlLoop:
@@ -72,6 +68,11 @@ class ControlLoop:
         self._tokens_at: float | None = None
         self.held_back = 0  # moving commands the ceiling did not send
         self._still_sampled = False  # one sample of a robot standing still outside a run, then none
+        # the odometry life followed (arbiter_core.mission): a new one forgets the missions of the last
+        self._telemetry = link.telemetry
+        self._life = link.telemetry.life
+        self.gap_pending = False  # the next sample follows a gap (link down, odometry stale or reset)
+        self.notice: str | None = None  # what ``g`` last has to say beside starting (read and cleared)
 
     # -- the mission's state, read -------------------------------------------------------
     @property
@@ -83,19 +84,22 @@ class ControlLoop:
         return self.state.selected
 
     @property
-    def mission(self) -> MissionProgress:
-        return self.state.progress
+    def mission(self) -> Mission:
+        """The run in progress (or the last one); before any, the selected mission from the origin."""
+        return self.state.current or self.state.preview()
 
     @property
     def mission_label(self) -> str:
-        return self.state.label
+        c = self.state.current
+        shown = c is not None and (c.running or not self.state.acknowledged)
+        return c.label if shown and c is not None else self.state.selected
 
     @property
     def running(self) -> bool:
         return self.state.running
 
     @property
-    def interrupted(self) -> Resumable | None:
+    def interrupted(self) -> Mission | None:
         return self.state.interrupted
 
     @property
@@ -126,38 +130,31 @@ class ControlLoop:
         self.set_algorithm(goal_driver(self.algorithm))
         return self.algorithm != MANUAL
 
-    def _run(self, mission: MissionProgress, label: str) -> None:
+    def _run(self, mission: Mission) -> None:
         self.stop()
-        self.state = M.starting(self.state, mission, label, self._wall_ms())
+        self.state = M.starting(self.state, mission)
         path = reference_path(mission.start, mission.waypoints[mission.index :])
-        self.store.begin_run(self.algorithm, label, self.state.started_ms, path)
+        self.store.begin_run(self.algorithm, mission.label, mission.started_ms, path)
 
     def start_autonomous(self) -> bool:
         """Start the selected controller on the named mission, from the robot's current pose."""
         if self.algorithm == MANUAL:
             return False
-        self._run(self._named_from(self.link.telemetry.snapshot()[0]), self.mission_name)
+        pose = self.link.telemetry.snapshot()[0]
+        self._run(Mission.named(self.mission_name, self.algorithm, pose, self._wall_ms(), self._life))
         return True
 
-    def _named_from(self, pose: Pose) -> MissionProgress:
-        """The selected mission as it runs from ``pose``: missions are relative to where the robot stands
-        when they start."""
-        mission = MissionProgress.named(self.mission_name)
-        mission.waypoints = [(pose.x + x, pose.y + y) for x, y in mission.waypoints]
-        mission.start = (pose.x, pose.y)
-        return mission
-
-    def plan(self, pose: Pose) -> MissionProgress | None:
+    def plan(self, pose: Pose) -> Mission | None:
         """What ``g`` drives, as the map and the panel show it: the run in progress; else the interrupted
         mission ``g`` resumes; else the selected mission from ``pose``, where ``g`` would start it. None
         when ``g`` would start nothing (manual driving with nothing to resume)."""
         if self.running:
             return self.mission
-        if self.interrupted is not None and not self.interrupted.done:
-            return self.interrupted.progress
+        if self.interrupted is not None:
+            return self.interrupted
         if self.algorithm == MANUAL:
             return None
-        return self._named_from(pose)
+        return self.state.preview(pose)
 
     def sample_goal(self, pose: Pose) -> tuple[float, float] | None:
         """What a sample's errors are measured to: the goal the control screen shows (the run's, the
@@ -169,15 +166,21 @@ class ControlLoop:
 
     def go(self) -> bool:
         """``g``: resume an interrupted mission from its current waypoint (with the selected controller,
-        or the one it ran with when manual is selected), else start the named mission afresh."""
+        or the one it ran with when manual is selected), else start the named mission afresh. A mission
+        forgotten since (a lost link, the odometry reset) is said in ``notice``."""
+        self.follow_life()
+        forgotten = self.state.forgotten
         interrupted = self.interrupted
-        if interrupted is None or interrupted.done:
-            return self.start_autonomous()
+        if interrupted is None:
+            started = self.start_autonomous()
+            if started and forgotten is not None:
+                self.notice = (f"{self.mission_label} starts afresh from here: the interrupted mission "
+                               f"was forgotten ({forgotten})")  # fmt: skip
+            return started
         if self.algorithm == MANUAL:
             self.set_algorithm(interrupted.algorithm)
         pose = self.link.telemetry.snapshot()[0]
-        interrupted.progress.start = (pose.x, pose.y)  # pure pursuit follows the segment from here
-        self._run(interrupted.progress, interrupted.label + M.RESUMED)
+        self._run(interrupted.resumed_from(pose, self.algorithm, self._wall_ms(), self._life))
         return True
 
     def restart(self) -> bool:
@@ -193,16 +196,37 @@ class ControlLoop:
             raise ValueError("a goal needs finite coordinates")
         self._autonomous()
         pose = self.link.telemetry.snapshot()[0]
-        mission = MissionProgress([(float(x), float(y))], start=(pose.x, pose.y))
-        self._run(mission, f"goal ({x:+.2f}, {y:+.2f})")
+        self._run(Mission.to_goal(x, y, self.algorithm, pose, self._wall_ms(), self._life))
 
     def stop(self, outcome: str = ABORTED) -> None:
         """Stop the robot: teleop and any autonomous run; the next tick sends exactly one zero."""
         if self.running:
-            self.state = M.stopping(self.state)
-            self.store.end_run(outcome, self._wall_ms(), self._final_error())
+            now = self._wall_ms()
+            self.state = M.stopping(self.state, Phase(outcome), now)
+            self.store.end_run(outcome, now, self._final_error())
         self._end_manual_run()
         self.teleop.stop()
+
+    def follow_life(self) -> bool:
+        """The link's odometry began a new life (the link was lost, or the pose jumped further than the
+        robot can drive: a backend restarted, an odometry reset): a run in progress stops, and nothing is
+        left to resume, since its waypoints are in a frame that no longer exists. The next sample follows
+        a gap. True when that happened now."""
+        telemetry = self.link.telemetry
+        if telemetry is not self._telemetry:  # another link attached: its life is the one to follow
+            self._telemetry, self._life = telemetry, telemetry.life
+            return False
+        life, why = telemetry.life, telemetry.life_reason
+        if life == self._life:
+            return False
+        self._life = life
+        self.gap_pending = True
+        if self.running:
+            self.stop()
+        self._end_manual_run()
+        self.teleop.stop()
+        self.state = M.forgetting_interrupted(self.state, why)
+        return True
 
     def acknowledge(self) -> None:
         """A key was pressed: the last run's "done" line goes (it stays until the next run or key)."""
@@ -262,9 +286,10 @@ class ControlLoop:
                 self.store.end_run(COMPLETED, t_ms, final_error)
 
     def _tick(self, now: float, completed: list[tuple[float, float | None]]) -> tuple[float, float] | None:
+        self.follow_life()
         pose, *_ = self.link.telemetry.snapshot()
         self.add_trail(pose.x, pose.y)
-        self.mission.update(pose)
+        self.state = M.advancing(self.state, pose)
         limits = self.teleop.limits
         if self.running:
             if self.mission.done:
@@ -319,6 +344,12 @@ class ControlLoop:
         run samples out of the ring buffer, and adds nothing to any statistic."""
         if not self.store.is_collecting:
             return None
+        self.follow_life()
+        if self.link.state in NO_ODOMETRY or not self.link.telemetry.odometry_live(time.monotonic()):
+            # no sample of a pose that is not live: the record has a gap here, never the last pose
+            # repeated (README, "A record that never lies")
+            self.gap_pending = True
+            return None
         pose, v_odom, w_odom, latency = self.link.telemetry.snapshot()
         goal = self.sample_goal(pose)
         run = self.store.active_run
@@ -346,5 +377,9 @@ class ControlLoop:
             algorithm=self.algorithm,
             latencyMs=latency,
             runId=run,
+            gap=self.gap_pending,
         )
-        return point if self.store.record(point) else None
+        if not self.store.record(point):
+            return None
+        self.gap_pending = False
+        return point

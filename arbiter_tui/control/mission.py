@@ -1,46 +1,43 @@
-"""A mission's lifecycle as one immutable value: what is selected, what drives, what runs, what ``g``
-resumes, what the last run did. Every change is a pure function from one state to the next; the
-control loop holds the current state and does the side effects (runs begun and ended in the store, the
-teleop stop) beside each step. No I/O, no Textual."""
+"""The console's missions as one immutable value: what is selected, the run in progress (or the last
+one), what ``g`` resumes, and why a mission was forgotten. Each run is an ``arbiter_core.mission.Mission``
+(the value the robot-side controller uses too); every change here is a pure function from one state to
+the next, and the control loop does the side effects (runs begun and ended in the store, the teleop
+stop) beside each step. No I/O, no Textual."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
-from arbiter_core.controllers import MissionProgress
+from arbiter_core.kinematics import Pose
+from arbiter_core.mission import Mission, Phase
 
 from ..analytics.runs import MANUAL
-
-RESUMED = ", resumed"  # what a resumed run's label ends with (the panel shows which waypoint it is at)
-
-
-@dataclass(frozen=True)
-class Resumable:
-    """A mission stopped before its end: ``g`` resumes it, with the controller and label it ran with."""
-
-    progress: MissionProgress
-    algorithm: str
-    label: str
-
-    @property
-    def goal(self) -> tuple[float, float]:
-        return self.progress.goal
-
-    @property
-    def done(self) -> bool:
-        return self.progress.done
 
 
 @dataclass(frozen=True)
 class MissionState:
     algorithm: str = MANUAL  # the controller selected (manual: the keys drive)
     selected: str = "square"  # the named mission ``n`` selects and ``g`` starts
-    progress: MissionProgress = field(default_factory=lambda: MissionProgress.named("square"))
-    label: str = "square"  # what the current (or last) run drives: a mission's name or a goal
-    running: bool = False  # an autonomous controller is driving
-    interrupted: Resumable | None = None
-    finished: str | None = None  # "done: 4/4 in 20.7 s" until the next run or key
-    started_ms: float = 0.0  # wall ms the current (or last) run began
+    current: Mission | None = None  # the run in progress, or the last one
+    interrupted: Mission | None = None  # a run stopped before its end: what ``g`` resumes
+    acknowledged: bool = False  # a key was pressed since the last run ended: its line goes
+    forgotten: str | None = None  # why a mission ``g`` would have resumed was forgotten (said once)
+
+    @property
+    def running(self) -> bool:
+        return self.current is not None and self.current.running
+
+    @property
+    def finished(self) -> str | None:
+        """``done: 4/4 in 20.7 s`` after a completed run, until the next run or key."""
+        c = self.current
+        if c is None or c.phase is not Phase.COMPLETED or self.acknowledged:
+            return None
+        return c.summary()
+
+    def preview(self, pose: Pose | None = None) -> Mission:
+        """The selected mission as ``g`` would start it from ``pose`` (None: from the origin)."""
+        return Mission.named(self.selected, self.algorithm, pose)
 
 
 def selecting_algorithm(state: MissionState, name: str) -> MissionState:
@@ -49,44 +46,55 @@ def selecting_algorithm(state: MissionState, name: str) -> MissionState:
 
 
 def selecting_mission(state: MissionState, name: str) -> MissionState:
-    """Named mission ``name`` selected, from its first waypoint; nothing left to resume."""
-    return replace(state, selected=name, label=name, progress=MissionProgress.named(name), interrupted=None)
+    """Named mission ``name`` selected; nothing left to resume, and the last run's line goes."""
+    return replace(state, selected=name, interrupted=None, forgotten=None, acknowledged=True)
 
 
-def starting(state: MissionState, progress: MissionProgress, label: str, now_ms: float) -> MissionState:
-    """A run of ``progress`` begins now."""
-    return replace(
-        state,
-        progress=progress,
-        label=label,
-        interrupted=None,
-        running=True,
-        finished=None,
-        started_ms=now_ms,
-    )
+def starting(state: MissionState, mission: Mission) -> MissionState:
+    """A run of ``mission`` begins."""
+    return replace(state, current=mission, interrupted=None, acknowledged=False, forgotten=None)
 
 
-def stopping(state: MissionState) -> MissionState:
-    """The run (if any) ends before its end: what is left of it is what ``g`` resumes."""
-    if not state.running:
+def advancing(state: MissionState, pose: Pose) -> MissionState:
+    """The run in progress passes the waypoints ``pose`` is within tolerance of; so does the mission ``g``
+    resumes, while the robot is driven by hand (a waypoint passed on the way counts as reached)."""
+    c, i = state.current, state.interrupted
+    if c is not None and c.running:
+        moved = c.advanced(pose)
+        return state if moved is c else replace(state, current=moved)
+    if i is not None:
+        moved = i.advanced(pose)
+        if moved is not i:
+            return replace(state, interrupted=moved if moved.resumable else None)
+    return state
+
+
+def stopping(state: MissionState, phase: Phase, now_ms: float) -> MissionState:
+    """The run (if any) ends now before its end (``phase``: aborted or overridden); what is left of it
+    is what ``g`` resumes."""
+    c = state.current
+    if c is None or not c.running:
         return state
-    interrupted = state.interrupted
-    if not state.progress.done:
-        interrupted = Resumable(state.progress, state.algorithm, state.label.removesuffix(RESUMED))
-    return replace(state, running=False, interrupted=interrupted)
+    ended = c.ended(phase, now_ms)
+    return replace(state, current=ended, interrupted=ended if ended.resumable else state.interrupted)
 
 
 def completing(state: MissionState, now_ms: float) -> MissionState:
     """The run reached its last waypoint now."""
-    n = len(state.progress.waypoints)
-    done = f"done: {n}/{n} in {(now_ms - state.started_ms) / 1000.0:.1f} s"
-    return replace(state, running=False, finished=done)
+    c = state.current
+    if c is None or not c.running:
+        return state
+    return replace(state, current=c.ended(Phase.COMPLETED, now_ms), acknowledged=False)
 
 
 def acknowledged(state: MissionState) -> MissionState:
     """A key was pressed: the last run's "done" line goes."""
-    return state if state.finished is None else replace(state, finished=None)
+    return state if state.acknowledged else replace(state, acknowledged=True)
 
 
-def forgetting_interrupted(state: MissionState) -> MissionState:
-    return state if state.interrupted is None else replace(state, interrupted=None)
+def forgetting_interrupted(state: MissionState, why: str | None = None) -> MissionState:
+    """Nothing to resume any more; ``why`` (a lost link, the odometry reset) is said when ``g`` next
+    starts a mission afresh."""
+    if state.interrupted is None:
+        return state
+    return replace(state, interrupted=None, forgotten=why)

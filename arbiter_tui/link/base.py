@@ -8,12 +8,13 @@ reads it at its own pace.
 
 from __future__ import annotations
 
+import math
 import threading
 import time
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
-from arbiter_core.kinematics import Pose, pose_of_odometry
+from arbiter_core.kinematics import Pose, odometry_jumped, pose_of_odometry
 from arbiter_core.record import LatencyRecord, RecordError
 
 from ..latency.clocksync import LatencyMeter
@@ -25,6 +26,7 @@ RECONNECTING = "RECONNECTING"
 DISCONNECTED = "DISCONNECTED"
 SIMULATED = "SIMULATED"
 ODOM_SILENCE_S = 2.0  # connected this long without odometry: said on screen
+ODOM_STALE_S = 0.5  # odometry older than this (the link up) is not sampled: the record has a gap instead
 
 
 @dataclass
@@ -42,6 +44,21 @@ class Telemetry:
     odom_at: float | None = None  # monotonic time of the last odometry message
     connected_at: float | None = None  # monotonic time the link last came up
     meter: LatencyMeter = field(default_factory=LatencyMeter)
+    # The odometry's life (arbiter_core.mission): bumped when the link is lost or the pose jumps further
+    # than the robot can drive (a backend restarted, an odometry reset). Missions, the record's path and
+    # what ``g`` resumes never cross from one life to the next.
+    life: int = 0
+    life_reason: str | None = None  # why the current life began
+
+    def new_life(self, why: str) -> None:
+        """The odometry starts a new life (the link was lost: its next pose may be from a restarted
+        robot)."""
+        with self.lock:
+            self._new_life(why)
+
+    def _new_life(self, why: str) -> None:
+        self.life += 1
+        self.life_reason = why
 
     def set_odom(self, msg: dict[str, Any]) -> None:
         try:
@@ -50,10 +67,14 @@ class Telemetry:
             w = float(msg["twist"]["twist"]["angular"]["z"])
         except (KeyError, TypeError, ValueError):
             return
+        now = time.monotonic()
         with self.lock:
+            if self.odom_at is not None and odometry_jumped(self.pose, pose, now - self.odom_at):
+                jump = math.hypot(pose.x - self.pose.x, pose.y - self.pose.y)
+                self._new_life(f"the odometry jumped {jump:.2f} m in {now - self.odom_at:.2f} s")
             self.pose, self.v, self.w = pose, v, w
             self.odom_count += 1
-            self.odom_at = time.monotonic()
+            self.odom_at = now
 
     def odometry_missing(self, now: float, after_s: float = ODOM_SILENCE_S) -> bool:
         """Connected for ``after_s`` and no odometry in that long (never, or it stopped)."""
@@ -62,6 +83,15 @@ class Telemetry:
                 return False
             last = self.connected_at if self.odom_at is None else max(self.odom_at, self.connected_at)
             return now - last >= after_s
+
+    def odometry_live(self, now: float, stale_s: float = ODOM_STALE_S) -> bool:
+        """Odometry fresh enough to record: within ``stale_s`` while the link is up. A link that dates
+        no connection (the simulations) is always live."""
+        with self.lock:
+            if self.connected_at is None:  # a simulation (a link that is down says so by its state)
+                return True
+            at = self.odom_at
+            return at is not None and at >= self.connected_at and now - at < stale_s
 
     def set_report(self, msg: dict[str, Any]) -> None:
         arrival = time.monotonic()

@@ -253,6 +253,9 @@ class RosLink:
         with self._lock:
             if self._state != "CLOSED":
                 self._state = DISCONNECTED
+        # whatever comes back may be another robot's life (a backend restarted: its odometry at the
+        # origin again): missions and the record's path never cross it
+        self.telemetry.new_life("the link was lost")
         self.streams.disconnected()
         with self.telemetry.lock:
             self.telemetry.connected_at = None

@@ -370,6 +370,12 @@ class RobotSession:
             started = self.loop.restart() if restart else self.loop.go()
             return None if started else choose_controller_hint()
 
+    def take_notice(self) -> str | None:
+        """What the last ``g`` has to say beside starting (a mission forgotten since), once."""
+        with self.lock:
+            notice, self.loop.notice = self.loop.notice, None
+            return notice
+
     def go_to(self, x: float, y: float) -> None:
         """Drive to (x, y) with go_to_goal (or the autonomous controller already selected)."""
         with self.lock:

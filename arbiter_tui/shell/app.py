@@ -283,6 +283,8 @@ class ArbiterApp(RegistryTheme):
         why = self.session.go(restart)
         if why is not None and not self.session.too_small:
             self.notify(why, severity="warning")
+        elif (notice := self.session.take_notice()) is not None:
+            self.notify(notice, timeout=6)
         self.refresh_frame(force=True)
         return why is None
 

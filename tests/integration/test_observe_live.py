@@ -10,8 +10,9 @@ import time
 import numpy as np
 import roslibpy
 
-from arbiter_core.controllers import MissionProgress, make_controller
+from arbiter_core.controllers import make_controller
 from arbiter_core.kinematics import Pose, quaternion_to_yaw
+from arbiter_core.mission import Mission
 from arbiter_tui.analytics import tracking as T
 from arbiter_tui.analytics.runs import COMPLETED
 from arbiter_tui.link.base import CONNECTED
@@ -50,7 +51,7 @@ def foreign_controller(port: int, done: threading.Event, plan: list) -> None:
             (start[0] + (GOAL[0] - start[0]) * k / 12, start[1] + (GOAL[1] - start[1]) * k / 12)
             for k in range(13)
         ]
-        mission = MissionProgress([GOAL], start=start)
+        mission = Mission.route([GOAL], start=start)
         poses = [
             {"pose": {"position": {"x": x, "y": y, "z": 0.0}, "orientation": {"w": 1.0}}} for x, y in plan
         ]
@@ -60,7 +61,7 @@ def foreign_controller(port: int, done: threading.Event, plan: list) -> None:
         while time.monotonic() < deadline and not done.is_set():
             if n % 10 == 0:
                 path.publish(roslibpy.Message(msg))
-            mission.update(pose[-1])
+            mission = mission.advanced(pose[-1])
             v, w = (0.0, 0.0) if mission.done else controller.command(pose[-1], mission)
             cmd.publish(
                 roslibpy.Message(

@@ -9,8 +9,9 @@ import time
 import numpy as np
 import pytest
 
-from arbiter_core.controllers import MissionProgress, make_controller
+from arbiter_core.controllers import make_controller
 from arbiter_core.kinematics import Pose, quaternion_to_yaw
+from arbiter_core.mission import Mission
 from arbiter_tui.analytics import tracking as T
 from arbiter_tui.analytics.runs import COMPLETED
 from arbiter_tui.link.base import CONNECTED
@@ -54,12 +55,12 @@ def drive_with_rclpy(peer: Peer, done: threading.Event, plan: list) -> None:
         p = PoseStamped()
         p.pose.position.x, p.pose.position.y, p.pose.orientation.w = x, y, 1.0
         path.poses.append(p)
-    mission, controller = MissionProgress([GOAL], start=start), make_controller("pure_pursuit")
+    mission, controller = Mission.route([GOAL], start=start), make_controller("pure_pursuit")
     deadline, n = time.monotonic() + 25, 0
     while time.monotonic() < deadline and not done.is_set():
         if n % 10 == 0:
             path_pub.publish(path)
-        mission.update(poses[-1])
+        mission = mission.advanced(poses[-1])
         v, w = (0.0, 0.0) if mission.done else controller.command(poses[-1], mission)
         cmd = Twist()
         cmd.linear.x, cmd.angular.z = v, w

@@ -11,8 +11,9 @@ import numpy as np
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import Stores, get_typestore
 
-from arbiter_core.controllers import MissionProgress, make_controller
+from arbiter_core.controllers import make_controller
 from arbiter_core.kinematics import quaternion_to_yaw
+from arbiter_core.mission import Mission
 from arbiter_core.simulator import DiffDriveSimulator
 
 TS = get_typestore(Stores.ROS2_KILTED)
@@ -90,7 +91,7 @@ def drive(
     rec = Recording()
     controller = make_controller(algorithm)
     start = (sim.state.pose.x, sim.state.pose.y)
-    mission = MissionProgress([goal], start=start)
+    mission = Mission.route([goal], start=start)
     plan = [
         (start[0] + (goal[0] - start[0]) * k / 19, start[1] + (goal[1] - start[1]) * k / 19)
         for k in range(20)
@@ -105,7 +106,7 @@ def drive(
             rec.messages.append(("/plan", t_ns + 1, path_msg(t_ns, plan)))
         if n % 5 in (0, 2):  # 20 Hz: 40 and 60 ms apart in turn, as a 20 Hz timer beside a 50 Hz one
             pose = sim.state.pose
-            mission.update(pose)
+            mission = mission.advanced(pose)
             v, w = (0.0, 0.0) if mission.done else controller.command(pose, mission)
             sim.on_twist({"linear": {"x": v}, "angular": {"z": w}}, now)
             stamp = t_ns - round(cmd_delay_ms * 1e6)

@@ -52,7 +52,7 @@ async def test_a_click_on_the_map_drives_to_that_point(tmp_path):
         goal = tuple(round(v, 2) for v in the_map.get_coordinate_from_pixel(px, py))
         assert await until(pilot, lambda: app.session.loop.running)
         run = app.session.store.active_run
-        assert app.session.loop.algorithm == "go_to_goal" and app.session.loop.mission.waypoints == [goal]
+        assert app.session.loop.algorithm == "go_to_goal" and app.session.loop.mission.waypoints == (goal,)
         assert abs(goal[0] - 1.0) < 0.2 and abs(goal[1] - 0.6) < 0.3  # within a cell of where we aimed
         drive(app, clock, 15.0)
         pose = app.session.link.telemetry.snapshot()[0]
@@ -75,7 +75,7 @@ async def test_a_typed_goal_and_its_errors(tmp_path):
             await pilot.press("backspace")
         await pilot.press(*"0.5 -0.5", "enter")
         assert not isinstance(app.screen, GoalPrompt)
-        assert app.session.loop.running and app.session.loop.mission.waypoints == [(0.5, -0.5)]
+        assert app.session.loop.running and app.session.loop.mission.waypoints == ((0.5, -0.5),)
         assert app.session.loop.mission_label == "goal (+0.50, -0.50)"
         await pilot.press("space")
         await pilot.press("t", "escape")

@@ -1,4 +1,5 @@
 import math
+from dataclasses import replace
 
 import pytest
 
@@ -6,7 +7,6 @@ from arbiter_core.controllers import (
     ALGORITHMS,
     MISSIONS,
     GoToGoalController,
-    MissionProgress,
     PurePursuitController,
     make_controller,
 )
@@ -22,6 +22,7 @@ from arbiter_core.kinematics import (
     wrap_angle,
     yaw_to_quaternion,
 )
+from arbiter_core.mission import Mission
 
 DT = 0.02  # 50 Hz, the simulator's rate
 
@@ -76,25 +77,24 @@ def test_quaternion_round_trip():
 
 
 def test_mission_progress_advances_within_tolerance():
-    m = MissionProgress([(1.0, 0.0), (1.0, 1.0)], tolerance=0.2)
-    assert m.update(Pose(0.0, 0.0)) == (1.0, 0.0)
-    assert m.update(Pose(0.9, 0.0)) == (1.0, 1.0)
-    assert m.index == 1
-    m.update(Pose(1.0, 0.95))
-    assert m.done
+    m = replace(Mission.route([(1.0, 0.0), (1.0, 1.0)]), tolerance=0.2)
+    assert m.advanced(Pose(0.0, 0.0)) is m and m.goal == (1.0, 0.0)
+    m1 = m.advanced(Pose(0.9, 0.0))
+    assert m1.goal == (1.0, 1.0) and m1.index == 1 and m.index == 0  # a new value; the old one unchanged
+    assert m1.advanced(Pose(1.0, 0.95)).done
     with pytest.raises(ValueError):
-        MissionProgress.named("nope")
+        Mission.named("nope", "go_to_goal")
 
 
 def run_mission(algorithm: str, mission: str, limit_s: float = 120.0):
     ctrl = make_controller(algorithm)
-    prog = MissionProgress.named(mission)
+    prog = Mission.named(mission, algorithm)
     state = RobotState()
     reached = []
     t = 0.0
     while not prog.done and t < limit_s:
         before = prog.index
-        prog.update(state.pose)
+        prog = prog.advanced(state.pose)
         if prog.index != before:
             reached.extend(range(before, prog.index))
         if prog.done:
@@ -118,7 +118,7 @@ def test_autonomous_controllers_reach_every_waypoint(algorithm, mission):
 def test_manual_controller_returns_the_held_command():
     c = make_controller("manual")
     c.v, c.w = 0.3, -0.2
-    assert c.command(Pose(), MissionProgress.named("square")) == (0.3, -0.2)
+    assert c.command(Pose(), Mission.named("square", "manual")) == (0.3, -0.2)
     assert set(ALGORITHMS) == {
         "manual", "go_to_goal", "pure_pursuit", "stanley", "regulated_pure_pursuit", "kanayama",
     }  # fmt: skip
@@ -127,8 +127,7 @@ def test_manual_controller_returns_the_held_command():
 
 
 def test_controllers_stop_when_mission_done():
-    prog = MissionProgress([(0.0, 0.0)])
-    prog.update(Pose())
+    prog = Mission.route([(0.0, 0.0)]).advanced(Pose())
     assert prog.done
     assert GoToGoalController().command(Pose(), prog) == (0.0, 0.0)
     assert PurePursuitController().command(Pose(), prog) == (0.0, 0.0)

@@ -7,33 +7,33 @@ import pytest
 
 from arbiter_core.controllers import (
     KanayamaController,
-    MissionProgress,
     PurePursuitController,
     RegulatedPurePursuitController,
     StanleyController,
 )
 from arbiter_core.kinematics import Limits, Pose, RobotState, step
+from arbiter_core.mission import Mission
 
 NEW = (StanleyController, RegulatedPurePursuitController, KanayamaController)
 LIMITS = Limits(max_linear=0.5, max_angular=1.0)
 
 
-def line(goal=(4.0, 0.0)) -> MissionProgress:
-    return MissionProgress([goal])
+def line(goal=(4.0, 0.0)) -> Mission:
+    return Mission.route([goal])
 
 
-def drive(controller, mission: MissionProgress, pose: Pose, seconds: float) -> list[Pose]:
+def drive(controller, mission: Mission, pose: Pose, seconds: float) -> tuple[list[Pose], Mission]:
     """The controller alone on the unicycle model at 10 Hz (commands) / 50 Hz (integration)."""
     state, path = RobotState(pose=pose), [pose]
     v = w = 0.0
     for n in range(int(seconds * 50)):
         if n % 5 == 0:
-            mission.update(state.pose)
+            mission = mission.advanced(state.pose)
             v, w = controller.command(state.pose, mission)
             assert abs(v) <= LIMITS.max_linear + 1e-9 and abs(w) <= LIMITS.max_angular + 1e-9
         state = step(state, v, w, 0.02, LIMITS)
         path.append(state.pose)
-    return path
+    return path, mission
 
 
 @pytest.mark.parametrize("cls", NEW, ids=lambda c: c.__name__)
@@ -43,7 +43,7 @@ def test_on_a_straight_line_it_steers_back_onto_the_line_and_stays(cls):
     assert v > 0 and w < 0  # forward, turning right, towards the line
     v, w = controller.command(Pose(0.5, -0.3, 0.0), line())
     assert v > 0 and w > 0
-    path = drive(controller, line(), Pose(0.0, 0.3, 0.0), 8.0)
+    path, _ = drive(controller, line(), Pose(0.0, 0.3, 0.0), 8.0)
     late = [p for p in path if 2.0 <= p.x <= 3.5]
     assert late and max(abs(p.y) for p in late) < 0.05  # converged onto y = 0
 
@@ -51,11 +51,11 @@ def test_on_a_straight_line_it_steers_back_onto_the_line_and_stays(cls):
 @pytest.mark.parametrize("cls", NEW, ids=lambda c: c.__name__)
 def test_at_a_turn_it_turns_towards_the_new_leg_and_follows_it(cls):
     controller = cls(limits=LIMITS)
-    mission = MissionProgress([(2.0, 0.0), (2.0, 2.0)])
-    mission.index = 1  # the first leg is done: the robot stands at its end, facing along it
+    # the first leg is done: the robot stands at its end, facing along it
+    mission = Mission.route([(2.0, 0.0), (2.0, 2.0)], index=1)
     _, w = controller.command(Pose(2.0, 0.0, 0.0), mission)
     assert w > 0  # the new leg goes left
-    path = drive(controller, mission, Pose(2.0, 0.0, 0.0), 12.0)
+    path, mission = drive(controller, mission, Pose(2.0, 0.0, 0.0), 12.0)
     assert mission.done
     on_leg = [p for p in path if 1.2 <= p.y <= 1.8]
     assert on_leg and max(abs(p.x - 2.0) for p in on_leg) < 0.15  # back on the leg x = 2 after the turn
@@ -70,7 +70,7 @@ def test_the_caps_hold_whatever_the_pose(cls):
             for th in (-3.0, -1.0, 0.0, 1.5, 3.1):
                 v, w = controller.command(Pose(x, y, th), line())
                 assert 0.0 <= v <= 0.2 + 1e-9 and abs(w) <= 0.3 + 1e-9 and math.isfinite(v + w)
-    assert controller.command(Pose(0, 0, 0), MissionProgress([(1.0, 0.0)], index=1)) == (0.0, 0.0)  # done
+    assert controller.command(Pose(0, 0, 0), Mission.route([(1.0, 0.0)], index=1)) == (0.0, 0.0)  # done
 
 
 def test_regulated_pure_pursuit_slows_for_curvature_and_near_the_goal():

@@ -4,6 +4,7 @@ import json
 import math
 import os
 import stat
+from dataclasses import replace
 
 import pytest
 
@@ -29,26 +30,47 @@ from arbiter_tui.analytics.store import FIELDS, AnalyticsStore, DataPoint, stats
 from ..support.points import random_points
 
 
-def test_csv_header_is_the_seeds_then_the_run_id():
+def test_csv_header_is_the_seeds_then_the_run_id_and_the_gap():
     seed = "timestamp,x,y,theta,linearVel,angularVel,distanceError,headingError,algorithm,latencyMs"
-    assert seed + ",runId" == CSV_HEADER
+    assert seed + ",runId,gap" == CSV_HEADER
     assert to_csv([]).splitlines()[0] == CSV_HEADER
 
 
-def test_the_seeds_own_csv_reads_back_without_run_ids():
+def test_the_seeds_own_csv_and_ours_before_the_gap_read_back():
     pts = random_points(5, seed=9)
-    seed_csv = "\n".join(line.rsplit(",", 1)[0] for line in to_csv(pts).splitlines()) + "\n"
+    seed_csv = "\n".join(line.rsplit(",", 2)[0] for line in to_csv(pts).splitlines()) + "\n"
     assert seed_csv.splitlines()[0] == SEED_CSV_HEADER
-    assert parse_csv(seed_csv) == pts
+    assert parse_csv(seed_csv) == [replace(p, runId=None) for p in pts]
+    runs_csv = "\n".join(line.rsplit(",", 1)[0] for line in to_csv(pts).splitlines()) + "\n"
+    assert parse_csv(runs_csv) == pts  # eleven columns: runId, no gap
     with pytest.raises(ExportFormatError, match="line 2: expected 10 columns"):
         parse_csv(SEED_CSV_HEADER + "\n1,2\n")
 
 
+def test_a_gap_survives_every_format_and_its_step_is_not_in_the_path(tmp_path):
+    """A sample that follows a gap (the link was down) says so in CSV (1), JSON (true) and MCAP, and the
+    jump into it (the odometry back at the origin after a backend restart) is no path."""
+    pts = [DataPoint(1000.0 + 100 * i, 0.1 * i, 0.0, 0.0, 0.5, 0.0, 0.0, 0.0, "manual", 1.0)
+           for i in range(5)]  # fmt: skip
+    pts += [DataPoint(9000.0 + 100 * i, 0.1 * i, 0.0, 0.0, 0.5, 0.0, 0.0, 0.0, "manual", 1.0, gap=i == 0)
+            for i in range(3)]  # fmt: skip
+    assert stats_of_points(pts).totalPathLength == pytest.approx(0.4 + 0.2)
+    assert to_csv(pts).splitlines()[6].endswith(",,1")
+    assert parse_csv(to_csv(pts)) == pts
+    assert parse_json(to_json(pts)) == pts
+    assert parse_mcap(to_mcap(pts)) == pts
+    with pytest.raises(ExportFormatError, match="line 2: gap"):
+        parse_csv(to_csv(pts[:1]).replace(",,\n", ",,yes\n"))
+
+
 @pytest.mark.parametrize("bad", ["0", "-3", "1.5", "x", str(2**32)])
 def test_a_bad_run_id_is_a_clear_error(bad):
-    text = to_csv(random_points(1, seed=1)).rstrip("\n") + bad + "\n"
+    text = to_csv(random_points(1, seed=1))
+    head, row = text.splitlines()
+    cells = row.split(",")
+    cells[-2] = bad  # the runId column
     with pytest.raises(ExportFormatError, match="line 2: runId"):
-        parse_csv(text)
+        parse_csv(f"{head}\n{','.join(cells)}\n")
 
 
 def test_js_number_formatting():
@@ -66,7 +88,7 @@ def test_csv_round_trip_through_the_csv_module():
     text = to_csv(pts)
     rows = list(csv.DictReader(io.StringIO(text)))
     assert len(rows) == 50
-    assert list(rows[0]) == [*FIELDS, "runId"]
+    assert list(rows[0]) == [*FIELDS, "runId", "gap"]
     assert {r["runId"] for r in rows} == {"", "1", "2", "70000"}
     for p, row in zip(pts, rows, strict=False):
         assert float(row["x"]) == p.x
@@ -81,7 +103,7 @@ def test_json_is_strict_and_round_trips():
     assert "NaN" not in text and "Infinity" not in text
     doc = json.loads(text)
     assert set(doc) == {"dataPoints", "stats"}  # summaries only when given (a store export gives them)
-    assert list(doc["dataPoints"][0]) == [*FIELDS, "runId"]
+    assert list(doc["dataPoints"][0]) == [*FIELDS, "runId", "gap"]
     assert doc["stats"] == stats_of_points(pts).as_dict()
     assert parse_json(text) == pts
 
@@ -206,8 +228,8 @@ def test_full_disk_leaves_no_partial_file(tmp_path, monkeypatch):
         ("", "empty"),
         ("a,b,c\n1,2,3\n", "header"),
         (CSV_HEADER + "\n1,2,3\n", "columns"),
-        (CSV_HEADER + "\n1,2,3,4,5,6,7,8,manual,zz,\n", "not a number"),
-        (CSV_HEADER + "\n1,2,3,4,5,6,7,nan,manual,1,3\n", "not finite"),
+        (CSV_HEADER + "\n1,2,3,4,5,6,7,8,manual,zz,,\n", "not a number"),
+        (CSV_HEADER + "\n1,2,3,4,5,6,7,nan,manual,1,3,\n", "not finite"),
         (SEED_CSV_HEADER + "\n1,2,3,4,5,6,7,8,manual,zz\n", "not a number"),
         ('{"dataPoints": 5}', "dataPoints"),
         ('{"dataPoints": [{"x": 1}]}', "missing field"),
