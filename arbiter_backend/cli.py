@@ -24,6 +24,7 @@ from arbiter_core.cliargs import (
 )
 from arbiter_core.kinematics import Limits
 from arbiter_core.logs import log_to_file
+from arbiter_core.rosenv import rclpy_missing
 from arbiter_core.topics import MEASURED_TYPES
 from arbiter_core.topicstats import WINDOW_S
 
@@ -228,11 +229,9 @@ def make_backend(config: BackendConfig, ros_args: list[str]) -> Backend | RosBac
         if ros_args:
             raise UsageError("--ros-args needs --transport ros")
         return Backend(config)
-    from .ros import ROS_HINT, rclpy_available
-
-    reason = rclpy_available()
-    if reason is not None:
-        raise UsageError(f"{ROS_HINT} ({reason})")
+    missing = rclpy_missing()
+    if missing is not None:
+        raise UsageError(missing)
     from .ros.backend import RosBackend
     from .ros.nodes import ParameterError
 

@@ -27,6 +27,7 @@ from arbiter_core.cliargs import (
 )
 from arbiter_core.kinematics import DEFAULT_LIMITS
 from arbiter_core.logs import default_log_path, log_to_file
+from arbiter_core.rosenv import rclpy_missing
 from arbiter_core.urls import (
     DEFAULT_ROSBRIDGE,
     UrlError,
@@ -270,6 +271,10 @@ def run_app(argv: list[str]) -> int:
         return 2
     # naming a server means using it: never silently start the bundled simulator instead
     mode = CONNECT if args.connect or named else SIM if args.sim else EMBEDDED
+    # the embedded backend on DDS needs rclpy: say how to get it now, not as a console stuck connecting
+    if mode == EMBEDDED and args.transport == "ros" and (missing := rclpy_missing()) is not None:
+        print(f"arbiter-tui: --transport ros: {missing}", file=sys.stderr)
+        return 2
     token = None
     if mode == CONNECT:
         try:
