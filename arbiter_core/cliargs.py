@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import os
+import secrets
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any, NoReturn
@@ -165,9 +167,27 @@ def writable_dir(text: str) -> Path:
         raise argparse.ArgumentTypeError(f"no such directory: {text}")
     if not path.is_dir():
         raise argparse.ArgumentTypeError(f"{text} is a file, not a directory")
-    if not os.access(path, os.W_OK | os.X_OK):
-        raise argparse.ArgumentTypeError(f"{text}: not a directory this user can write to")
+    if not can_create_in(path):
+        raise argparse.ArgumentTypeError(f"{text}: {NOT_WRITABLE}")
     return path
+
+
+NOT_WRITABLE = "not writable (this user cannot create files in it)"
+
+
+def can_create_in(directory: Path) -> bool:
+    """Whether a file can be created in ``directory``, tried with an empty file removed at once: the
+    permission bits alone pass root in /proc, or on a read-only mount, where the write then fails."""
+    if not os.access(directory, os.W_OK | os.X_OK):
+        return False
+    probe = directory / f".arbiter-write-test-{os.getpid()}-{secrets.token_hex(4)}"
+    try:
+        os.close(os.open(probe, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o600))
+    except OSError:
+        return False
+    with contextlib.suppress(OSError):
+        probe.unlink()
+    return True
 
 
 LOG_LEVELS = ("DEBUG", "INFO", "WARNING", "ERROR")

@@ -104,3 +104,29 @@ def test_help_names_the_log_file_and_the_config_file(capsys):
     assert code == 0
     flat = " ".join(out.split())
     assert "arbiter-tui-<pid>.log" in flat and "config.toml" in flat and "--print-config" in flat
+
+
+@pytest.mark.parametrize(
+    ("argv", "prog"),
+    [
+        (["--export-dir", "/proc", "--print-config"], "arbiter-tui"),
+        (["compare", "--mission", "corner", "--algorithms", "stanley", "--export-dir", "/proc"],
+         "arbiter-tui compare"),
+    ],
+)  # fmt: skip
+def test_an_export_dir_that_takes_no_files_is_not_writable_even_for_root(argv, prog, capsys, tmp_path):
+    """Issue 46: root passes the permission check of /proc, and the export then failed with "No such
+    file or directory". Every command with --export-dir tries a file there first, and says what is wrong."""
+    from arbiter_core.cliargs import NOT_WRITABLE
+
+    code, out, err = run_main(tui_cli.main, argv, capsys)
+    assert (code, out) == (2, "")
+    assert err.splitlines() == [f"{prog}: argument --export-dir: /proc: {NOT_WRITABLE} (see --help)"]
+
+
+def test_a_writable_export_dir_is_left_as_it_was(tmp_path):
+    from arbiter_core.cliargs import writable_dir
+
+    (tmp_path / "kept").write_text("x")
+    assert writable_dir(str(tmp_path)) == tmp_path
+    assert [p.name for p in tmp_path.iterdir()] == ["kept"]  # the trial file is gone
