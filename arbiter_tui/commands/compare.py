@@ -7,7 +7,7 @@ import json
 import math
 import sys
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -67,7 +67,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--export-dir",
         type=writable_dir,
         help="also write every run's data points as CSV, JSON and MCAP there (an existing directory you "
-        "can write to)",
+        "can write to); a sweep: one set per latency and trial",
     )
     link = p.add_argument_group(
         "a modelled link (in simulated time): commands reach the robot late, some never; odometry "
@@ -223,12 +223,14 @@ def _aligned(rows: list[list[str]], left: int = 2) -> list[str]:
     return out
 
 
-def export(results: list[RunResult], directory: Path) -> list[Path]:
+def export(results: list[RunResult], directory: Path, stem: str | None = None) -> list[Path]:
+    """One comparison's points and run summaries as CSV, JSON and MCAP, ``stem.csv`` etc. (default
+    ``arbiter_compare_<epoch ms>``)."""
     points = [p for r in results for p in r.points]
     runs = [r.summary for r in results if r.summary is not None]
     rows = [row_of(r) for r in runs]  # one run per (mission, algorithm)
     stats = stats_of_points(points)
-    stem = f"arbiter_compare_{time.time_ns() // 1_000_000}"
+    stem = stem or f"arbiter_compare_{time.time_ns() // 1_000_000}"
     return [
         write_new_file(directory, stem, "csv", to_csv(points).encode()),
         write_new_file(directory, stem, "json", to_json(points, stats, runs, rows).encode()),
@@ -258,12 +260,15 @@ def run(argv: list[str]) -> int:
     except (CompareError, LinkModelError) as exc:
         print(f"arbiter-tui compare: {exc}", file=sys.stderr)
         return 2
-    if args.plot is not None and args.plot.suffix.lower() not in (".svg", ".png"):
-        print(f"arbiter-tui compare: --plot {args.plot}: give a .svg or .png file", file=sys.stderr)
-        return 2
+    if args.plot is not None:
+        from .plotfile import cannot_plot
+
+        if (why := cannot_plot(args.plot)) is not None:  # before the sweep, not after its minutes
+            print(f"arbiter-tui compare: --plot {args.plot}: {why}", file=sys.stderr)
+            return 2
     if latencies is not None or not links[0].perfect or args.trials > 1 or args.plot is not None:
         setup = Sweep(missions, algorithms, speed, turn, links, args.seed, args.trials, args.cmd_timeout)
-        return sweep(setup, args.json, args.plot)
+        return sweep(setup, args.json, args.plot, args.export_dir)
     results = compare(missions, algorithms, speed, turn, cmd_timeout=args.cmd_timeout)
     written: list[Path] = []
     if args.export_dir is not None:
@@ -334,8 +339,8 @@ def run_sweep(setup: Sweep) -> list[SweepCell]:
     return out
 
 
-def sweep_body(setup: Sweep, cells: list[SweepCell]) -> dict[str, Any]:
-    """The sweep's JSON (schema: tests/unit/test_compare.py, README)."""
+def sweep_body(setup: Sweep, cells: list[SweepCell], written: list[Path] | None = None) -> dict[str, Any]:
+    """The sweep's JSON (schema: tests/unit/test_compare.py, README); ``exports``: the files written."""
     return {
         "sweep": [c.as_dict() for c in cells],
         "trials": setup.trials,
@@ -345,23 +350,62 @@ def sweep_body(setup: Sweep, cells: list[SweepCell]) -> dict[str, Any]:
         "interval": INTERVAL,
         "rule": ranking.RULE,
         "verdict_rule": VERDICT_RULE,
+        "exports": [str(p) for p in written or ()],
     }
 
 
-def sweep(setup: Sweep, as_json: bool, plot: Path | None = None) -> int:
+def _from(results: list[RunResult], t0_ms: float) -> list[RunResult]:
+    """A comparison run in simulated time from 0 (a sweep's, deterministic), moved to start at
+    ``t0_ms``, as plain ``compare`` runs from now: its points and summaries, each run's span kept."""
+
+    def later(ms: float | None) -> float | None:
+        return None if ms is None else ms + t0_ms
+
+    out = []
+    for r in results:
+        s = r.summary
+        if s is not None:
+            s = replace(s, start_ms=s.start_ms + t0_ms, end_ms=later(s.end_ms), last_ms=later(s.last_ms))
+        points = [replace(p, timestamp=p.timestamp + t0_ms) for p in r.points]
+        out.append(replace(r, points=points, summary=s))
+    return out
+
+
+def export_sweep(cells: list[SweepCell], directory: Path) -> list[Path]:
+    """Every comparison of a sweep, one per link and trial, as plain ``--export-dir`` writes one:
+    ``arbiter_compare_<epoch ms>_latency<MS>ms_trial<K>`` .csv, .json and .mcap (the name carries the
+    link's latency, the one figure a sweep varies; each file's runs are numbered from 1)."""
+    now = time.time_ns() // 1_000_000
+    written: list[Path] = []
+    for cell in cells:
+        for k, results in enumerate(cell.runs):
+            stem = f"arbiter_compare_{now}_latency{cell.link.latency_s * 1e3:g}ms_trial{k}"
+            written += export(_from(results, now), directory, stem)
+    return written
+
+
+def sweep(setup: Sweep, as_json: bool, plot: Path | None = None, export_dir: Path | None = None) -> int:
     """The whole comparison once per link (one per ``--latency`` value) and trial; per mission a ranked
-    table with intervals and a verdict, then avg e_xt per controller and latency side by side."""
+    table with intervals and a verdict, then avg e_xt per controller and latency side by side. With
+    ``export_dir``, every comparison's runs written there (``export_sweep``)."""
     cells = run_sweep(setup)
     if plot is not None:
         try:
             from .plotfile import write_plot
 
             write_plot(plot, cells)
-        except (OSError, ImportError) as exc:
+        except (OSError, ImportError) as exc:  # checked before the sweep; a disk that filled since
             print(f"arbiter-tui compare: --plot {plot}: {exc}", file=sys.stderr)
             return 1
+    written: list[Path] = []
+    if export_dir is not None:
+        try:
+            written = export_sweep(cells, export_dir)
+        except ExportError as exc:
+            print(f"arbiter-tui compare: {exc}", file=sys.stderr)
+            return 1
     if as_json:
-        print(json.dumps(sweep_body(setup, cells), allow_nan=False))
+        print(json.dumps(sweep_body(setup, cells, written), allow_nan=False))
         return 0
     for cell in cells:
         d = cell.link.as_dict()
@@ -373,8 +417,8 @@ def sweep(setup: Sweep, as_json: bool, plot: Path | None = None) -> int:
         print()
     print(f"avg e_xt (m) by one-way latency ({INTERVAL if setup.trials > 1 else 'one trial'}):")
     print("\n".join(error_vs_latency(cells)))
-    if plot is not None:
-        print(f"wrote {plot}")
+    for path in ([plot] if plot is not None else []) + written:
+        print(f"wrote {path}")
     return 0
 
 

@@ -8,7 +8,9 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
+
+from arbiter_core.cliargs import NOT_WRITABLE, can_create_in
 
 from ..analytics.styles import style_of
 
@@ -31,12 +33,11 @@ def series(cells: list[SweepCell]) -> dict[str, dict[str, list[tuple[float, floa
 
 
 INSTALL = "pip install 'arbiter-tui[report]' (from a clone: pip install -e '.[report]')"
+SUFFIXES = (".svg", ".png")
 
 
-def figure(cells: list[SweepCell]) -> Figure:
-    """The figure: one panel per mission, and one legend for them all to the right of the panels, off
-    the data (inside a panel it covered the points at the longest latencies). ImportError (with how to
-    install) when matplotlib is missing."""
+def _pyplot() -> Any:
+    """matplotlib.pyplot on the headless Agg backend; ImportError (with how to install) when missing."""
     try:
         import matplotlib
 
@@ -44,6 +45,42 @@ def figure(cells: list[SweepCell]) -> Figure:
         import matplotlib.pyplot as plt
     except ImportError:
         raise ImportError(f"needs matplotlib: {INSTALL}") from None
+    return plt
+
+
+def cannot_plot(path: Path) -> str | None:
+    """Why the figure could not be written to ``path``, in words, or None: asked before a sweep runs, so
+    a long sweep never ends in a plot that fails. Nothing is left behind (an existing file is opened to
+    append nothing, a new one is tried in its directory and removed)."""
+    if path.suffix.lower() not in SUFFIXES:
+        return "give a .svg or .png file"
+    if path.is_dir():
+        return "a directory, not a file"
+    if path.exists() and not path.is_file():
+        return "not a regular file"  # a FIFO would block the check, a device take the image
+    directory = path.parent
+    if not directory.is_dir():
+        return f"no such directory: {directory}"
+    if path.exists():
+        try:
+            with open(path, "ab"):
+                pass
+        except OSError:
+            return NOT_WRITABLE
+    elif not can_create_in(directory):
+        return f"{directory}: {NOT_WRITABLE}"
+    try:
+        _pyplot()
+    except ImportError as exc:
+        return str(exc)
+    return None
+
+
+def figure(cells: list[SweepCell]) -> Figure:
+    """The figure: one panel per mission, and one legend for them all to the right of the panels, off
+    the data (inside a panel it covered the points at the longest latencies). ImportError (with how to
+    install) when matplotlib is missing."""
+    plt = _pyplot()
     data = series(cells)
     n = len(data)
     cols = min(n, 2)
@@ -83,8 +120,7 @@ def write_plot(path: Path, cells: list[SweepCell]) -> None:
     """Write the figure as SVG or PNG (by the suffix); ImportError (with how to install) when matplotlib
     is missing."""
     fig = figure(cells)
-    import matplotlib.pyplot as plt
-
+    plt = _pyplot()
     try:
         fig.savefig(path, format=path.suffix.lower().lstrip("."), bbox_inches="tight")
     finally:

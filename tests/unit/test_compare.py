@@ -128,6 +128,7 @@ def test_a_sweeps_json_holds_every_cell_trial_and_the_rules(capsys):
         "interval",
         "rule",
         "verdict_rule",
+        "exports",
     }
     assert body["trials"] == 3 and body["seed"] == 4 and body["cmd_timeout_s"] == 0.5
     assert "half-normal" in body["jitter"] and "95 %" in body["interval"] and body["rule"] == RULE
@@ -347,10 +348,76 @@ def test_plot_without_matplotlib_says_how_to_install_it_from_pypi_and_a_clone(tm
 
     monkeypatch.setitem(sys.modules, "matplotlib", None)  # import matplotlib -> ImportError
     out = tmp_path / "sweep.svg"
-    assert main(["compare", "--latency", "0", "--mission", "corner", "--plot", str(out)]) == 1
+    assert main(["compare", "--latency", "0", "--mission", "corner", "--plot", str(out)]) == 2
     (err,) = capsys.readouterr().err.strip().splitlines()
     assert "pip install 'arbiter-tui[report]'" in err and "pip install -e '.[report]'" in err, err
     assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    ("where", "says"),
+    [
+        ("no-matplotlib", "needs matplotlib: pip install"),
+        ("/proc/sweep.svg", "/proc: not writable"),
+        ("missing/sweep.svg", "no such directory: "),
+        ("a-dir.svg", "a directory, not a file"),
+    ],
+)
+def test_a_plot_that_cannot_be_written_is_refused_before_the_sweep(
+    tmp_path, capsys, monkeypatch, where, says
+):
+    """Issue 46: a 20 s sweep ended in "needs matplotlib" or a plot path that takes no file. Now that is
+    one line on stderr and exit 2 before anything runs: no sweep, no tables, no file."""
+    import sys
+
+    from arbiter_tui.commands import compare as compare_cmd
+
+    def sweep_ran(*args, **kwargs):
+        raise AssertionError("the sweep ran before the plot was known to be writable")
+
+    monkeypatch.setattr(compare_cmd, "run_sweep", sweep_ran)
+    monkeypatch.chdir(tmp_path)
+    if where == "no-matplotlib":
+        monkeypatch.setitem(sys.modules, "matplotlib", None)
+        where = "sweep.svg"
+    if where == "a-dir.svg":
+        (tmp_path / where).mkdir()
+    assert main(["compare", "--latency", "0,100", "--mission", "corner", "--plot", where]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and len(err.splitlines()) == 1, err
+    assert err.startswith(f"arbiter-tui compare: --plot {where}: ") and says in err, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == (["a-dir.svg"] if where == "a-dir.svg" else [])
+
+
+def test_a_sweep_exports_every_comparison_it_ran(tmp_path, capsys):
+    """Issue 46: `compare --latency ... --export-dir DIR` wrote nothing and exited 0. Each link and trial
+    is one comparison, written as plain `--export-dir` writes one, named by its latency and trial, its
+    runs from now (the sweep runs them from 0 in simulated time)."""
+    t0_ms = time.time() * 1000
+    body = run_json(
+        capsys, "--latency", "0,150", "--trials", "2", "--mission", "corner",
+        "--algorithms", "stanley,pure_pursuit", "--export-dir", str(tmp_path),
+    )  # fmt: skip
+    stem = body["exports"][0].rsplit("/", 1)[1].split("_latency")[0]
+    wanted = [
+        f"{stem}_latency{ms}ms_trial{k}.{ext}"
+        for ms in (0, 150)
+        for k in (0, 1)
+        for ext in ("csv", "json", "mcap")
+    ]
+    assert sorted(p.rsplit("/", 1)[1] for p in body["exports"]) == sorted(wanted)
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(wanted)
+    for cell, ms in zip(body["sweep"], (0, 150), strict=True):
+        for k in (0, 1):
+            runs = [r for r in cell["runs"] if r["trial"] == k]
+            for ext in ("csv", "json"):  # read back with the reader `stats` uses
+                points = load_points(tmp_path / f"{stem}_latency{ms}ms_trial{k}.{ext}")
+                for r in runs:
+                    mine = [p for p in points if p.runId == r["run"]]
+                    assert len(mine) == r["stats"]["sampleCount"] and {p.algorithm for p in mine} == {
+                        r["algorithm"]
+                    }
+                assert min(p.timestamp for p in points) >= t0_ms - 1000  # from now, not from 1970
 
 
 def _compare_exit(capsys, *args):
