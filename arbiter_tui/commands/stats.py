@@ -175,6 +175,9 @@ def run(argv: list[str]) -> int:
     except (ExportFormatError, OSError) as exc:
         print(f"arbiter-tui stats: {args.file}: {exc}", file=sys.stderr)
         return 1
+    if not export.points and not export.runs:  # a CSV's header alone: nothing to compute stats of
+        print(f"arbiter-tui stats: {args.file}: no samples", file=sys.stderr)
+        return 1
     labels: dict[str, RunLabel] = {}
     runs = {f"run {r.id}": r for r in export.runs or ()}
     if args.by is None:

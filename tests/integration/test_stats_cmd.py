@@ -310,3 +310,21 @@ def test_by_run_has_one_order_for_every_format_and_names_each_runs_algorithm(tmp
             "no run": (None, None, None),
         }, fmt
         assert [body[k]["sampleCount"] for k in body] == [5, 4, 5], fmt
+
+
+@pytest.mark.parametrize(
+    "content",
+    [HEADER, to_csv([]).encode(), to_json([]).encode(), to_mcap([])],
+    ids=["seed CSV header", "CSV header", "JSON export", "MCAP export"],
+)
+@pytest.mark.parametrize(
+    "by", [[], ["--by", "run"], ["--by", "algorithm"], ["--json"]], ids=lambda by: " ".join(by) or "table"
+)
+def test_an_export_with_no_samples_says_so(tmp_path, content, by):
+    """Issue 46: a header-only CSV printed nothing (`--by run`) or nine zeros, exit 0. Like every file
+    `stats` cannot give figures for: one line naming it, exit 1."""
+    f = tmp_path / "empty_export"
+    f.write_bytes(content)
+    r = run(f, *by)
+    assert (r.returncode, r.stdout) == (1, "")
+    assert r.stderr.splitlines() == [f"arbiter-tui stats: {f}: no samples"]
