@@ -71,8 +71,19 @@ class Observer:
         self._pending_goal: Point | None = None  # a goal before any odometry: its run starts at the first
         self._pending_plan: np.ndarray | None = None  # ... with this plan, when one came for it
         self._last_ms = 0.0
+        self._gap = False  # the next sample follows a gap (the link was lost)
         self.samples = 0
         self.foreign_stamps = 0  # stamped commands whose stamp is from another clock (no latency taken)
+
+    # -- what the screen shows -------------------------------------------------------------------
+    @property
+    def current_goal(self) -> Point | None:
+        """The goal of the observed run in progress (None: no run)."""
+        return self._goal if self._run is not None else None
+
+    @property
+    def current_run(self) -> int | None:
+        return self._run
 
     # -- what arrives --------------------------------------------------------------------------
     def wants_odometry(self, t_ns: int) -> bool:
@@ -108,9 +119,11 @@ class Observer:
             algorithm=self.config.label,
             latencyMs=self._cmd_latency_ms,
             runId=self._run,
+            gap=self._gap,
         )
         if self.store.record(point):
             self.samples += 1
+            self._gap = False
         if (
             self._run is not None
             and goal is not None
@@ -162,6 +175,14 @@ class Observer:
             self._pending_goal, self._pending_plan = (x, y), None
             return
         self._start(t_ns, (x, y), reference_path((self._pose.x, self._pose.y), [(x, y)]), plan=False)
+
+    def lost(self) -> None:
+        """The data stopped for a while (the link to the robot was lost): the run in progress ends as
+        aborted at its last sample, and the next sample follows a gap (no path is counted across it)."""
+        self.finish()
+        self._gap = True
+        self._cmd = None
+        self._cmd_latency_ms = None
 
     def finish(self) -> None:
         """The data ended: a run still going ends as aborted, at the last sample."""

@@ -43,6 +43,9 @@ SCALE_KEYS: dict[str, tuple[float, float]] = {
     "c": (1.0, 0.9),
 }
 STOP_KEYS = frozenset({"k", " ", "space"})
+# The stop key that is never text: it stops from inside a text input too (where space and k type), on
+# every screen and dialog (README, "Safety").
+ANYWHERE_STOP = "ctrl+k"
 
 
 def key_name(character: str | None, key: str) -> str:

@@ -19,6 +19,8 @@ from arbiter_core.record import LatencyRecord, RecordError, parse_latency_stats
 from arbiter_core.stats import Summary
 from arbiter_core.timesync import TimeSync
 
+from .autonomy_client import AutonomyClient
+
 if TYPE_CHECKING:
     import httpx
 
@@ -150,6 +152,7 @@ class TrackerClient:
     ) -> None:
         self.base_url = base_url.rstrip("/")
         self.limit = limit
+        self._token, self._ca_file = token, ca_file
         self.view = LatencyView()
         import httpx  # here, not at module level: ~90 ms the console's first frame need not wait for
 
@@ -200,6 +203,10 @@ class TrackerClient:
     async def get(self, path: str) -> httpx.Response:
         """Another endpoint of the same API (``/api/topics``), with the same client, token and TLS."""
         return await self._client.get(f"{self.base_url}{path}")
+
+    def autonomy(self) -> AutonomyClient:
+        """The same backend's robot-side controller API, with the same token and TLS settings."""
+        return AutonomyClient(self.base_url, token=self._token, ca_file=self._ca_file)
 
     async def aclose(self) -> None:
         await self._client.aclose()

@@ -11,8 +11,9 @@ from __future__ import annotations
 import math
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import Any, Protocol, runtime_checkable
 
 from arbiter_core.kinematics import Pose, odometry_jumped, pose_of_odometry
 from arbiter_core.record import LatencyRecord, RecordError
@@ -118,6 +119,22 @@ class Link(Protocol):
     def send(self, v: float, w: float) -> bool: ...
 
     def close(self) -> None: ...
+
+
+ServiceDone = Callable[[bool, Any], None]  # (answered with a result, its values or the error text)
+
+
+@runtime_checkable
+class ReachesOthers(Protocol):
+    """A link that can reach more than its own command path: a stop asks foreign controllers to stop
+    through it (``control/stop.py``). Both calls return at once (False: the link is down) and never
+    raise; ``done`` comes on the link's thread, or never (the caller bounds its wait)."""
+
+    def call_service(
+        self, service: str, args: dict[str, Any], timeout_s: float, done: ServiceDone
+    ) -> bool: ...
+
+    def publish_zero(self, topic: str, stamped: bool) -> bool: ...
 
 
 class PendingLink:

@@ -96,6 +96,7 @@ class RosLink:
         self._ever_connected = False
         self._error: str | None = None
         self._odom_problem: str | None = None  # what the server said when it refused our odometry
+        self._zero_pubs: dict[tuple[str, str], Any] = {}  # a stop's zero velocity, by (topic, type)
         self._reactor: Any = reactor
         # relative names resolve under the namespace, absolute ones are used as given (ROS rules)
         self.topic_stamped = topics.resolve(topics.STAMPED, namespace)
@@ -361,6 +362,49 @@ class RosLink:
                 remove()
 
         return stop
+
+    def call_service(
+        self, service: str, args: dict[str, Any], timeout_s: float, done: Callable[[bool, Any], None]
+    ) -> bool:
+        """rosbridge ``call_service`` (roslibpy's pending-request table answers it), with the server
+        bounding its own wait (``timeout``); False at once while the link is down (nothing is queued for
+        a reconnect). ``done(True, values)`` or ``done(False, error text)`` on the reactor's thread."""
+        import roslibpy
+
+        if self.state != CONNECTED:
+            return False
+        ident = f"call_service:{service}:{self.ros.id_counter}"
+        frame = {"op": "call_service", "id": ident, "service": service, "args": args, "timeout": timeout_s}
+        try:
+            self.ros.call_async_service(
+                roslibpy.Message(frame), lambda values: done(True, values), lambda error: done(False, error)
+            )
+        except Exception:  # a socket closing under us: the caller's wait ends it
+            log.debug("call_service %s failed", service, exc_info=True)
+            return False
+        return True
+
+    def publish_zero(self, topic: str, stamped: bool) -> bool:
+        """One zero velocity command on ``topic`` (Twist, or TwistStamped stamped now), advertised on its
+        first use; False while the link is down."""
+        import roslibpy
+
+        if self.state != CONNECTED:
+            return False
+        type_name = TYPE_TWIST_STAMPED if stamped else TYPE_TWIST
+        with self._lock:
+            pub = self._zero_pubs.get((topic, type_name))
+            if pub is None:
+                pub = self._zero_pubs[(topic, type_name)] = roslibpy.Topic(self.ros, topic, type_name)
+        zero = topics.twist(0.0, 0.0)
+        msg = zero if not stamped else {"header": {"stamp": topics.stamp(time.time_ns()), "frame_id": ""},
+                                        "twist": zero}  # fmt: skip
+        try:
+            pub.publish(roslibpy.Message(msg))
+        except Exception:
+            log.debug("zero on %s failed", topic, exc_info=True)
+            return False
+        return True
 
     def close(self) -> None:
         with self._lock:

@@ -29,6 +29,8 @@ from .views import (
     AnalyticsView,
     LatencySnapshot,
     MapView,
+    Observed,
+    RobotSideView,
     RobotView,
     StatusView,
     analytics_view,
@@ -165,6 +167,7 @@ class FrameSampler:
         self._slow_at = {ANALYTICS: float("-inf"), LATENCY: float("-inf"), TOPICS: float("-inf")}
         self._count_at = float("-inf")
         self._topics: TopicsState | None = None  # the last topics answer, for the next slow frame
+        self.robot_side: RobotSideView | None = None  # observe mode: the robot-side controller's last answer
         self._sweep_version = -1  # the store version the measured p95 is from
         # holds the sweep's child while the robot drives, where the console has no core to spare
         self.sweep_pause = sweep_pause if sweep_pause is not None else SweepPause(cores_available)
@@ -173,6 +176,24 @@ class FrameSampler:
     def topics_polled(self, state: TopicsState) -> None:
         """A topics answer: shown with the next frame that takes the slow parts."""
         self._topics = state
+
+    def robot_side_polled(self, view: RobotSideView) -> None:
+        """The robot-side controller's answer (observe mode): shown with the next frame."""
+        self.robot_side = view
+
+    def observed(self) -> Observed | None:
+        """Observe mode: what the panel and the map show of the observed controller."""
+        st, observer = self.settings, self.session.observer
+        if not st.observe or observer is None:
+            return None
+        goal = observer.current_goal
+        return Observed(
+            label=st.observe_label,
+            watches=f"{st.cmd_topic} {st.plan_topic} {st.goal_topic}",
+            goal=None if goal is None else (round(goal[0], 2), round(goal[1], 2)),
+            run=observer.current_run,
+            robot_side=self.robot_side,
+        )
 
     def sweep_changed(self, view: LinkSweepView) -> None:
         """The sweep started, ended or failed (only a running sweep is ever paused)."""
@@ -210,11 +231,15 @@ class FrameSampler:
         slow = set(self._slow_at) if force else set(due and [min(due, key=self._slow_at.__getitem__)])
         for part in slow:
             self._slow_at[part] = now
-        status = self._status(f.status, now, bool(slow), force)
+        # the sample count follows in a frame that takes a slow part; where no slow part is shown (the
+        # control screen below the dashboard's size), in any frame, at most every COUNT_PERIOD_S
+        counts = bool(slow) or not any(shown.shows(part) for part in self._slow_at)
+        status = self._status(f.status, now, counts, force)
         robot, trail, analytics, latency, sweep = f.robot, f.map, f.analytics, f.latency, f.link_sweep
         if shown.screen == CONTROL and (force or not (slow and shown.dashboard)):
-            robot = _kept(f.robot, robot_view(s.link, s.loop, s.too_small))
-            trail = _kept(f.map, map_view(s.link, s.loop, f.map))
+            observed = self.observed()
+            robot = _kept(f.robot, robot_view(s.link, s.loop, s.too_small, observed=observed))
+            trail = _kept(f.map, map_view(s.link, s.loop, f.map, observed=observed))
         if ANALYTICS in slow and shown.shows(ANALYTICS):
             analytics = analytics_view(s.store, f.analytics, s.loop)
             sweep = self._measured_p95(sweep)
@@ -248,9 +273,11 @@ class FrameSampler:
     def status(self) -> StatusView:
         s = self.session
         simulated = self.settings.mode == SIM
+        observing = self.settings.observe_label if self.settings.observe else None
         return status_view(
-            s.link, self.target(), s.loop, s.store, self.tracker_view(), simulated, self.start_error
-        )
+            s.link, self.target(), s.loop, s.store, self.tracker_view(), simulated, self.start_error,
+            observing=observing,
+        )  # fmt: skip
 
     def _status(self, shown: StatusView, now: float, slow: bool, force: bool) -> StatusView:
         """The status line; a change of the sample count alone shows in a slow frame, at most every

@@ -23,8 +23,9 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from arbiter_core.controllers import choose_controller_hint
+from arbiter_core.controllers import choose_controller_hint, goal_driver
 from arbiter_core.simulator import RATE_HZ as SIM_HZ
 from arbiter_core.topicstats import TopicFigures
 
@@ -33,12 +34,18 @@ from ..analytics.observe import ObserveConfig, Observer
 from ..analytics.runs import MANUAL
 from ..analytics.store import AnalyticsStore, DataPoint
 from ..control.loop import ControlLoop
+from ..control.stop import StopReport, stop_scope
 from ..control.teleop import MOVE_KEYS, SCALE_KEYS, STOP_KEYS, Teleop
+from ..latency.autonomy import AutonomyUnavailable, RobotSideView
 from ..link.base import DISCONNECTED, RECONNECTING, STARTING, Link
 from ..link.sim import SimLink
 from .collector import TickCollector
 from .echo import TopicEcho
-from .settings import Settings
+from .remote_stop import RemoteStop
+from .settings import SIM, Settings
+
+if TYPE_CHECKING:  # the client imports httpx: the session side (and compare) load it only when asked
+    from ..latency.autonomy_client import AutonomyClient
 
 log = logging.getLogger(__name__)
 
@@ -50,6 +57,13 @@ class ExportResult:
     points: int
     error: str | None = None
     nothing: bool = False  # refused: no samples to export (not a failure)
+
+
+@dataclass(frozen=True)
+class StopDone:
+    """A stop's remote part ended (``remote_stop.py``): what it did, in words."""
+
+    report: StopReport
 
 
 @dataclass(frozen=True)
@@ -107,8 +121,19 @@ class RobotSession:
             else None
         )
         self._unobserve: Callable[[], None] | None = None
+        self._observed_life: int | None = None
+        self._observed_telemetry: object = None
         self._observe(link)
         self.echo = TopicEcho()  # the topics screen's echo of one topic
+        # what a stop reaches beyond the console's own commands (control/stop.py), done on its own thread
+        self.autonomy: AutonomyClient | None = None  # the backend's robot-side controller API, once known
+        self.stop_scope = stop_scope(
+            config.mode == SIM or not config.live, config.observe, config.namespace, config.cmd_topic,
+            config.cmd_stamped, config.stop_actions,
+        )  # fmt: skip
+        self.remote_stop = RemoteStop(
+            self.stop_scope, lambda: self.link, lambda: self.autonomy, lambda r: self.on_event(StopDone(r))
+        )
         self.last_export: ExportResult | None = None
         self.too_small = False
         self.stop_reason: str | None = None
@@ -136,6 +161,15 @@ class RobotSession:
             self.loop.link = link
         self._observe(link)
 
+    def _follow_observed_life(self) -> None:
+        """Observe mode: a new odometry life (the link lost, the pose jumped) ends the observed run and
+        leaves a gap in the record (the session's thread, before each control tick)."""
+        life = self.link.telemetry.life
+        if self.observer is not None and life != self._observed_life:
+            if self._observed_life is not None and self._observed_telemetry is self.link.telemetry:
+                self.observer.lost()
+            self._observed_life, self._observed_telemetry = life, self.link.telemetry
+
     def _observe(self, link: Link) -> None:
         observe = getattr(link, "observe", None)
         if self.observer is None or observe is None:
@@ -158,6 +192,7 @@ class RobotSession:
         """One control tick: a held key's command or the controller's, and run bookkeeping."""
         with self.lock:
             self.published = False
+            self._follow_observed_life()
             try:
                 self.link.telemetry.meter.expire(time.monotonic())  # unreported commands become "lost"
                 refused = self.loop.unsent
@@ -291,6 +326,7 @@ class RobotSession:
     def close(self) -> None:
         """Stop the robot (one zero) and the clocked work."""
         self.stop("quit")
+        self.remote_stop.close()
         self._stopping.set()
         if self._thread is not None and self._thread is not threading.current_thread():
             self._thread.join(timeout=2.0)
@@ -304,6 +340,15 @@ class RobotSession:
             with contextlib.suppress(Exception):
                 self.loop.tick_control(self.clock())
             self._was_running = False
+
+    def stop_all(self, reason: str) -> None:
+        """The stop keys, from any screen, dialog or thread: the console's own driving stops now (one
+        zero), and whatever else drives is asked to stop on the stop's own thread (``control/stop.py``
+        says what that is in each mode; a ``StopDone`` event says what it did)."""
+        with self.lock:
+            self.stop(reason)
+            self.loop.acknowledge()  # a stop is a key: the last run's "done" line goes
+        self.remote_stop.request()
 
     def end_manual_hold(self, reason: str) -> None:
         """A held teleop key ends now (one zero); an autonomous run is left driving."""
@@ -324,10 +369,11 @@ class RobotSession:
     def key(self, key: str) -> bool:
         """A key pressed on the control screen; True if teleop used it."""
         with self.lock:
+            if key in STOP_KEYS:  # everywhere, whatever else holds: a stop
+                self.stop_all("stop key")
+                return True
             if self.too_small:
                 return key in MOVE_KEYS or key in SCALE_KEYS  # swallowed: nothing moves unseen
-            if self.loop.running and key in STOP_KEYS:
-                self.loop.stop()
             if key in MOVE_KEYS and self.loop.algorithm != MANUAL:
                 # Manual keys take over from an autonomous controller (g resumes its mission): the run
                 # ends as overridden before the key is pressed, once.
@@ -337,14 +383,10 @@ class RobotSession:
             if result is None:
                 return False
             self.loop.acknowledge()  # the last run's "done" stays until the next mission or key
-            if result == "move":
-                if (self.teleop.moving, self.teleop.target) != before:
-                    # a new key (or direction) is answered at once; a key's auto-repeats only keep it
-                    # held, and the control tick sends at --repeat-rate
-                    self.tick_control()
-            elif result == "stop":
-                self.stop_reason = "stop key"
-                self.tick_control()  # the zero goes now, not at the next tick
+            if result == "move" and (self.teleop.moving, self.teleop.target) != before:
+                # a new key (or direction) is answered at once; a key's auto-repeats only keep it held,
+                # and the control tick sends at --repeat-rate
+                self.tick_control()
             return True
 
     def select_algorithm(self, name: str) -> None:
@@ -369,6 +411,33 @@ class RobotSession:
                 return NO_LINK_WORDS  # a mission that cannot move says why, instead of "driving" at v 0
             started = self.loop.restart() if restart else self.loop.go()
             return None if started else choose_controller_hint()
+
+    # -- the robot-side controller (observe mode: g starts it, the stop keys stop it) ------------------
+    def robot_side(self) -> RobotSideView:
+        """Ask the backend's robot-side controller how it is (blocking: a worker's thread)."""
+        client = self.autonomy
+        if client is None:
+            return RobotSideView(known=True, text="no backend API to ask")
+        try:
+            status = client.status()
+        except AutonomyUnavailable as exc:
+            text = "off: the backend runs without --autonomy" if exc.disabled else f"cannot ask: {exc}"
+            return RobotSideView(known=True, enabled=False, text=text)
+        text = status.state if status.algorithm is None else f"{status.run()}, {status.state}"
+        return RobotSideView(known=True, enabled=True, running=status.running, text=text)
+
+    def start_robot_side(self) -> str:
+        """``g`` in observe mode: the selected controller (go_to_goal when manual is selected) on the
+        selected mission, started on the robot at the console's max speed and turn (blocking: a worker's
+        thread). One line saying what happened; AutonomyUnavailable when the backend refused."""
+        client = self.autonomy
+        if client is None:
+            raise AutonomyUnavailable("no backend API to ask")
+        with self.lock:
+            algorithm = goal_driver(self.loop.algorithm)
+            mission, speed, turn = self.loop.mission_name, self.teleop.speed, self.teleop.turn
+        status = client.start(algorithm, mission, speed, turn)
+        return f"robot-side {status.run()}: started on the robot"
 
     def take_notice(self) -> str | None:
         """What the last ``g`` has to say beside starting (a mission forgotten since), once."""

@@ -52,3 +52,6 @@ class Settings:
     cmd_stamped: bool = False  # geometry_msgs/TwistStamped (its age is the sample's latency), else Twist
     plan_topic: str = "plan"
     goal_topic: str = "goal_pose"
+    namespace: str = ""  # the robot's namespace: relative topic and action names resolve under it
+    # action servers whose goals a stop cancels (control/stop.py); None: Nav2's in observe mode, else none
+    stop_actions: tuple[str, ...] | None = None

@@ -24,6 +24,7 @@ from arbiter_core.timesync import TimeSync, one_way_bound_ms
 from ..analytics.runs import MANUAL, AlgorithmSummary, RunSummary
 from ..analytics.store import EMPTY_STATS, AnalyticsStats, AnalyticsStore
 from ..control.loop import ControlLoop
+from ..latency.autonomy import RobotSideView
 from ..latency.clocksync import MeterSummary
 from ..latency.tracker_client import LatencyView
 from ..link.base import CONNECTED, DISCONNECTED, RECONNECTING, STARTING, Link
@@ -119,6 +120,7 @@ class StatusView:
     api: str | None = None  # "api UNREACHABLE" / "api …" (not answered yet); None when it answers
     error: str | None = None  # why the console could not start its link, or why the link is down
     warning: str | None = None  # e.g. "no odometry on /robot1/odom"
+    observing: str | None = None  # observe mode: the observed controller's label
 
     @property
     def alarm(self) -> bool:
@@ -129,7 +131,10 @@ class StatusView:
         recorded (and how many), an unreachable API, the algorithm, where the backend is, the hint to
         press r, the deploy mode."""
         link = "DISCONNECTED (reconnecting)" if self.link == RECONNECTING else self.link
-        parts = [Part.of(link, ALARM), Part.of(self.target, TARGET)]
+        parts = [Part.of(link, ALARM)]
+        if self.observing:  # the mode is never left out: keys do not do here what they do elsewhere
+            parts.append(Part(((f"OBSERVING {self.observing}", ALARM),)))
+        parts.append(Part.of(self.target, TARGET))
         if self.error:
             parts.append(Part.of(self.error, ALARM))
         if self.deploy:
@@ -178,6 +183,9 @@ class RobotView:
     e_th: float | None = None
     too_small: bool = False
     warning: str | None = None  # e.g. "no odometry on /robot1/odom"
+    observing: str | None = None  # observe mode: what drives (its label) and what the console watches
+    observed_run: int | None = None  # the observed run in progress
+    robot_side: RobotSideView | None = None  # observe mode: the robot-side controller (g starts it)
 
 
 @dataclass(frozen=True, slots=True)
@@ -276,6 +284,7 @@ def status_view(
     simulated: bool,
     error: str | None = None,
     now: float | None = None,
+    observing: str | None = None,
 ) -> StatusView:
     api = deploy = None
     if not simulated and tracker is not None:
@@ -294,6 +303,7 @@ def status_view(
         api=api,
         error=error or getattr(link, "error", None),
         warning=odometry_warning(link, time.monotonic() if now is None else now),
+        observing=observing,
     )
 
 
@@ -313,11 +323,30 @@ def odometry_stale(link: Link, now: float) -> bool:
     return link.state == CONNECTED and link.telemetry.odometry_missing(now)
 
 
-def robot_view(link: Link, loop: ControlLoop, too_small: bool = False, now: float | None = None) -> RobotView:
+@dataclass(frozen=True, slots=True)
+class Observed:
+    """Observe mode, for the panel: what drives and what the console watches, the observed run's goal."""
+
+    label: str
+    watches: str  # "/cmd_vel /plan /goal_pose"
+    goal: tuple[float, float] | None = None
+    run: int | None = None
+    robot_side: RobotSideView | None = None
+
+
+def robot_view(
+    link: Link,
+    loop: ControlLoop,
+    too_small: bool = False,
+    now: float | None = None,
+    observed: Observed | None = None,
+) -> RobotView:
     pose, v_odom, w_odom, _lat = link.telemetry.snapshot()
     now = time.monotonic() if now is None else now
     plan = loop.plan(pose)  # what g drives: the goal shown is the one it drives to
     goal = None if plan is None else plan.goal
+    if observed is not None:  # the goal shown is the observed controller's, never a console mission's
+        plan, goal = None, observed.goal
     e_d = e_th = None
     if goal is not None:
         e_d, e_th = round(distance_error(pose, goal), 2), round(heading_error(pose, goal), 2)
@@ -349,11 +378,18 @@ def robot_view(link: Link, loop: ControlLoop, too_small: bool = False, now: floa
         e_th=e_th,
         too_small=too_small,
         warning=odometry_warning(link, now),
+        observing=None if observed is None else f"{observed.label}: {observed.watches}",
+        observed_run=None if observed is None else observed.run,
+        robot_side=None if observed is None else observed.robot_side,
     )
 
 
 def map_view(
-    link: Link, loop: ControlLoop, previous: MapView | None = None, now: float | None = None
+    link: Link,
+    loop: ControlLoop,
+    previous: MapView | None = None,
+    now: float | None = None,
+    observed: Observed | None = None,
 ) -> MapView:
     pose = link.telemetry.snapshot()[0]
     version = loop.trail_version
@@ -363,12 +399,15 @@ def map_view(
         trail = tuple(loop.trail)
         bounds = bounds_of(trail)
     plan = loop.plan(pose)  # the waypoints where g takes the robot, not the mission's own frame
+    goal = None if plan is None else plan.goal
+    if observed is not None:  # observing: the observed controller's goal, no mission of the console's
+        plan, goal = None, observed.goal
     return MapView(
         version=version,
         trail=trail,
         bounds=bounds,
         pose=(round(pose.x, 2), round(pose.y, 2), round(pose.theta, 1)),
-        goal=None if plan is None else plan.goal,
+        goal=goal,
         waypoints=() if plan is None else tuple(plan.waypoints),
         stale=odometry_stale(link, time.monotonic() if now is None else now),
     )

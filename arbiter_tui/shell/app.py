@@ -22,8 +22,10 @@ from functools import partial
 from textual import events, on, work
 from textual.app import App, SystemCommand
 from textual.binding import Binding
+from textual.command import CommandPalette
 from textual.driver import Driver
 from textual.screen import Screen
+from textual.widgets import Input, TextArea
 
 from ..analytics.linkcurve import FAILED, READY, CurveError
 from ..analytics.store import AnalyticsStore
@@ -35,11 +37,11 @@ from ..session.config import save_theme
 from ..session.frames import CONTROL, LATENCY, TOPICS, Frame, FrameClock, FrameSampler, Shown
 from ..session.link_sweep import sweep_curve
 from ..session.pollers import poll_forever
-from ..session.robot import MissionFinished, RobotSession
+from ..session.robot import MissionFinished, RobotSession, StopDone
 from ..session.settings import Settings
-from . import canvas_rows, give_way, lifecycle, palette, strips
+from . import canvas_rows, give_way, lifecycle, palette, robot_side, strips
 from .heap import freeze_heap
-from .keys import KeyRouter, direct_keys
+from .keys import STOP_BINDINGS, KeyRouter, direct_keys
 from .messages import (
     BackendFailed,
     BackendStarted,
@@ -47,6 +49,7 @@ from .messages import (
     GoalPicked,
     LinkSweepFailed,
     RunFinished,
+    StopReported,
 )
 from .screens.analytics import AnalyticsScreen
 from .screens.base import BaseScreen
@@ -62,6 +65,7 @@ canvas_rows.install()  # a plot's unchanged rows keep their strips
 log = logging.getLogger(__name__)
 NOTICE_AFTER_STOP_S = 0.1  # a run's end is told once its stop command has reached the robot
 EXIT_DEADLINE_S = 2.0  # after SIGHUP/SIGTERM the process is gone by then, whatever the terminal does
+PALETTE_PROMPT = "Search for commands…  (ctrl+k stops the robot)"
 
 
 SCREENS = {
@@ -78,8 +82,7 @@ KEYS = [
     Binding("2", "mode('analytics')", "Stats", tooltip="The analytics screen"),
     Binding("3", "mode('latency')", "Link", tooltip="The latency screen: the link's latency"),
     Binding("4", "mode('topics')", "Topics", tooltip="The topics screen: is every topic alive?"),
-    Binding("space", "stop", "Stop"),
-    Binding("k", "stop", "Stop", show=False),
+    *STOP_BINDINGS,
     Binding("question_mark", "help", "Help"),
 ]
 
@@ -112,9 +115,10 @@ class ArbiterApp(RegistryTheme):
         self._cleanup: Callable[[], None] | None = None
         self.session = RobotSession(settings, link, store, clock)
         self.session.on_event = self._session_event  # from the session's thread: post_message is safe
+        self.session.autonomy = None if tracker is None else tracker.autonomy()
         self.sampler = FrameSampler(self.session, settings, tracker=tracker)
         self.frame_clock: FrameClock | None = None  # live only: frames after control ticks
-        self.keys = KeyRouter(self.session.key)
+        self.keys = KeyRouter(self.session.key, lambda: self.session.stop_all("stop key"))
         self._shown_state: tuple[object, ...] = ()
         self._theme_loaded = False
 
@@ -125,6 +129,8 @@ class ArbiterApp(RegistryTheme):
     def _session_event(self, event: object) -> None:
         if isinstance(event, MissionFinished):
             self.post_message(RunFinished(event.algorithm, event.mission))
+        elif isinstance(event, StopDone):
+            self.post_message(StopReported(event.report))
 
     # -- lifecycle -------------------------------------------------------------------------------------
     def on_mount(self) -> None:
@@ -160,6 +166,7 @@ class ArbiterApp(RegistryTheme):
     @on(BackendStarted)
     def _attach(self, event: BackendStarted) -> None:
         self.session.attach(event.link)
+        self.session.autonomy = None if event.tracker is None else event.tracker.autonomy()
         self.tracker = self.sampler.tracker = event.tracker
         self._cleanup = event.cleanup
         self._poll()
@@ -183,6 +190,8 @@ class ArbiterApp(RegistryTheme):
         shown = lambda: _shown(self).shows(TOPICS)  # noqa: E731
         topics = poll_forever(TopicsPoller(tracker).poll, TOPICS_PERIOD_S, self.sampler.topics_polled, shown)
         self.run_worker(topics, group="topics", exclusive=True)
+        if s.observe:  # the robot-side controller: g starts it there, and the panel says how it is
+            robot_side.poll(self)
 
     def _on_signal(self, sig: int) -> None:
         self.session.stop(f"signal {signal.Signals(sig).name}")
@@ -273,13 +282,28 @@ class ArbiterApp(RegistryTheme):
             return
         await super().on_event(event)
 
+    def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
+        """space and k stop everywhere but in a text input, where they are text (ctrl+k stops there)."""
+        if action == "stop_key":
+            return not isinstance(self.focused, (Input, TextArea))
+        return True
+
+    def action_command_palette(self) -> None:
+        """The palette, saying in its prompt how to stop the robot while typing in it."""
+        if self.use_command_palette and not CommandPalette.is_open(self):
+            self.push_screen(CommandPalette(id="--command-palette", placeholder=PALETTE_PROMPT))
+
     def get_system_commands(self, screen: Screen[object]) -> Iterable[SystemCommand]:
         yield from super().get_system_commands(screen)
         yield from palette.commands(self, self, self.action_mode)
 
     # -- what needs the app: notices and dialogs -------------------------------------------------------
     def go(self, restart: bool = False) -> bool:
-        """``g``: resume an interrupted mission or start the selected one; ``restart``: from waypoint 1."""
+        """``g``: resume an interrupted mission or start the selected one; ``restart``: from waypoint 1.
+        In observe mode the console drives no mission: ``g`` starts the robot-side controller."""
+        if self.settings.observe:
+            robot_side.go(self)
+            return True
         why = self.session.go(restart)
         if why is not None and not self.session.too_small:
             self.notify(why, severity="warning")
@@ -293,6 +317,9 @@ class ArbiterApp(RegistryTheme):
         """Drive to the goal with go_to_goal (or the autonomous controller already selected)."""
         if self.session.too_small:
             return
+        if self.settings.observe:
+            self.notify(robot_side.NO_GOALS, severity="warning")
+            return
         try:
             self.session.go_to(event.x, event.y)
         except ValueError as exc:
@@ -304,6 +331,13 @@ class ArbiterApp(RegistryTheme):
     @on(LinkSweepFailed)
     def _link_sweep_failed(self, event: LinkSweepFailed) -> None:
         self.notify(f"latency sweep failed: {event.error}", severity="warning", timeout=8)
+
+    @on(StopReported)
+    def _stop_reported(self, event: StopReported) -> None:
+        report = event.report
+        if report.worth_saying():
+            severity = "warning" if report.unsure else "information"
+            self.notify(report.text(), severity=severity, timeout=10, markup=False)
 
     @on(RunFinished)
     def _run_finished(self, event: RunFinished) -> None:
@@ -323,8 +357,12 @@ class ArbiterApp(RegistryTheme):
             self.push_screen(HelpScreen())
 
     def action_stop(self) -> None:
-        self.session.stop("stop key")
+        """Every stop key (space, k, ctrl+k), on every screen and dialog: ``RobotSession.stop_all``."""
+        self.session.stop_all("stop key")
         self.refresh_frame()
+
+    def action_stop_key(self) -> None:
+        self.action_stop()
 
     async def action_stop_and_quit(self) -> None:
         self.session.stop("quit")

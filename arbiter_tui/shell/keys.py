@@ -5,6 +5,10 @@ robot should not wait for the screen. A teleop key (movement, scale, stop) on th
 the session at once, on the driver's input thread; it still goes on to the UI, marked as answered, so
 the screen shows it and nothing answers it twice. Keys keep their order: while a key the UI must answer
 (g, a, 1, ...) is queued and not yet handled, the keys after it queue behind it.
+
+The stop key that is never text (``ctrl+k``) is answered on the input thread whatever is in front, a
+dialog or a text input included, and then again by the UI in its place among the keys (a ``g`` queued
+before it must not start a mission after it).
 """
 
 from __future__ import annotations
@@ -14,10 +18,11 @@ import threading
 from collections.abc import Callable
 
 from textual import events
+from textual.binding import Binding
 from textual.driver import Driver
 from textual.message import Message
 
-from ..control.teleop import TELEOP_KEYS, key_name
+from ..control.teleop import ANYWHERE_STOP, TELEOP_KEYS, key_name
 
 log = logging.getLogger(__name__)
 
@@ -25,8 +30,9 @@ log = logging.getLogger(__name__)
 class KeyRouter:
     """Which keys the session answers on the input thread, and which the UI answers (thread-safe)."""
 
-    def __init__(self, answer: Callable[[str], bool]) -> None:
+    def __init__(self, answer: Callable[[str], bool], stop: Callable[[], None] = lambda: None) -> None:
         self._answer = answer  # the session's key handler: True if it used the key
+        self._stop = stop  # the session's stop (ANYWHERE_STOP, on the input thread)
         self._lock = threading.Lock()
         self._direct = False  # the control screen is in front, no dialog over it, no key queued
         self._queued = 0  # keys passed to the UI that it has not answered yet
@@ -40,6 +46,14 @@ class KeyRouter:
     def on_input_thread(self, event: events.Key) -> None:
         """A key on Textual's input thread, before it joins the UI's queue."""
         key = key_name(event.character, event.key)
+        if key == ANYWHERE_STOP:
+            try:
+                self._stop()
+            except Exception:  # the UI answers it too, below
+                log.exception("a stop on the input thread failed")
+            with self._lock:
+                self._queue()
+            return
         with self._lock:
             take = self._direct and self._queued == 0 and key in TELEOP_KEYS
             if not take:
@@ -92,3 +106,16 @@ def direct_keys(base: type[Driver], router: Callable[[], KeyRouter | None]) -> t
 
     DirectKeysDriver.__name__ = f"DirectKeys{base.__name__}"
     return DirectKeysDriver
+
+
+# -- the stop keys' bindings (one definition: the app's, and what every dialog's footer shows) ------------
+STOP_BINDINGS = [
+    # priority: a dialog, a table or a button never takes them first; space and k are text in a text
+    # input (the app's check_action then passes them on), ctrl+k never is
+    Binding("space", "stop_key", "Stop", priority=True),
+    Binding("k", "stop_key", "Stop", show=False, priority=True),
+    Binding(ANYWHERE_STOP, "stop", "Stop", show=False, priority=True),
+]
+# what a dialog's footer shows (the app's priority bindings above answer the keys first)
+STOP_HINT = Binding(ANYWHERE_STOP, "app.stop", "Stop robot", key_display="space/^k", priority=True)
+STOP_HINT_TYPING = Binding(ANYWHERE_STOP, "app.stop", "Stop robot", key_display="^k", priority=True)

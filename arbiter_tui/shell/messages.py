@@ -11,6 +11,7 @@ from collections.abc import Callable
 
 from textual.message import Message
 
+from ..control.stop import StopReport
 from ..latency.tracker_client import TrackerClient
 from ..link.base import Link
 from ..session.frames import FrameClock
@@ -67,3 +68,11 @@ class FrameDue(Message):
     def __init__(self, clock: FrameClock) -> None:
         super().__init__()
         self.clock = clock
+
+
+class StopReported(Message):
+    """A stop's part beyond the console's own commands ended (``session/remote_stop.py``): what it did."""
+
+    def __init__(self, report: StopReport) -> None:
+        super().__init__()
+        self.report = report

@@ -28,7 +28,11 @@ def commands(app: App[object], console: Console, switch: Callable[[str], None]) 
 
     for name in SCREENS:
         yield SystemCommand(f"Screen: {name}", f"Switch to the {name} screen", lambda n=name: switch(n))
-    yield SystemCommand("Stop the robot", "Zero velocity now", then_show(lambda: session.stop("palette")))
+    yield SystemCommand(
+        "Stop the robot",
+        "Whatever drives it (space, k or ctrl+k)",
+        then_show(lambda: session.stop_all("palette")),
+    )
     for algo in ALGORITHMS:
         yield SystemCommand(
             f"Algorithm: {algo}",

@@ -15,6 +15,7 @@ from rich.text import Text
 from textual.reactive import reactive
 from textual.widget import Widget
 
+from arbiter_core.controllers import goal_driver
 from arbiter_core.timesync import TimeSync
 
 from ..analytics.labels import STAT_LABELS, format_stat
@@ -166,21 +167,46 @@ class RobotPanel(Bound[RobotView]):
         t.append(f"Odom{mark}    ", "bold")
         t.append(f"v {r.v_odom:+.2f}  ω {r.w_odom:+.2f}", look)
         t.append("  * stale\n" if r.stale else "\n", "bold yellow")
-        t.append("Algo     ", "bold")
-        t.append(f"{r.algorithm} ({r.state})\n")
-        t.append("Mission  ", "bold")
-        if r.finished is not None:
-            t.append(f"{r.mission} {r.finished}\n", "bold green")
+        if r.observing is not None:
+            self.draw_observed(t, r)
         else:
-            t.append(f"{r.mission} {r.done}/{r.total}\n")
+            t.append("Algo     ", "bold")
+            t.append(f"{r.algorithm} ({r.state})\n")
+            t.append("Mission  ", "bold")
+            if r.finished is not None:
+                t.append(f"{r.mission} {r.finished}\n", "bold green")
+            else:
+                t.append(f"{r.mission} {r.done}/{r.total}\n")
         t.append("Goal     ", "bold")
-        t.append("none (manual)\n" if r.goal is None else f"({r.goal[0]:+.2f}, {r.goal[1]:+.2f})\n")
+        none = "none (manual)" if r.observing is None else "none (no observed run)"
+        t.append(f"{none}\n" if r.goal is None else f"({r.goal[0]:+.2f}, {r.goal[1]:+.2f})\n")
         t.append("Errors   ", "bold")
         if r.e_d is None or r.e_th is None:
             t.append("—")
         else:
             t.append(f"e_d {r.e_d:.2f} m  e_θ {r.e_th:+.2f} rad")
+        if r.observing is not None:
+            rs = r.robot_side
+            t.append("\nRobot    ", "bold")
+            if rs is None or not rs.known:
+                t.append("robot-side controller: not asked yet")
+            elif not rs.enabled:
+                t.append(rs.text, "dim")
+            else:
+                t.append(rs.text, "bold green" if rs.running else "")
+                if not rs.running:
+                    t.append(f"\n         g starts {goal_driver(r.algorithm)} on {r.mission} there", "dim")
         return t
+
+    @staticmethod
+    def draw_observed(t: Text, r: RobotView) -> None:
+        """Observe mode: what drives and what the console watches, and the observed run (no console
+        mission: g starts the robot-side controller, when the backend runs one)."""
+        t.append("Observe  ", "bold")
+        t.append(f"{r.observing}\n", "bold magenta")
+        t.append("Run      ", "bold")
+        run = r.observed_run
+        t.append("none yet (a goal or plan starts one)\n" if run is None else f"{run}\n")
 
 
 class StatsCards(Bound[AnalyticsView]):

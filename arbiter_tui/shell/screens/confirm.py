@@ -6,7 +6,9 @@ from textual.app import ComposeResult
 from textual.binding import Binding
 from textual.containers import Horizontal, Vertical
 from textual.screen import ModalScreen
-from textual.widgets import Button, Static
+from textual.widgets import Button, Footer, Static
+
+from ..keys import STOP_HINT
 
 
 class ConfirmClear(ModalScreen[bool]):
@@ -14,6 +16,7 @@ class ConfirmClear(ModalScreen[bool]):
     BINDINGS = [
         Binding("y", "answer(True)", "Clear"),
         Binding("escape,n", "answer(False)", "Keep"),
+        STOP_HINT,
     ]
 
     def __init__(self, points: int) -> None:
@@ -26,6 +29,7 @@ class ConfirmClear(ModalScreen[bool]):
             with Horizontal(classes="buttons"):
                 yield Button("Keep them (n)", id="keep", variant="primary")
                 yield Button("Clear (y)", id="clear", variant="error")
+        yield Footer(show_command_palette=False, compact=True)
 
     def on_mount(self) -> None:
         self.query_one("#keep", Button).focus()  # enter keeps: the safe answer is the default

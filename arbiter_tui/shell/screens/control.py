@@ -95,6 +95,18 @@ class ControlScreen(BaseScreen):
                 self._dashboard_frozen = True
                 self.call_after_refresh(freeze_heap)
 
+    def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
+        """Observe mode: the console runs no mission of its own; a, n and g pick and start the robot-side
+        controller, and only where the backend runs one; no typed goal."""
+        if not self.console.session.config.observe:
+            return True
+        if action in ("goal", "restart"):
+            return False
+        if action in ("cycle_algorithm", "cycle_mission", "go"):
+            robot_side = self.frame.robot.robot_side
+            return robot_side is not None and robot_side.enabled
+        return True
+
     def on_key(self, event: events.Key) -> None:
         if self.console.session.key(key_name(event.character, event.key)):
             self.console.refresh_frame()  # a new command or limit shows at once; a held key's repeats

@@ -6,7 +6,9 @@ from textual.app import ComposeResult
 from textual.binding import Binding
 from textual.containers import Horizontal, Vertical
 from textual.screen import ModalScreen
-from textual.widgets import Button, Static
+from textual.widgets import Button, Footer, Static
+
+from ..keys import STOP_HINT
 
 CHOICES = {"csv": ("csv",), "json": ("json",), "mcap": ("mcap",), "all": ("csv", "json", "mcap")}
 
@@ -19,6 +21,7 @@ class ExportChooser(ModalScreen[tuple[str, ...] | None]):
         Binding("m", "choose('mcap')", "MCAP"),
         Binding("a", "choose('all')", "All"),
         Binding("escape", "choose('')", "Cancel"),
+        STOP_HINT,
     ]
 
     def __init__(self, points: int) -> None:
@@ -31,6 +34,7 @@ class ExportChooser(ModalScreen[tuple[str, ...] | None]):
             with Horizontal(classes="buttons"):
                 for name in CHOICES:
                     yield Button(f"{name.upper()} ({name[0]})", id=name)
+        yield Footer(show_command_palette=False, compact=True)
 
     def on_button_pressed(self, event: Button.Pressed) -> None:
         self.action_choose(event.button.id or "")

@@ -6,14 +6,16 @@ from textual.app import ComposeResult
 from textual.binding import Binding
 from textual.containers import VerticalScroll
 from textual.screen import ModalScreen
-from textual.widgets import Static
+from textual.widgets import Footer, Static
 
 from ...control.teleop import legend_long
+from ..keys import STOP_HINT
 
 HELP = f"""[b]arbiter-tui[/b] — teleop console, analytics and latency monitor
 
 [b]Screens[/b]  1 control  2 analytics  3 latency  4 topics  ? help  ctrl+p
-[b]Stop[/b]     space or k, on every screen
+[b]Stop[/b]     space or k, on every screen and in every dialog;
+         ctrl+k anywhere, even while typing (it stops whatever drives)
 [b]Quit[/b]     ctrl+q or ctrl+c (stops the robot first)
 
 [b]Control[/b] (teleop_twist_keyboard keys; hold a key to keep moving)
@@ -49,8 +51,9 @@ class HelpScreen(ModalScreen[None]):
         padding: 1 2;
     }
     """
-    BINDINGS = [Binding("escape,question_mark,q", "dismiss", "Close")]
+    BINDINGS = [Binding("escape,question_mark,q", "dismiss", "Close"), STOP_HINT]
 
     def compose(self) -> ComposeResult:
         with VerticalScroll():
             yield Static(HELP)
+        yield Footer(show_command_palette=False, compact=True)

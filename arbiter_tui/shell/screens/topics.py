@@ -223,7 +223,8 @@ class TopicsScreen(BaseScreen):
     sort: reactive[str] = reactive("name", repaint=False)
 
     def compose_body(self) -> ComposeResult:
-        yield Input(placeholder="/ filters by name or type; esc returns to the table", id="topics-filter")
+        yield Input(placeholder="/ filters by name or type; esc returns to the table; ctrl+k stops the robot",
+                    id="topics-filter")  # fmt: skip
         yield TopicsList(id="topics-list").data_bind(TopicsScreen.state, TopicsScreen.sort)
         with Horizontal(id="topics-side"):
             yield TopicDetail(id="topics-detail").data_bind(TopicsScreen.state, TopicsScreen.selected)
