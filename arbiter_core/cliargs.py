@@ -148,6 +148,18 @@ def topic_name(text: str) -> str:
     return text
 
 
+@_kind("a comma-separated string of action names")
+def action_names(text: str) -> tuple[str, ...]:
+    """Comma-separated ROS action names (relative or absolute); ``""``: none."""
+    names = tuple(part.strip() for part in text.split(",") if part.strip())
+    for name in names:
+        try:
+            topics.resolve(name, what="action")
+        except topics.TopicNameError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+    return names
+
+
 @_kind("a path string")
 def existing_file(text: str) -> Path:
     path = Path(text)

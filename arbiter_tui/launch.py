@@ -12,6 +12,7 @@ from arbiter_core import topics
 from arbiter_core.auth import AuthConfigError, load_token
 from arbiter_core.cliargs import (
     OneLineParser,
+    action_names,
     add_log_level,
     add_version,
     bounded_float,
@@ -37,6 +38,7 @@ from arbiter_core.urls import (
     tracker_endpoint,
 )
 
+from .control.stop import NAV2_ACTIONS
 from .control.teleop import cap_setting
 from .session import config
 from .session.settings import (
@@ -117,6 +119,14 @@ def build_parser() -> argparse.ArgumentParser:
     )
     obs.add_argument(
         "--goal-topic", type=topic_name, default=D.goal_topic, help="PoseStamped goal (default %(default)s)"
+    )
+    obs.add_argument(
+        "--stop-actions",
+        type=action_names,
+        default=None,
+        help="action servers whose goals a stop key cancels, comma-separated (relative names resolve "
+        f"under --namespace; '' none; default in observe mode Nav2's: {', '.join(NAV2_ACTIONS)}; "
+        "otherwise none)",
     )
     p.add_argument(
         "--ca-file",
@@ -309,6 +319,9 @@ def run_app(argv: list[str]) -> int:
         cmd_stamped=args.cmd_stamped,
         plan_topic=args.plan_topic,
         goal_topic=args.goal_topic,
+        namespace=ns,
+        odom_topic=args.odom_topic,
+        stop_actions=args.stop_actions,
     )
     if mode == CONNECT:
         settings.rosbridge_url, settings.tracker_url = bridge.url, tracker.url

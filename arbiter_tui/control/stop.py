@@ -18,6 +18,7 @@ Pure: no I/O, no Textual.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from enum import Enum
 
@@ -91,8 +92,8 @@ class ActionCancel:
 
 def cancel_outcome(action: str, values: object) -> ActionCancel:
     """A ``CancelGoal`` response (rosbridge JSON) as an :class:`ActionCancel`."""
-    goals = values.get("goals_canceling") if isinstance(values, dict) else None
-    code = values.get("return_code") if isinstance(values, dict) else None
+    goals = values.get("goals_canceling") if isinstance(values, Mapping) else None
+    code = values.get("return_code") if isinstance(values, Mapping) else None
     if isinstance(goals, list) and goals:
         return ActionCancel(action, Cancel.CANCELLED, len(goals))
     if code in (0, 2, 3, None):  # none, unknown goal id, goal already terminated: nothing runs

@@ -77,4 +77,5 @@ class RobotSideView:
     known: bool = False  # asked and answered (or refused)
     enabled: bool = False  # the backend runs it (not 403)
     running: bool = False
-    text: str = "not asked yet"  # "stanley on corner at 1/2, running" / "off: the backend runs without …"
+    text: str = "not asked yet"  # its state ("running", "idle"), or why it cannot be asked
+    run: str = ""  # the run in progress or the last one: "stanley on corner at 1/2"

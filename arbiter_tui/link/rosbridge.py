@@ -376,8 +376,11 @@ class RosLink:
         ident = f"call_service:{service}:{self.ros.id_counter}"
         frame = {"op": "call_service", "id": ident, "service": service, "args": args, "timeout": timeout_s}
         try:
+            # roslibpy hands a ServiceResponse (a UserDict): the caller gets plain JSON values
             self.ros.call_async_service(
-                roslibpy.Message(frame), lambda values: done(True, values), lambda error: done(False, error)
+                roslibpy.Message(frame),
+                lambda values: done(True, _plain(values)),
+                lambda error: done(False, error),
             )
         except Exception:  # a socket closing under us: the caller's wait ends it
             log.debug("call_service %s failed", service, exc_info=True)
@@ -416,6 +419,12 @@ class RosLink:
                 self.ros.close(timeout=2)
         except Exception:  # closing a dead link must never take the app down
             log.debug("closing the rosbridge link failed", exc_info=True)
+
+
+def _plain(values: Any) -> Any:
+    """A roslibpy message or response (a UserDict) as the plain dict its JSON was."""
+    data = getattr(values, "data", values)
+    return dict(data) if isinstance(data, dict) else data
 
 
 def tls_options(host: str, ca_file: Path | None) -> Any:

@@ -189,7 +189,6 @@ class FrameSampler:
         goal = observer.current_goal
         return Observed(
             label=st.observe_label,
-            watches=f"{st.cmd_topic} {st.plan_topic} {st.goal_topic}",
             goal=None if goal is None else (round(goal[0], 2), round(goal[1], 2)),
             run=observer.current_run,
             robot_side=self.robot_side,

@@ -34,7 +34,7 @@ from ..analytics.observe import ObserveConfig, Observer
 from ..analytics.runs import MANUAL
 from ..analytics.store import AnalyticsStore, DataPoint
 from ..control.loop import ControlLoop
-from ..control.stop import StopReport, stop_scope
+from ..control.stop import StopReport, StopScope, stop_scope
 from ..control.teleop import MOVE_KEYS, SCALE_KEYS, STOP_KEYS, Teleop
 from ..latency.autonomy import AutonomyUnavailable, RobotSideView
 from ..link.base import DISCONNECTED, RECONNECTING, STARTING, Link
@@ -128,12 +128,14 @@ class RobotSession:
         # what a stop reaches beyond the console's own commands (control/stop.py), done on its own thread
         self.autonomy: AutonomyClient | None = None  # the backend's robot-side controller API, once known
         self.stop_scope = stop_scope(
-            config.mode == SIM or not config.live, config.observe, config.namespace, config.cmd_topic,
-            config.cmd_stamped, config.stop_actions,
+            config.mode == SIM, config.observe, config.namespace, config.cmd_topic, config.cmd_stamped,
+            config.stop_actions,
         )  # fmt: skip
+        # a session that is not live (a still for tests, `compare`'s engine) asks nothing of anyone
         self.remote_stop = RemoteStop(
-            self.stop_scope, lambda: self.link, lambda: self.autonomy, lambda r: self.on_event(StopDone(r))
-        )
+            self.stop_scope if config.live else StopScope(), lambda: self.link, lambda: self.autonomy,
+            lambda r: self.on_event(StopDone(r)),
+        )  # fmt: skip
         self.last_export: ExportResult | None = None
         self.too_small = False
         self.stop_reason: str | None = None
@@ -421,10 +423,10 @@ class RobotSession:
         try:
             status = client.status()
         except AutonomyUnavailable as exc:
-            text = "off: the backend runs without --autonomy" if exc.disabled else f"cannot ask: {exc}"
+            text = "off (the backend runs without --autonomy)" if exc.disabled else f"cannot ask: {exc}"
             return RobotSideView(known=True, enabled=False, text=text)
-        text = status.state if status.algorithm is None else f"{status.run()}, {status.state}"
-        return RobotSideView(known=True, enabled=True, running=status.running, text=text)
+        run = "" if status.algorithm is None else status.run()
+        return RobotSideView(known=True, enabled=True, running=status.running, text=status.state, run=run)
 
     def start_robot_side(self) -> str:
         """``g`` in observe mode: the selected controller (go_to_goal when manual is selected) on the

@@ -53,5 +53,6 @@ class Settings:
     plan_topic: str = "plan"
     goal_topic: str = "goal_pose"
     namespace: str = ""  # the robot's namespace: relative topic and action names resolve under it
+    odom_topic: str = "odom"
     # action servers whose goals a stop cancels (control/stop.py); None: Nav2's in observe mode, else none
     stop_actions: tuple[str, ...] | None = None

@@ -24,6 +24,7 @@ from arbiter_core.timesync import TimeSync, one_way_bound_ms
 from ..analytics.runs import MANUAL, AlgorithmSummary, RunSummary
 from ..analytics.store import EMPTY_STATS, AnalyticsStats, AnalyticsStore
 from ..control.loop import ControlLoop
+from ..control.stop import StopScope
 from ..latency.autonomy import RobotSideView
 from ..latency.clocksync import MeterSummary
 from ..latency.tracker_client import LatencyView
@@ -328,10 +329,21 @@ class Observed:
     """Observe mode, for the panel: what drives and what the console watches, the observed run's goal."""
 
     label: str
-    watches: str  # "/cmd_vel /plan /goal_pose"
     goal: tuple[float, float] | None = None
     run: int | None = None
     robot_side: RobotSideView | None = None
+
+
+def observe_banner(label: str, watched: Sequence[str], scope: StopScope) -> str:
+    """Observe mode's banner on every screen: what drives, what the console watches, what a stop does."""
+    stop = ["the console's keys"]
+    if scope.robot_side:
+        stop.append("the robot-side controller")
+    if scope.actions:
+        stop.append(f"{len(scope.actions)} action servers' goals")
+    if scope.zero_topic:
+        stop.append(f"zero on {scope.zero_topic}")
+    return f"OBSERVING {label} · watching {' '.join(watched)} · a stop key stops {', '.join(stop)}"
 
 
 def robot_view(
@@ -378,7 +390,7 @@ def robot_view(
         e_th=e_th,
         too_small=too_small,
         warning=odometry_warning(link, now),
-        observing=None if observed is None else f"{observed.label}: {observed.watches}",
+        observing=None if observed is None else observed.label,
         observed_run=None if observed is None else observed.run,
         robot_side=None if observed is None else observed.robot_side,
     )

@@ -31,6 +31,7 @@ def poll(app: ArbiterApp) -> None:
         app.sampler.robot_side_polled(view)
         if before is None or before.enabled != view.enabled:
             with contextlib.suppress(Exception):  # the app may be leaving: no screen to refresh
+                app.refresh_frame(force=True)  # the footer reads the frame
                 app.screen.refresh_bindings()
 
     app.run_worker(poll_forever(ask, PERIOD_S, polled), group="robot-side", exclusive=True)

@@ -189,24 +189,28 @@ class RobotPanel(Bound[RobotView]):
             rs = r.robot_side
             t.append("\nRobot    ", "bold")
             if rs is None or not rs.known:
-                t.append("robot-side controller: not asked yet")
+                t.append("robot-side: not asked yet")
             elif not rs.enabled:
                 t.append(rs.text, "dim")
             else:
                 t.append(rs.text, "bold green" if rs.running else "")
+                if rs.run:
+                    t.append(f"\n         {rs.run}", "" if rs.running else "dim")
                 if not rs.running:
-                    t.append(f"\n         g starts {goal_driver(r.algorithm)} on {r.mission} there", "dim")
+                    t.append(f"\n         g: {goal_driver(r.algorithm)} on {r.mission}", "dim")
         return t
 
     @staticmethod
     def draw_observed(t: Text, r: RobotView) -> None:
-        """Observe mode: what drives and what the console watches, and the observed run (no console
-        mission: g starts the robot-side controller, when the backend runs one)."""
+        """Observe mode: what drives (the banner says what the console watches), the console's own keys'
+        state, and the observed run (no console mission: g starts the robot-side controller, when the
+        backend runs one)."""
         t.append("Observe  ", "bold")
-        t.append(f"{r.observing}\n", "bold magenta")
+        t.append(f"{r.observing}", "bold magenta")
+        t.append(f" (keys: {r.state})\n")
         t.append("Run      ", "bold")
         run = r.observed_run
-        t.append("none yet (a goal or plan starts one)\n" if run is None else f"{run}\n")
+        t.append("none yet (waits for a goal)\n" if run is None else f"{run}\n")
 
 
 class StatsCards(Bound[AnalyticsView]):

@@ -76,9 +76,10 @@ class RecordingLink:
         pass
 
 
-def still_app(tmp_path=None, link=None, store=None, tracker_view=True, mode="embedded"):
-    """An app with no timers, seeded data and a fixed pose: every frame is the same."""
-    settings = Settings(mode=mode, live=False, handle_signals=False, export_dir=tmp_path or ".")
+def still_app(tmp_path=None, link=None, store=None, tracker_view=True, mode="embedded", **more):
+    """An app with no timers, seeded data and a fixed pose: every frame is the same. ``more``: other
+    settings (observe mode...)."""
+    settings = Settings(mode=mode, live=False, handle_signals=False, export_dir=tmp_path or ".", **more)
     link = link or RecordingLink()
     link.telemetry.pose = Pose(1.25, -0.5, 0.6)
     link.telemetry.v, link.telemetry.w = 0.4, 0.2

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from typing import Protocol, runtime_checkable
 
+from rich.text import Text
 from textual import events
 from textual.app import ComposeResult
 from textual.containers import Container
@@ -14,8 +15,11 @@ from textual.reactive import reactive
 from textual.screen import Screen
 from textual.widgets import Footer, Static
 
+from arbiter_core import topics
+
 from ...session.frames import Frame
 from ...session.robot import RobotSession
+from ...session.views import observe_banner
 from ..heap import freeze_heap
 from ..keys import KeyRouter
 from ..widgets import StatusLine
@@ -70,6 +74,7 @@ class BaseScreen(Screen[None]):
 
     def compose(self) -> ComposeResult:
         yield StatusLine(id="status").data_bind(BaseScreen.frame)
+        yield Static(id="observe-banner")  # observe mode only (on_mount): what drives and what a stop does
         yield Static(TOO_SMALL, id="too-small")
         with Container(id="body"):
             yield from self.compose_body()
@@ -81,6 +86,14 @@ class BaseScreen(Screen[None]):
 
     def on_mount(self) -> None:
         self._check_size(self.app.size)
+        session = self.console.session
+        config = session.config
+        if config.observe:
+            names = (config.odom_topic, config.cmd_topic, config.plan_topic, config.goal_topic)
+            watched = [topics.resolve(t, config.namespace) for t in names]
+            banner = observe_banner(config.observe_label, watched, session.stop_scope)
+            self.query_one("#observe-banner", Static).update(Text(banner))
+            self.add_class("observing")
 
     def on_screen_resume(self) -> None:
         self._check_size(self.app.size)
