@@ -134,7 +134,8 @@ class StopReport:
         """The stop may not have reached what drives: shown as a warning."""
         if self.link_down:
             return True
-        if self.robot_side is not None and self.robot_side.error is not None:
+        rs = self.robot_side
+        if rs is not None and rs.error is not None and rs.enabled:
             return True
         if any(c.outcome is Cancel.FAILED for c in self.cancels):
             return True
