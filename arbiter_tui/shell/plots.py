@@ -44,7 +44,7 @@ def algorithm_style(name: str) -> tuple[str, str]:
 CELL_ASPECT = 2.0  # a terminal cell is about twice as tall as it is wide
 MIN_GAP_X = 8  # columns between x ticks: room for a label like "-12.5"
 MIN_GAP_Y = 2  # rows between y ticks
-LINE_GAP_S = 1.0  # latency over time: no line across a second without commands
+LINE_GAP_S = 1.0  # latency and error over time: no line across a second with nothing recorded
 
 
 SHORT_NAMES = {MANUAL: "man", "waypoint": "wpt"}
@@ -198,9 +198,18 @@ class ErrorPlot(Plot[AnalyticsView, int]):
     def draw(self, view: AnalyticsView) -> None:
         cols, rows = self.scale_size()
         if view.errors:
-            # braille: two dots a cell across; more points than that draw the same line, slower
-            pick = thin(len(view.errors), 2 * self.canvas_size()[0])
-            self.plot(view.error_t[pick], view.errors[pick], line_style="cyan", hires_mode=HiResMode.BRAILLE)
+            t, e = np.asarray(view.error_t, dtype=np.float64), np.asarray(view.errors, dtype=np.float64)
+            # no line across a gap in the record (the link down, odometry stale, nothing recorded): a gap
+            # is more than LINE_GAP_S, or three of the plotted samples' usual steps where they are sparser
+            step = float(np.median(np.diff(t))) if t.size > 2 else 0.0
+            budget = 2 * self.canvas_size()[0]  # braille: two dots a cell across; more draw the same line
+            for part in axes.gaps(view.error_t, max(LINE_GAP_S, 3.0 * step)):
+                seg_t, seg_e = t[part], e[part]
+                pick = thin(seg_t.size, max(2, budget * seg_t.size // t.size))
+                if seg_t.size > 1:
+                    self.plot(seg_t[pick], seg_e[pick], line_style="cyan", hires_mode=HiResMode.BRAILLE)
+                else:  # one sample between two gaps: a dot, not a line to its neighbours
+                    self.scatter(seg_t, seg_e, marker="•", marker_style="cyan")
             x = axes.aligned(view.error_t[0], max(view.error_t[-1], view.error_t[0] + 1.0), cols, MIN_GAP_X)
             self.set_axes(x, axes.aligned(0.0, max(max(view.errors) * 1.05, 0.1), rows, MIN_GAP_Y))
         else:
