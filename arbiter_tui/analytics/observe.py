@@ -29,8 +29,9 @@ Rules (README, "Grade any controller"):
   the status's time; otherwise when the commands have been zero (|v| below ``stopped_v`` and |ω| below
   ``stopped_w``) or silent for ``stalled_s`` after the controller had commanded motion, at the moment
   they stopped (the samples after it leave the run), or ``stalled_s`` after the run began when it never
-  commanded motion. After a run ended, a plan to the same goal belongs to no run, unless a new goal
-  came (``goal_pose``, or a new action goal on the status topic);
+  commanded motion (with no command recorded, the odometry's measured velocity stands for it). After a
+  run ended, a plan to the same goal belongs to no run, unless a new goal came (``goal_pose``, or a new
+  action goal on the status topic);
 - the data's end leaves a run still going aborted;
 - ``latencyMs`` is the stamped command's age when it was received: the receive time (the recorder's or
   the console's clock) minus ``header.stamp`` (the sender's clock), so it holds the transport to the
@@ -145,6 +146,8 @@ class Observer:
         )
         if self.store.record(point):
             self.samples += 1
+        if self._cmd is None:  # no command recorded (yet): the robot's own motion says whether it stopped
+            self._motion(t_ns, v, w)
         if self._run is None or goal is None:
             return
         if (
@@ -160,10 +163,7 @@ class Observer:
         if not (math.isfinite(v) and math.isfinite(w)):
             return
         self._cmd = (v, w)
-        if abs(v) >= self.config.stopped_v or abs(w) >= self.config.stopped_w:
-            self._moved_ns, self._zero_ns = t_ns, None
-        elif self._zero_ns is None:
-            self._zero_ns = t_ns
+        self._motion(t_ns, v, w)
         age_ms = None if stamp_ns is None else (t_ns - stamp_ns) / 1e6
         if age_ms is not None and abs(age_ms) > MAX_AGE_MS:
             self.foreign_stamps += 1  # another clock (use_sim_time): no latency, rather than 1.7e12 ms
@@ -233,6 +233,13 @@ class Observer:
             self._end(ABORTED, self._last_ms)
 
     # -- runs ----------------------------------------------------------------------------------
+    def _motion(self, t_ns: int, v: float, w: float) -> None:
+        """What the controller asks for (its command; before any came, what the odometry measures)."""
+        if abs(v) >= self.config.stopped_v or abs(w) >= self.config.stopped_w:
+            self._moved_ns, self._zero_ns = t_ns, None
+        elif self._zero_ns is None:
+            self._zero_ns = t_ns
+
     def _stopped_ns(self, t_ns: int) -> int | None:
         """When the active run's controller stopped, once it has been stopped for ``stalled_s``; else None.
         Stopped: since its commands became zero, or since its last command when none came after it; a

@@ -348,3 +348,20 @@ def test_a_canceled_or_aborted_action_goal_aborts_the_run_and_a_resent_goal_to_t
     drive_x(obs, t + 2 * S + S // 10, 1.0, 3.0)
     runs = store.runs()
     assert [r.outcome for r in runs] == [ABORTED, COMPLETED] and runs[1].mission == first.mission
+
+
+def test_without_any_command_the_odometry_says_when_the_robot_stopped():
+    """A recording with no cmd_vel (odometry and plans only): the run goes on while the robot moves, and
+    ends where it stood still for stalled_s short of the goal."""
+    obs, store = observer(stalled_s=2.0)
+    obs.on_odometry(T0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    obs.on_plan(T0 + 1, line(0.0, 0.0, 4.0))
+    t = T0
+    for k in range(1, 151):  # 3 s driving at 0.5 m/s (no command recorded), then 3 s standing at 1.5 m
+        t = T0 + k * S // 50
+        obs.on_odometry(t, 0.01 * k, 0.0, 0.0, 0.5, 0.0)
+    assert store.active_run is not None  # 3 s of motion: no stall
+    for k in range(1, 151):
+        obs.on_odometry(t + k * S // 50, 1.5, 0.0, 0.0, 0.0, 0.0)
+    (run,) = store.runs()
+    assert run.outcome == ABORTED and run.end_ms == pytest.approx((t + S // 50) / 1e6)  # its first standstill
