@@ -360,7 +360,7 @@ def _grade(
                 frames.setdefault(topic, msg.header.frame_id)
             elif topic not in frames:
                 frames[topic] = decode(raw, conn.msgtype).header.frame_id
-            observer.on_plan(t_ns, xy.tolist())
+            observer.on_plan(t_ns, xy)
         elif topic == topics.goal:
             msg = decode(raw, conn.msgtype)
             frames.setdefault(topic, msg.header.frame_id)

@@ -170,12 +170,15 @@ class Observer:
             age_ms = None
         self._cmd_latency_ms = None if age_ms is None else round(age_ms, 4)
 
-    def on_plan(self, t_ns: int, points: Sequence[Point]) -> None:
-        points = [(float(x), float(y)) for x, y in points if math.isfinite(x) and math.isfinite(y)]
-        if not points:
-            return  # Nav2 publishes an empty path when planning fails: no new goal, the reference stays
-        end = points[-1]
+    def on_plan(self, t_ns: int, points: Sequence[Point] | np.ndarray) -> None:
+        """A plan's positions, (k, 2): a sequence of (x, y) or an array (a reader's, not copied again)."""
         path = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        finite = np.isfinite(path).all(axis=1)
+        if not finite.all():
+            path = path[finite]
+        if not len(path):
+            return  # Nav2 publishes an empty path when planning fails: no new goal, the reference stays
+        end = (float(path[-1, 0]), float(path[-1, 1]))
         goal = self._pending_goal if self._pending_goal is not None else self._goal
         same = goal is not None and math.hypot(end[0] - goal[0], end[1] - goal[1]) <= self.config.tolerance_m
         if self._pose is None:  # before any odometry: its run starts at the first

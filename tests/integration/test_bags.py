@@ -349,3 +349,36 @@ def test_scans_give_the_obstacle_figures_and_the_scorecards_say_why_where_they_c
     }
     text = stats(plain, "--by", "run").stdout
     assert "minObstacle       — (no sensor_msgs/LaserScan on /scan in the recording)" in text
+
+
+def test_grade_returns_what_stats_prints_for_the_analytics_screen(bags):
+    """The one function the analytics screen calls for a file: the same runs, in the order stats prints
+    them, with their scorecards and the screen's ranking."""
+    from arbiter_tui.analytics.grade import grade
+
+    _rec, mcap, _db3 = bags
+    graded = grade(mcap)
+    body = _json(stats(mcap, "--by", "run", "--json"))
+    assert [f"run {r.id}" for r in graded.runs] == [k for k in body if k.startswith("run ")]
+    (run,) = graded.runs
+    assert run.tracking.as_dict() == body["run 1"]["tracking"]
+    assert graded.card(run.id).as_dict() == body["run 1"]["scorecard"]
+    assert graded.is_bag and graded.what.startswith("ros2 bag directory (MCAP, 1 file")
+    assert graded.ranking().missions[0].mission == run.mission
+    assert len(graded.notes) == 1 and "in frame 'map'" in graded.notes[0]
+
+
+def test_running_out_of_memory_is_said_as_such_never_as_a_damaged_file(bags, monkeypatch, capsys):
+    from arbiter_tui.analytics import observe
+    from arbiter_tui.cli import main
+
+    _rec, mcap, _db3 = bags
+
+    def no_memory(*_args: object) -> None:
+        raise MemoryError
+
+    monkeypatch.setattr(observe.Observer, "on_plan", no_memory)
+    assert main(["stats", str(mcap)]) == 1
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    assert "out of memory reading ros2 bag directory" in line and "not damaged" in line
+    assert "damaged or unreadable" not in line
