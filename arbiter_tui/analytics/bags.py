@@ -483,6 +483,11 @@ def _refusal(path: Path, kind: str, exc: BaseException) -> str:
             f"closing it): run `mcap recover {cut} -o {fixed}`{then}"
         )
     lowered = reason.lower()
+    if "serialization format" in lowered:
+        return (
+            f"{kind} {path} stores messages in a serialization other than CDR ({reason}): only CDR, what "
+            "ROS 2 records by default, is read; record again without --serialization-format"
+        )
     if "metadata" in lowered or "yaml" in lowered or "database files are missing" in lowered:
         return f"{kind} {path}: its metadata.yaml is wrong ({reason}): run {reindex} to rewrite it"
     if isinstance(exc, FileNotFoundError):

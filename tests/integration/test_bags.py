@@ -382,3 +382,18 @@ def test_running_out_of_memory_is_said_as_such_never_as_a_damaged_file(bags, mon
     (line,) = capsys.readouterr().err.strip().splitlines()
     assert "out of memory reading ros2 bag directory" in line and "not damaged" in line
     assert "damaged or unreadable" not in line
+
+
+def test_a_bag_in_another_serialization_than_cdr_says_so(tmp_path):
+    from rosbags.rosbag2 import Writer
+
+    from ..support.bags import TS
+
+    with Writer(tmp_path / "json", version=9) as writer:
+        conn = writer.add_connection(
+            "/odom", "nav_msgs/msg/Odometry", typestore=TS, serialization_format="json"
+        )
+        writer.write(conn, 1, b"{}")
+    out = stats(tmp_path / "json")
+    (line,) = out.stderr.strip().splitlines()
+    assert out.returncode == 1 and "serialization other than CDR" in line and "json" in line, line
