@@ -121,6 +121,13 @@ def build_parser() -> argparse.ArgumentParser:
         "--goal-topic", type=topic_name, default=D.goal_topic, help="PoseStamped goal (default %(default)s)"
     )
     obs.add_argument(
+        "--status-topic",
+        type=topic_name,
+        default=D.status_topic,
+        help="action_msgs/GoalStatusArray of the controller's action: a goal that succeeds, aborts or is "
+        "cancelled ends its run then (default %(default)s, Nav2's navigator)",
+    )
+    obs.add_argument(
         "--stop-actions",
         type=action_names,
         default=None,
@@ -319,6 +326,7 @@ def run_app(argv: list[str]) -> int:
         cmd_stamped=args.cmd_stamped,
         plan_topic=args.plan_topic,
         goal_topic=args.goal_topic,
+        status_topic=args.status_topic,
         namespace=ns,
         odom_topic=args.odom_topic,
         stop_actions=args.stop_actions,

@@ -146,11 +146,18 @@ def best_in_columns(
 
 
 class _Run:
-    __slots__ = ("_summary", "algorithm", "cols", "end_ms", "final_error_m", "id", "in_ring", "last_ms",
-                 "mission", "n", "outcome", "path", "start_ms", "unseen_m")  # fmt: skip
+    __slots__ = ("_index", "_summary", "algorithm", "cols", "end_ms", "final_error_m", "first", "id",
+                 "in_ring", "last_ms", "measured", "mission", "n", "outcome", "path", "stand_in",
+                 "start_ms", "unseen_m")  # fmt: skip
 
     def __init__(
-        self, run_id: int, algorithm: str, mission: str, start_ms: float, path: np.ndarray | None = None
+        self,
+        run_id: int,
+        algorithm: str,
+        mission: str,
+        start_ms: float,
+        path: np.ndarray | None = None,
+        stand_in: bool = False,
     ) -> None:
         self.id = run_id
         self.algorithm = algorithm
@@ -159,9 +166,18 @@ class _Run:
         self.end_ms: float | None = None
         self.outcome = RUNNING
         self.final_error_m: float | None = None
-        self.path = path  # the reference path (``tracking.reference_path``); None: no tracking metrics
-        self.cols = np.empty((7, 64), dtype=np.float64)  # x, y, v, w, e_d, e_th, t (ms)
+        # The reference path in force (``tracking.reference_path``, or the plan a robot's controller
+        # follows): each sample's cross-track error is taken against the one in force when it came.
+        # None: no tracking metrics (manual driving).
+        self.path = path
+        self._index: T.PathIndex | None = None  # the path in force, indexed once it is measured against
+        # The run's first reference, what its path ratio and time limit are against; a stand-in (an
+        # observed goal's straight line) gives way to the first plan that comes.
+        self.first = path
+        self.stand_in = stand_in
+        self.cols = np.empty((8, 64), dtype=np.float64)  # x, y, v, w, e_d, e_th, t (ms), cross-track
         self.n = 0
+        self.measured = 0  # samples whose cross-track error is in cols[7]
         self.in_ring = 0
         self.last_ms: float | None = None
         self.unseen_m = 0.0  # steps into samples that follow a gap: not part of its path length
@@ -173,14 +189,47 @@ class _Run:
         if gap and self.n:
             self.unseen_m += float(np.hypot(x - self.cols[0, self.n - 1], y - self.cols[1, self.n - 1]))
         if self.n == self.cols.shape[1]:
-            grown = np.empty((7, self.n * 2), dtype=np.float64)
+            grown = np.empty((8, self.n * 2), dtype=np.float64)
             grown[:, : self.n] = self.cols
             self.cols = grown
-        self.cols[:, self.n] = (x, y, v, w, e_d, e_th, t_ms)
+        self.cols[:7, self.n] = (x, y, v, w, e_d, e_th, t_ms)
         self.n += 1
         self.in_ring += 1
         self.last_ms = t_ms
         self._summary = None
+
+    def follow(self, path: np.ndarray) -> None:
+        """From the next sample on, measure against ``path`` (a replan); the first plan replaces a
+        stand-in as the run's first reference."""
+        self._measure()
+        self.path = path
+        self._index = None
+        if self.stand_in or self.first is None:
+            self.first, self.stand_in = path, False
+        self._summary = None
+
+    def drop_after(self, t_ms: float) -> int:
+        """Forget the samples taken after ``t_ms`` (the run ended before them); how many."""
+        keep = int(np.searchsorted(self.cols[6, : self.n], t_ms, side="right"))
+        dropped = self.n - keep
+        if dropped:
+            self.n = keep
+            self.measured = min(self.measured, keep)
+            self.in_ring = max(0, self.in_ring - dropped)
+            self.last_ms = float(self.cols[6, keep - 1]) if keep else None
+            self._summary = None
+        return dropped
+
+    def _measure(self) -> None:
+        """The cross-track errors of the samples taken since the last measure, against the path in force."""
+        if self.path is None or self.measured == self.n:
+            return
+        if self._index is None:
+            self._index = T.PathIndex(self.path)
+        c = self.cols
+        lo, hi = self.measured, self.n
+        c[7, lo:hi] = self._index.distances(c[0, lo:hi], c[1, lo:hi])
+        self.measured = hi
 
     def summary(self) -> RunSummary:
         if self._summary is None:
@@ -193,18 +242,20 @@ class _Run:
                 self.id, self.algorithm, self.mission, self.start_ms, self.end_ms, self.outcome,
                 self.final_error_m, stats, self.in_ring, self.last_ms,
             )  # fmt: skip
-            if self.path is not None and self.n:
+            if self.first is not None and self.n:
                 done = summary.time_s if self.outcome == COMPLETED else None
-                tracking = T.tracking_stats(
-                    c[6] / 1e3, c[0], c[1], c[2], c[3], self.path, stats.totalPathLength, done
-                )
+                tracking = T.tracking_of(
+                    c[6] / 1e3, c[2], c[3], self.cross_track(), T.path_length(self.first),
+                    stats.totalPathLength, done,
+                )  # fmt: skip
                 summary = replace(summary, tracking=tracking)
             self._summary = summary
         return self._summary
 
     def cross_track(self) -> np.ndarray:
-        c = self.cols[:, : self.n]
-        return T.cross_track(c[0], c[1], self.path) if self.path is not None else c[0][:0]
+        """Each sample's cross-track error against the reference in force when it was taken."""
+        self._measure()
+        return self.cols[7, : self.n] if self.first is not None else self.cols[7, :0]
 
 
 class RunLog:
@@ -224,24 +275,35 @@ class RunLog:
     def active_algorithm(self) -> str | None:
         return None if self._active is None else self._active.algorithm
 
-    def begin(self, algorithm: str, mission: str, t_ms: float, path: np.ndarray | None = None) -> int:
+    def begin(
+        self,
+        algorithm: str,
+        mission: str,
+        t_ms: float,
+        path: np.ndarray | None = None,
+        stand_in: bool = False,
+    ) -> int:
         """Start a run (ending the active one as aborted); returns its id. ``path``: the reference path
-        its tracking metrics are measured against (none for manual driving)."""
+        its tracking metrics are measured against (none for manual driving); ``stand_in``: it stands in
+        until a plan comes (:meth:`follow`), and the plan, not it, is the run's first reference."""
         if self._active is not None:
             self.end(ABORTED, t_ms)
-        run = _Run(self._next_id, algorithm, mission, t_ms, path)
+        run = _Run(self._next_id, algorithm, mission, t_ms, path, stand_in)
         self._next_id += 1
         self._runs.append(run)
         self._by_id[run.id] = run
         self._active = run
         return run.id
 
-    def set_path(self, path: np.ndarray) -> None:
-        """The active run's reference path, given after it began (an observed robot's plan, which comes
-        a moment after its goal)."""
+    def follow(self, path: np.ndarray) -> None:
+        """The active run's samples from now on are measured against ``path`` (an observed robot's plan,
+        which comes a moment after its goal, and every replan after it)."""
         if self._active is not None:
-            self._active.path = path
-            self._active._summary = None
+            self._active.follow(path)
+
+    def drop_after(self, t_ms: float) -> int:
+        """The active run's samples after ``t_ms`` leave it (it ended before them); how many."""
+        return 0 if self._active is None else self._active.drop_after(t_ms)
 
     def end(self, outcome: str, t_ms: float, final_error_m: float | None = None) -> RunSummary | None:
         """End the active run; returns its summary (None when no run was active)."""
@@ -313,7 +375,7 @@ class RunLog:
         self._active = None
         self._next_id = 1
         if active is not None:
-            self.begin(active.algorithm, active.mission, active.start_ms, active.path)
+            self.begin(active.algorithm, active.mission, active.start_ms, active.path, active.stand_in)
 
 
 def row_of(run: RunSummary) -> AlgorithmSummary:
@@ -333,7 +395,7 @@ def row_of(run: RunSummary) -> AlgorithmSummary:
 
 def _pool(algorithm: str, mission: str, runs: list[_Run]) -> AlgorithmSummary:
     # x and y only make the path, which is the sum of the runs' paths (no step between two runs)
-    cols = np.concatenate([r.cols[2:, : r.n] for r in runs], axis=1)
+    cols = np.concatenate([r.cols[2:6, : r.n] for r in runs], axis=1)
     path = sum(r.summary().stats.totalPathLength for r in runs)
     none = cols[0][:0]
     stats = compute_stats(none, none, cols[0], cols[1], cols[2], cols[3], path=path)

@@ -162,26 +162,52 @@ class AnalyticsStore:
             self._version += 1
 
     # -- runs ----------------------------------------------------------------------------------
-    def begin_run(self, algorithm: str, mission: str, t_ms: float, path: np.ndarray | None = None) -> int:
+    def begin_run(
+        self,
+        algorithm: str,
+        mission: str,
+        t_ms: float,
+        path: np.ndarray | None = None,
+        stand_in: bool = False,
+    ) -> int:
         """Start a run (an active one ends as aborted); points recorded with its id join it. ``path``:
-        its reference path, for the tracking metrics (``analytics.tracking``)."""
+        its reference path, for the tracking metrics (``analytics.tracking``); ``stand_in``: only until
+        the run's first plan comes (:meth:`follow_path`)."""
         with self._lock:
-            run_id = self._runs.begin(algorithm, mission, t_ms, path)
+            run_id = self._runs.begin(algorithm, mission, t_ms, path, stand_in)
             self._version += 1
         return run_id
 
-    def set_run_path(self, path: np.ndarray) -> None:
-        """The active run's reference path, when it is known only after the run began."""
+    def follow_path(self, path: np.ndarray) -> None:
+        """The active run's reference from its next sample on: the plan its controller now follows."""
         with self._lock:
-            self._runs.set_path(path)
+            self._runs.follow(path)
             self._version += 1
 
-    def end_run(self, outcome: str, t_ms: float, final_error_m: float | None = None) -> RunSummary | None:
+    def end_run(
+        self, outcome: str, t_ms: float, final_error_m: float | None = None, drop_later: bool = False
+    ) -> RunSummary | None:
+        """End the active run at ``t_ms``. ``drop_later``: its samples taken after ``t_ms`` leave it (they
+        stay in the store, in no run): a run found, later, to have ended earlier."""
         with self._lock:
+            active = self._runs.active
+            if drop_later and active is not None and self._runs.drop_after(t_ms):
+                self._detach_after(active, t_ms)
             summary = self._runs.end(outcome, t_ms, final_error_m)
             if summary is not None:
                 self._version += 1
         return summary
+
+    def _detach_after(self, run_id: int, t_ms: float) -> None:
+        """The newest stored points of ``run_id`` taken after ``t_ms`` belong to no run."""
+        alloc = self._num.shape[1]
+        i = self._next - 1
+        for _ in range(self._size):
+            i %= alloc
+            if self._run[i] != run_id or self._num[0, i] <= t_ms:
+                break
+            self._run[i] = 0
+            i -= 1
 
     @property
     def active_run(self) -> int | None:

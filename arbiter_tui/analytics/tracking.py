@@ -105,20 +105,122 @@ def path_length(path: np.ndarray) -> float:
 
 
 def cross_track(x: np.ndarray, y: np.ndarray, path: np.ndarray) -> np.ndarray:
-    """Each sample's distance to the nearest point of the polyline ``path`` (one point: to that point)."""
-    px = np.asarray(x, dtype=np.float64)[:, None]
-    py = np.asarray(y, dtype=np.float64)[:, None]
-    if len(path) == 1:
-        return np.hypot(px[:, 0] - path[0, 0], py[:, 0] - path[0, 1])
-    a = path[:-1]
-    d = path[1:] - a
-    seg2 = (d * d).sum(axis=1)
+    """Each sample's distance to the nearest point of the polyline ``path`` (one point: to that point).
+    O(samples · log poses) on a path that does not pass near a sample many times: see :class:`PathIndex`."""
+    return PathIndex(path).distances(x, y)
+
+
+def segment_distance(
+    px: np.ndarray, py: np.ndarray, ax: np.ndarray, ay: np.ndarray, dx: np.ndarray, dy: np.ndarray
+) -> np.ndarray:
+    """Distance from each point ``p`` to the segment ``a + u d``, ``0 <= u <= 1`` (element-wise, broadcast);
+    a segment of no length is its point. The one definition of a sample's distance to a segment."""
+    seg2 = dx * dx + dy * dy
     safe = np.where(seg2 > 0, seg2, 1.0)
-    u = np.clip(((px - a[:, 0]) * d[:, 0] + (py - a[:, 1]) * d[:, 1]) / safe, 0.0, 1.0)
+    u = np.clip(((px - ax) * dx + (py - ay) * dy) / safe, 0.0, 1.0)
     u = np.where(seg2 > 0, u, 0.0)
-    dx = px - (a[:, 0] + u * d[:, 0])
-    dy = py - (a[:, 1] + u * d[:, 1])
-    return np.sqrt((dx * dx + dy * dy).min(axis=1))
+    ex = px - (ax + u * dx)
+    ey = py - (ay + u * dy)
+    return np.sqrt(ex * ex + ey * ey)
+
+
+class PathIndex:
+    """A polyline's segments in a tree of bounding boxes, for the distance from many points to it.
+
+    The tree is built over the segments *in path order* (no sorting: a path is spatially coherent, so
+    consecutive segments make tight boxes): level 0 holds each segment's box, level ``l + 1`` the boxes of
+    pairs of level ``l``. A query walks down from the root for all its points at once, keeping for each
+    point only the nodes whose box is nearer than the nearest path *vertex* seen so far (a vertex of a
+    node is a point of the path: no nearer segment can lie in a box farther than it), and takes the exact
+    distance (:func:`segment_distance`) to the segments that remain. The answer is the brute-force minimum
+    over every segment, to the last bit: the segments dropped cannot hold it.
+
+    Cost: building O(k) for k poses; a query O(log k) levels times the nodes per level whose boxes come
+    within the sample's error of it (a handful, unless the path passes within that distance of the sample
+    many times: then up to every segment, as a brute force would). Memory: O(k) for the tree, and the
+    pairs (point, node) still in play, worked through in batches of at most ``BATCH_PAIRS``.
+    """
+
+    BRUTE_MAX = 16  # segments: fewer are measured against every point directly
+    BATCH_PAIRS = 1 << 20
+
+    def __init__(self, path: np.ndarray) -> None:
+        path = np.asarray(path, dtype=np.float64).reshape(-1, 2)
+        if not len(path):
+            raise ValueError("a path needs at least one point")
+        self.path = path
+        a = path[:-1]
+        d = path[1:] - a
+        self._a, self._d = a, d
+        self.levels: list[np.ndarray] = []  # each (4, nodes): min x, min y, max x, max y
+        if len(a) > self.BRUTE_MAX:
+            box = np.stack((np.minimum(a[:, 0], path[1:, 0]), np.minimum(a[:, 1], path[1:, 1]),
+                            np.maximum(a[:, 0], path[1:, 0]), np.maximum(a[:, 1], path[1:, 1])))  # fmt: skip
+            self.levels.append(box)
+            while box.shape[1] > 1:
+                if box.shape[1] % 2:
+                    box = np.concatenate((box, box[:, -1:]), axis=1)  # the odd one paired with itself
+                box = np.concatenate((np.minimum(box[:2, 0::2], box[:2, 1::2]),
+                                      np.maximum(box[2:, 0::2], box[2:, 1::2])))  # fmt: skip
+                self.levels.append(box)
+
+    def distances(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        px = np.asarray(x, dtype=np.float64).ravel()
+        py = np.asarray(y, dtype=np.float64).ravel()
+        if len(self.path) == 1:
+            return np.hypot(px - self.path[0, 0], py - self.path[0, 1])
+        out = np.empty(px.size, dtype=np.float64)
+        if not self.levels:
+            step = max(1, self.BATCH_PAIRS // len(self._a))
+            a, d = self._a, self._d
+            for i in range(0, px.size, step):
+                e = segment_distance(px[i : i + step, None], py[i : i + step, None], a[:, 0], a[:, 1],
+                                     d[:, 0], d[:, 1])  # fmt: skip
+                out[i : i + step] = e.min(axis=1)
+            return out
+        pending = [np.arange(px.size)]
+        while pending:
+            idx = pending.pop()
+            if idx.size and not self._query(px, py, idx, out):
+                half = idx.size // 2  # too many pairs in play at once: each half on its own
+                pending += [idx[:half], idx[half:]]
+        return out
+
+    def _query(self, px: np.ndarray, py: np.ndarray, idx: np.ndarray, out: np.ndarray) -> bool:
+        """The distances of the points ``idx`` into ``out``; False (nothing written) when the pairs in
+        play would exceed ``BATCH_PAIRS`` and ``idx`` can be split."""
+        top = len(self.levels) - 1
+        who = np.arange(idx.size)  # pairs: which of the batch's points ...
+        node = np.zeros(idx.size, dtype=np.int64)  # ... against which node of the current level
+        qx, qy = px[idx], py[idx]
+        for level in range(top, -1, -1):
+            if level < top:  # each pair becomes one pair per child of its node
+                n = self.levels[level].shape[1]
+                who = np.repeat(who, 2)
+                node = np.repeat(node * 2, 2)
+                node[1::2] += 1
+                keep = node < n
+                who, node = who[keep], node[keep]
+            if who.size > self.BATCH_PAIRS and idx.size > 1:
+                return False
+            box = self.levels[level]
+            bx, by = qx[who], qy[who]
+            gx = np.maximum(np.maximum(box[0, node] - bx, bx - box[2, node]), 0.0)
+            gy = np.maximum(np.maximum(box[1, node] - by, by - box[3, node]), 0.0)
+            low = np.sqrt(gx * gx + gy * gy)  # no point of the node's segments is nearer
+            first = self.path[node << level]  # the node's first vertex: a point of the path
+            high = np.hypot(bx - first[:, 0], by - first[:, 1])
+            bound = np.full(idx.size, np.inf)
+            np.minimum.at(bound, who, high)
+            # margin: rounding must never drop the segment the exact formula finds nearest
+            keep = low <= bound[who] * (1.0 + 1e-9) + 1e-9
+            who, node = who[keep], node[keep]
+        a, d = self._a[node], self._d[node]
+        e = segment_distance(qx[who], qy[who], a[:, 0], a[:, 1], d[:, 0], d[:, 1])
+        best = np.full(idx.size, np.inf)
+        np.minimum.at(best, who, e)
+        out[idx] = best
+        return True
 
 
 def mean_abs_rate(t_s: np.ndarray, w: np.ndarray) -> float:
@@ -193,11 +295,24 @@ def tracking_stats(
     completed_time_s: float | None,
 ) -> TrackingStats:
     """A run's tracking metrics from its time-ordered samples: positions, commanded speeds and turn
-    rates (see the module for each formula)."""
-    reference_m = path_length(path)
+    rates, against one reference path (see the module for each formula)."""
+    return tracking_of(t_s, v, w, cross_track(x, y, path), path_length(path), travelled, completed_time_s)
+
+
+def tracking_of(
+    t_s: np.ndarray,
+    v: np.ndarray,
+    w: np.ndarray,
+    xte: np.ndarray,
+    reference_m: float,
+    travelled: float,
+    completed_time_s: float | None,
+) -> TrackingStats:
+    """A run's tracking metrics from its samples' cross-track errors already measured (each against the
+    reference in force when it was taken) and the length of its first reference."""
     jerks = (integrated_jerk(t_s, v), integrated_jerk(t_s, w))
-    return of_errors(cross_track(x, y, path), travelled, reference_m, completed_time_s,
-                     mean_abs_rate(t_s, w), jerks, succeeded(completed_time_s, reference_m))  # fmt: skip
+    return of_errors(xte, travelled, reference_m, completed_time_s, mean_abs_rate(t_s, w), jerks,
+                     succeeded(completed_time_s, reference_m))  # fmt: skip
 
 
 def mean_of(values: Sequence[float | None]) -> float | None:

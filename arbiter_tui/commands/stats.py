@@ -12,9 +12,10 @@ import numpy as np
 
 from arbiter_core.cliargs import OneLineParser
 
-from ..analytics.bags import DEFAULT_TOPICS, BagTopics, is_bag, read_bag
+from ..analytics import scorecards as SC
+from ..analytics.bags import DEFAULT_TOPICS, BagTopics
 from ..analytics.exports import Export, ExportFormatError
-from ..analytics.files import load_export
+from ..analytics.grade import Graded, grade
 from ..analytics.labels import format_stat
 from ..analytics.model import (
     STATS_FIELDS,
@@ -37,8 +38,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "file",
         type=Path,
-        help="an arbiter_analytics_*.csv, *.json or *.mcap export, or a ros2 bag directory (metadata.yaml; "
-        "MCAP or SQLite 3) recorded on the robot: its runs from odometry, command, plan and goal topics",
+        help="an arbiter_analytics_*.csv, *.json or *.mcap export, or a ros2 bag recorded on the robot (its "
+        "directory, split or compressed, with or without metadata.yaml, or a lone .mcap or .db3 file): its "
+        "runs from odometry, command, plan, goal, action status and scan topics",
     )
     bag = p.add_argument_group("ros2 bags ('Grade any controller' in the README)")
     for flag, default, kind in (
@@ -51,12 +53,23 @@ def build_parser() -> argparse.ArgumentParser:
         "--goal-topic", default=DEFAULT_TOPICS.goal, help="geometry_msgs/PoseStamped (default %(default)s)"
     )
     bag.add_argument(
+        "--status-topic",
+        default=DEFAULT_TOPICS.status,
+        help="action_msgs/GoalStatusArray of the action that drives: its goal ending ends the run "
+        "(default %(default)s)",
+    )
+    bag.add_argument(
+        "--scan-topic",
+        default=DEFAULT_TOPICS.scan,
+        help="sensor_msgs/LaserScan for the obstacle distances (default %(default)s)",
+    )
+    bag.add_argument(
         "--label", default="observed", help="what drove: the samples' algorithm (default %(default)s)"
     )
     p.add_argument("--json", action="store_true", help="print one JSON object with the seed's camelCase keys")
     p.add_argument(
         "--by",
-        choices=("algorithm", "run"),
+        choices=("algorithm", "run", "controller"),
         help="one set of stats per group (with --json: an object keyed by group). run: in run order, "
         "headed 'run N ALGORITHM on MISSION' (key 'run N' with 'run', 'algorithm' and 'mission' fields; a "
         "CSV does not carry the mission: null); where the file carries run summaries (JSON and MCAP "
@@ -64,8 +77,9 @@ def build_parser() -> argparse.ArgumentParser:
         "file K/N' when the file holds only part of the run; otherwise over the file's samples; samples "
         "outside every run last, under 'no run'. algorithm: as "
         "the screen groups them, 'ALGORITHM on MISSION' from the file's summaries, else per algorithm over "
-        "the file's run samples (samples outside every run belong to no algorithm). A path length never "
-        "spans a gap between separate stretches",
+        "the file's run samples (samples outside every run belong to no algorithm). controller: each "
+        "algorithm's scorecard over all of its runs (Nav2's controller benchmark and the BARN score: README, "
+        "'Scorecards'). A path length never spans a gap between separate stretches",
     )
     return p
 
@@ -155,37 +169,29 @@ def _grouped(points: list[DataPoint], labels: list[str]) -> dict[str, AnalyticsS
 
 def run(argv: list[str]) -> int:
     args = build_parser().parse_args(argv)
-    try:
-        if is_bag(args.file):
-            topics = BagTopics(args.odom_topic, args.cmd_topic, args.plan_topic, args.goal_topic)
-            export = read_bag(
-                args.file,
-                topics,
-                ObserveConfig(label=args.label),
-                warn=lambda text: print(f"arbiter-tui stats: {args.file}: warning: {text}", file=sys.stderr),
-            )
-        else:
-            export = load_export(args.file)
-    except FileNotFoundError:
-        print(f"arbiter-tui stats: {args.file}: no such file", file=sys.stderr)
+    graded = _graded(args)
+    if graded is None:
         return 1
-    except PermissionError:
-        print(f"arbiter-tui stats: {args.file}: permission denied", file=sys.stderr)
-        return 1
-    except (ExportFormatError, OSError) as exc:
-        print(f"arbiter-tui stats: {args.file}: {exc}", file=sys.stderr)
-        return 1
+    for note in graded.notes:
+        print(f"arbiter-tui stats: {args.file}: warning: {note}", file=sys.stderr)
+    export = graded.export
     if not export.points and not export.runs:  # a CSV's header alone: nothing to compute stats of
         print(f"arbiter-tui stats: {args.file}: no samples", file=sys.stderr)
         return 1
+    if args.by == "controller":
+        return _print_controllers(args, graded)
     labels: dict[str, RunLabel] = {}
     runs = {f"run {r.id}": r for r in export.runs or ()}
+    cards = {f"run {c.run}": c for c in graded.cards}
     if args.by is None:
         groups: Groups = {"": (stats_of_points(export.points), None)}
     elif args.by == "run":
         groups, labels = by_run(export)
     else:
         groups = by_algorithm(export)
+        if not groups:
+            print(f"arbiter-tui stats: {args.file}: {_no_runs(args, graded)}", file=sys.stderr)
+            return 1
     if args.json:
         if args.by is None:
             body: dict[str, object] = groups[""][0].as_dict()
@@ -195,6 +201,7 @@ def run(argv: list[str]) -> int:
                 | _in_file(part)
                 | (labels[k].as_dict() if k in labels else {})
                 | _outcome(runs.get(k), json_form=True)
+                | ({"scorecard": cards[k].as_dict()} if k in cards and args.by == "run" else {})
                 for k, (v, part) in groups.items()
             }
         print(json.dumps(body, allow_nan=False))
@@ -208,7 +215,76 @@ def run(argv: list[str]) -> int:
             print(f"{name:<{width}}  {format_stat(name, getattr(stats, name), decimals=6)}")
         for name, value in _outcome(runs.get(group) if args.by == "run" else None).items():
             print(f"{name:<{width}}  {value}")
+        if args.by == "run" and group in cards:
+            for name, value in _run_card_lines(cards[group]).items():
+                print(f"{name:<{width}}  {value}")
     return 0
+
+
+def _graded(args: argparse.Namespace) -> Graded | None:
+    """The file graded, or None after one line on stderr saying why not."""
+    topics = BagTopics(
+        args.odom_topic, args.cmd_topic, args.plan_topic, args.goal_topic, args.status_topic, args.scan_topic
+    )
+    try:
+        return grade(args.file, topics, ObserveConfig(label=args.label))
+    except FileNotFoundError:
+        why = "no such file"
+    except PermissionError:
+        why = "permission denied"
+    except (ExportFormatError, OSError) as exc:  # OutOfMemory says so (an ExportFormatError)
+        why = str(exc)
+    except MemoryError:
+        why = "out of memory reading it (the file is not damaged: this machine has too little free memory)"
+    print(f"arbiter-tui stats: {args.file}: {why}", file=sys.stderr)
+    return None
+
+
+def _no_runs(args: argparse.Namespace, graded: Graded) -> str:
+    if graded.is_bag:
+        return (
+            f"no runs to group: nothing on {args.goal_topic} or {args.plan_topic} gave the robot a goal "
+            "(see --goal-topic, --plan-topic; without --by: the whole recording's stats)"
+        )
+    return "no runs to group: the file has no samples of a run (without --by: its stats)"
+
+
+def _print_controllers(args: argparse.Namespace, graded: Graded) -> int:
+    """``--by controller``: each algorithm's scorecard over all of its runs."""
+    cards = graded.controllers
+    if not cards:
+        print(f"arbiter-tui stats: {args.file}: {_no_runs(args, graded)}", file=sys.stderr)
+        return 1
+    if args.json:
+        print(json.dumps({f"controller {c.algorithm}": c.as_dict() for c in cards}, allow_nan=False))
+        return 0
+    for c in cards:
+        print(f"[controller {c.algorithm}: {c.runs} run{'s' * (c.runs != 1)}, {c.successes} succeeded]")
+        lines = {"successRate": c.success_rate.text(".3f")} | _card_lines(c)
+        width = max(map(len, lines))
+        for name, value in lines.items():
+            print(f"{name:<{width}}  {value}")
+    return 0
+
+
+def _card_lines(card: SC.RunCard | SC.ControllerCard) -> dict[str, str]:
+    o = card.obstacles
+    return {
+        "timeToGoal": card.time_to_goal_s.text(".3f", " s"),
+        "pathLength": card.path_length_m.text(".6f", " m"),
+        "linearJerk": card.linear_jerk.text(".6f", " m²/s⁵"),
+        "angularJerk": card.angular_jerk.text(".6f", " rad²/s⁵"),
+        "minObstacle": o.min_m.text(".6f", " m"),
+        "meanMinObstacle": o.mean_min_m.text(".6f", " m"),
+        "stdMinObstacle": o.std_min_m.text(".6f", " m"),
+        "barnScore": card.barn.text(".6f"),
+    }
+
+
+def _run_card_lines(card: SC.RunCard) -> dict[str, str]:
+    """The scorecard figures a run's block does not show already (its outcome and tracking lines do)."""
+    lines = _card_lines(card)
+    return {k: lines[k] for k in ("minObstacle", "meanMinObstacle", "stdMinObstacle", "barnScore")}
 
 
 def _outcome(run: RunSummary | None, json_form: bool = False) -> dict[str, object]:

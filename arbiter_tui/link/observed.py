@@ -1,7 +1,8 @@
 """rosbridge messages (JSON) of a robot's own topics into an :class:`Observer`'s calls: the odometry,
-the command (Twist or TwistStamped), the plan and the goal. Stamped with this host's clock on arrival,
-so a TwistStamped's age is this host's receive time minus the sender's stamp (README, "Grade any
-controller"). A message that does not parse is skipped: a foreign robot's topics are not ours to trust."""
+the command (Twist or TwistStamped), the plan, the goal and an action's goal status. Stamped with this
+host's clock on arrival, so a TwistStamped's age is this host's receive time minus the sender's stamp
+(README, "Grade any controller"). A message that does not parse is skipped: a foreign robot's topics
+are not ours to trust."""
 
 from __future__ import annotations
 
@@ -16,6 +17,7 @@ TYPE_TWIST = "geometry_msgs/Twist"
 TYPE_TWIST_STAMPED = "geometry_msgs/TwistStamped"
 TYPE_PATH = "nav_msgs/Path"
 TYPE_POSE_STAMPED = "geometry_msgs/PoseStamped"
+TYPE_GOAL_STATUS_ARRAY = "action_msgs/GoalStatusArray"  # on <action>/_action/status
 _BAD = (KeyError, TypeError, ValueError, IndexError)
 
 
@@ -67,3 +69,27 @@ def observe_goal(observer: Observer, msg: dict[str, Any]) -> None:
     except _BAD:
         return
     observer.on_goal(now, x, y)
+
+
+def goal_statuses(msg: dict[str, Any]) -> list[tuple[str, int]]:
+    """(goal id, status) of each goal in a rosbridge ``action_msgs/GoalStatusArray``. The id is opaque:
+    rosbridge sends the uuid's 16 bytes as a list of numbers, or as base64 text (uint8 arrays). Entries
+    that do not parse are left out."""
+    out = []
+    for entry in msg.get("status_list") or ():
+        try:
+            uuid = entry["goal_info"]["goal_id"]["uuid"]
+            goal_id = uuid if isinstance(uuid, str) else bytes(int(b) & 0xFF for b in uuid).hex()
+            out.append((goal_id, int(entry["status"])))
+        except (*_BAD, AttributeError):
+            continue
+    return out
+
+
+def observe_goal_status(observer: Observer, msg: dict[str, Any]) -> None:
+    """An action's status topic (``<action>/_action/status``, e.g. ``/navigate_to_pose/_action/status``):
+    the observed run ends with its action goal (``Observer.on_goal_status``)."""
+    now = time.time_ns()
+    if not isinstance(msg, dict):
+        return
+    observer.on_goal_status(now, goal_statuses(msg))

@@ -18,12 +18,14 @@ from ..analytics.observe import Observer
 from . import wsframe
 from .base import CONNECTED, CONNECTING, DISCONNECTED, RECONNECTING, Telemetry
 from .observed import (
+    TYPE_GOAL_STATUS_ARRAY,
     TYPE_PATH,
     TYPE_POSE_STAMPED,
     TYPE_TWIST,
     TYPE_TWIST_STAMPED,
     observe_command,
     observe_goal,
+    observe_goal_status,
     observe_odometry,
     observe_plan,
 )
@@ -338,11 +340,18 @@ class RosLink:
         return self.streams.listen(topic, type_name, callback, ECHO_THROTTLE_MS, queue_length=1)
 
     def observe(
-        self, observer: Observer, cmd: str, cmd_stamped: bool, plan: str, goal: str
+        self,
+        observer: Observer,
+        cmd: str,
+        cmd_stamped: bool,
+        plan: str,
+        goal: str,
+        status: str | None = None,
     ) -> Callable[[], None]:
         """Feed ``observer`` from the robot's own topics (relative names under the namespace): odometry
-        shares the console's stream; the command, plan and goal are streams of their own. Every call
-        comes on the link's thread, stamped with this host's clock. Returns the function that stops it."""
+        shares the console's stream; the command, plan, goal and the action's goal status are streams of
+        their own. Every call comes on the link's thread, stamped with this host's clock. Returns the
+        function that stops it."""
         ns = self.namespace
         removers = [
             self.streams.listen(self.topic_odom, topics.TYPE_ODOM, lambda m: observe_odometry(observer, m)),
@@ -356,6 +365,10 @@ class RosLink:
                 topics.resolve(goal, ns), TYPE_POSE_STAMPED, lambda m: observe_goal(observer, m)
             ),
         ]
+        if status:
+            statuses = topics.resolve(status, ns)
+            listener = lambda m: observe_goal_status(observer, m)  # noqa: E731
+            removers.append(self.streams.listen(statuses, TYPE_GOAL_STATUS_ARRAY, listener))
 
         def stop() -> None:
             for remove in removers:

@@ -179,7 +179,9 @@ class RobotSession:
         if self._unobserve is not None:
             self._unobserve()
         c = self.config
-        self._unobserve = observe(self.observer, c.cmd_topic, c.cmd_stamped, c.plan_topic, c.goal_topic)
+        self._unobserve = observe(
+            self.observer, c.cmd_topic, c.cmd_stamped, c.plan_topic, c.goal_topic, c.status_topic
+        )
 
     def echo_topic(self, figures: TopicFigures | None) -> None:
         """Echo the topic ``figures`` describes on the topics screen (None: stop), through the link."""

@@ -52,6 +52,7 @@ class Settings:
     cmd_stamped: bool = False  # geometry_msgs/TwistStamped (its age is the sample's latency), else Twist
     plan_topic: str = "plan"
     goal_topic: str = "goal_pose"
+    status_topic: str = "navigate_to_pose/_action/status"  # action_msgs/GoalStatusArray: its runs' ends
     namespace: str = ""  # the robot's namespace: relative topic and action names resolve under it
     odom_topic: str = "odom"
     # action servers whose goals a stop cancels (control/stop.py); None: Nav2's in observe mode, else none

@@ -164,8 +164,8 @@ GOOD_JSON = to_json(random_points(10)).encode()
         (_flipped(GOOD_MCAP, 0.5), "corrupt MCAP: "),
         (
             _foreign_mcap("/chatter"),
-            "MCAP, but not an arbiter analytics export: no /arbiter/data_point "
-            "channel (its topics: /chatter)",
+            "MCAP, but neither an arbiter analytics export (no /arbiter/data_point channel) nor a ros2 bag "
+            "with odometry on /odom (its topics: /chatter)",
         ),
         (
             _foreign_mcap("/arbiter/data_point"),

@@ -125,8 +125,21 @@ def drive(
     return rec
 
 
-def write_bag(path: Path, rec: Recording, storage: str = "mcap", extra: dict[str, str] | None = None) -> Path:
-    """``rec`` as a rosbag2 directory at ``path`` (``mcap`` or ``sqlite3`` storage)."""
+def write_bag(
+    path: Path,
+    rec: Recording,
+    storage: str = "mcap",
+    extra: dict[str, str] | None = None,
+    compression: str | None = None,
+    raw: list[tuple[str, str, str, int, bytes]] | None = None,
+    empty: dict[str, str] | None = None,
+) -> Path:
+    """``rec`` as a rosbag2 directory at ``path`` (``mcap`` or ``sqlite3`` storage; ``compression``:
+    ``file`` or ``message``, zstd). ``raw``: connections written as they are, (topic, type, its
+    definition text, log time, bytes), e.g. a type no parser here reads; ``empty``: topics (and their
+    types) recorded with no message."""
+    from rosbags.rosbag2 import CompressionFormat, CompressionMode
+
     plugin = StoragePlugin.MCAP if storage == "mcap" else StoragePlugin.SQLITE3
     types = {
         "/odom": "nav_msgs/msg/Odometry",
@@ -134,11 +147,54 @@ def write_bag(path: Path, rec: Recording, storage: str = "mcap", extra: dict[str
         "/goal_pose": "geometry_msgs/msg/PoseStamped",
         **(extra or {}),
     }
-    with Writer(path, version=9, storage_plugin=plugin) as writer:
-        conns = {}
-        for topic, t_ns, msg in rec.messages:
+    writer = Writer(path, version=9, storage_plugin=plugin)
+    if compression is not None:
+        writer.set_compression(CompressionMode[compression.upper()], CompressionFormat.ZSTD)
+    with writer:
+        conns = {
+            topic: writer.add_connection(topic, msgtype, typestore=TS)
+            for topic, msgtype in (empty or {}).items()
+        }
+        for topic, msgtype, msgdef, _t, _data in raw or ():
+            if topic not in conns:
+                conns[topic] = writer.add_connection(
+                    topic, msgtype, msgdef=msgdef, rihs01="RIHS01_" + "0" * 64
+                )
+        rows = [(t_ns, topic, msg, None) for topic, t_ns, msg in rec.messages]
+        rows += [(t_ns, topic, None, data) for topic, _m, _d, t_ns, data in raw or ()]
+        for t_ns, topic, msg, data in sorted(rows, key=lambda r: r[0]):
             if topic not in conns:
                 msgtype = types.get(topic) or msg.__msgtype__
                 conns[topic] = writer.add_connection(topic, msgtype, typestore=TS)
-            writer.write(conns[topic], t_ns, TS.serialize_cdr(msg, conns[topic].msgtype))
+            writer.write(
+                conns[topic], t_ns, data if data is not None else TS.serialize_cdr(msg, conns[topic].msgtype)
+            )
     return path
+
+
+def scan_msg(t_ns: int, ranges: list[float], range_min: float = 0.12, range_max: float = 3.5) -> object:
+    """A 360-beam sensor_msgs/LaserScan in the robot's frame."""
+    return TS.types["sensor_msgs/msg/LaserScan"](
+        header=_header(t_ns, "base_scan"), angle_min=0.0, angle_max=2 * math.pi,
+        angle_increment=2 * math.pi / 360, time_increment=0.0, scan_time=0.2, range_min=range_min,
+        range_max=range_max,
+        ranges=np.asarray(ranges, dtype=np.float32), intensities=np.zeros(len(ranges), dtype=np.float32),
+    )  # fmt: skip
+
+
+def status_msg(t_ns: int, *goals: tuple[int, int]) -> object:
+    """An action_msgs/GoalStatusArray: (goal number, status) each (status 2 executing, 4 succeeded,
+    5 canceled, 6 aborted)."""
+    t = TS.types
+    return t["action_msgs/msg/GoalStatusArray"](
+        status_list=[
+            t["action_msgs/msg/GoalStatus"](
+                goal_info=t["action_msgs/msg/GoalInfo"](
+                    goal_id=t["unique_identifier_msgs/msg/UUID"](uuid=np.full(16, n, dtype=np.uint8)),
+                    stamp=_time(t_ns),
+                ),
+                status=status,
+            )
+            for n, status in goals
+        ]
+    )

@@ -191,3 +191,57 @@ def test_each_controllers_tracking_on_the_square_at_300_ms_against_0_ms_over_10_
     for name in ("go_to_goal", "kanayama"):
         assert at[300][name].figures["xte_mean_m"].high < at[0][name].figures["xte_mean_m"].low, name
     assert at[500]["kanayama"].figures["xte_mean_m"].low > at[0]["kanayama"].figures["xte_mean_m"].high
+
+
+def _brute_cross_track(x: np.ndarray, y: np.ndarray, path: np.ndarray) -> np.ndarray:
+    """Every sample against every segment (what cross_track computed before it was indexed)."""
+    px, py = np.asarray(x, dtype=np.float64)[:, None], np.asarray(y, dtype=np.float64)[:, None]
+    if len(path) == 1:
+        return np.hypot(px[:, 0] - path[0, 0], py[:, 0] - path[0, 1])
+    a, d = path[:-1], path[1:] - path[:-1]
+    seg2 = (d * d).sum(axis=1)
+    u = np.clip(((px - a[:, 0]) * d[:, 0] + (py - a[:, 1]) * d[:, 1]) / np.where(seg2 > 0, seg2, 1.0), 0, 1)
+    u = np.where(seg2 > 0, u, 0.0)
+    ex, ey = px - (a[:, 0] + u * d[:, 0]), py - (a[:, 1] + u * d[:, 1])
+    return np.sqrt((ex * ex + ey * ey).min(axis=1))
+
+
+def test_the_indexed_cross_track_is_the_brute_force_minimum_on_paths_that_loop_and_cross():
+    from arbiter_core.controllers import MISSIONS
+
+    rng = np.random.default_rng(7)
+    t = np.linspace(0.0, 6 * math.pi, 900)
+    circle = np.stack((np.cos(t[:300] / 3), np.sin(t[:300] / 3)), axis=1)
+    paths = [
+        *(T.reference_path((0.0, 0.0), MISSIONS[m]) for m in MISSIONS),
+        np.stack((2 * np.sin(t), np.sin(2 * t)), axis=1),  # a figure eight three times over itself
+        np.cumsum(rng.normal(size=(2000, 2)) * 0.05, axis=0),  # a random walk, crossing itself
+        rng.normal(size=(300, 2)) * 4.0,  # segments in every direction
+        circle,  # a sample at the centre is as far from every segment: nothing can be pruned
+        np.repeat([[1.0, 1.0], [2.0, 1.0]], 20, axis=0),  # repeated poses: segments of no length
+    ]
+    for path in paths:
+        x, y = rng.normal(size=500) * 3, rng.normal(size=500) * 3
+        x[:3], y[:3] = 0.0, 0.0
+        x[3:6], y[3:6] = path[:3, 0], path[:3, 1]  # on the path's vertices
+        assert np.array_equal(T.cross_track(x, y, path), _brute_cross_track(x, y, path))
+
+
+def test_cross_track_memory_grows_with_the_path_not_with_samples_times_poses():
+    """4,000 poses and 6,000 samples: a samples x segments matrix is 192 MB an array (several at once)."""
+    import tracemalloc
+
+    k, n = 4000, 6000
+    s = np.arange(k) * 0.05
+    path = np.stack((s, np.sin(s / 2)), axis=1)
+    x = np.linspace(0.0, s[-1], n)
+    y = np.sin(x / 2) + 0.1 * np.cos(x)
+    tracemalloc.start()
+    try:
+        e = T.cross_track(x, y, path)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 16e6, f"{peak / 1e6:.0f} MB"
+    every = slice(None, None, 50)
+    assert np.array_equal(e[every], _brute_cross_track(x[every], y[every], path))
