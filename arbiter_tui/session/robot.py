@@ -1,10 +1,11 @@
 """The robot session: one object that drives the robot and records what it did, with no Textual.
 
 It owns the link, teleop, the control loop, the analytics store (the seed's ``useAnalyticsEngine``: one
-per robot session, outliving screen switches) and the exports. Its clocked work -- the control tick at
-``--repeat-rate``, sampling at ``--collection-rate``, stepping the client-side simulator at 50 Hz and
-expiring unanswered commands -- runs on a thread of its own on a monotonic schedule, so a slow paint
-never delays a command (the robot's clock is not the UI's clock). The Textual shell turns keys into
+per robot session, outliving screen switches), the stop and the exports, and takes the commands. Its
+clocked work -- the control tick at ``--repeat-rate``, sampling at ``--collection-rate``, stepping the
+client-side simulator at 50 Hz and expiring unanswered commands -- is run by ``schedule.py`` on a thread
+of its own, so a slow paint never delays a command (the robot's clock is not the UI's clock). The
+Textual shell turns keys into
 the commands below and samples the session into frozen snapshots at its own pace; ``arbiter-tui
 compare`` and tests drive the same session without Textual (``live=False``: the caller ticks it).
 
@@ -17,7 +18,6 @@ from __future__ import annotations
 
 import contextlib
 import logging
-import sys
 import threading
 import time
 from collections.abc import Callable
@@ -39,9 +39,9 @@ from ..control.teleop import MOVE_KEYS, SCALE_KEYS, STOP_KEYS, Teleop
 from ..latency.autonomy import AutonomyUnavailable, RobotSideView
 from ..link.base import DISCONNECTED, RECONNECTING, STARTING, Link
 from ..link.sim import SimLink
-from .collector import TickCollector
 from .echo import TopicEcho
 from .remote_stop import RemoteStop
+from .schedule import Jobs, Schedule
 from .settings import SIM, Settings
 
 if TYPE_CHECKING:  # the client imports httpx: the session side (and compare) load it only when asked
@@ -74,22 +74,8 @@ class MissionFinished:
     mission: str
 
 
-SWITCH_INTERVAL_S = 0.001
-WRITE_WAIT_S = 0.02  # a tick waits at most this long for its command to be written (_written)
 DEFAULT_CONTROL_HZ = 10.0  # the control tick when no --repeat-rate ceiling is set
 NO_LINK_WORDS = "The link to the robot is down: nothing can be sent. Press g once it is back."
-
-
-def next_due(due: float, started: float, period: float) -> float:
-    """When a clocked job that was due at ``due`` and started at ``started`` runs next (monotonic s).
-
-    One period after ``due`` (its grid) when it started less than half a period late, so wake-up delays
-    never slow the rate. One period after it *started* when it started later than that: after a stall
-    (the process stopped, the CPU quota spent, the garbage collection after the last control tick ran
-    past this one's time) the next command leaves a period after the late one, never in a burst behind
-    it -- and never a whole extra period later, as when the grid restarted from the end of the job."""
-    on_grid = due + period
-    return on_grid if started - due <= period / 2 else started + period
 
 
 class RobotSession:
@@ -140,20 +126,19 @@ class RobotSession:
         self.too_small = False
         self.stop_reason: str | None = None
         self.on_event: Callable[[object], None] = lambda event: None
-        self.on_tick: Callable[[], None] = lambda: None  # after each control tick, on the session's thread
         self.ticks = 0  # control ticks run (tests and the bench read it)
-        self.late_ticks = 0  # ticks that ran more than one period late
         self.published = False  # the last control tick handed the link a command
-        self.driving = False  # a mission runs or a key drives, as of the last control tick
-        self.tick_late_s = 0.0  # how late the newest command left, after its tick's due time
-        self.collector = TickCollector()  # full garbage collections just after a tick (the thread's own)
         self._was_running = False
-        self._thread: threading.Thread | None = None
-        self._stopping = threading.Event()
-        self.tick_due_s = float("inf")  # when the next control tick is due (monotonic; the loop's)
-        self.ticks_written = 0  # control ticks done with their command (written, none, or waited 20 ms for)
-        self._tick_written = threading.Condition(threading.Lock())
-        self.gave_way = 0  # times the UI waited for a tick (give_way: tests and the bench read it)
+        # the clocked work (control, sampling, the simulator) on a thread of its own (schedule.py)
+        self.schedule = Schedule(
+            Jobs(
+                tick=self.tick_control, sample=self.sample, step=self.step_link,
+                meter=lambda: self.link.telemetry.meter,
+                driving=lambda: self.loop.running or self.teleop.moving,
+                control_s=1.0 / (config.repeat_rate or DEFAULT_CONTROL_HZ),
+                sample_s=1.0 / config.collection_rate, step_s=1.0 / SIM_HZ,
+            )
+        )  # fmt: skip
 
     # -- the link ---------------------------------------------------------------------------------
     def attach(self, link: Link) -> None:
@@ -192,8 +177,9 @@ class RobotSession:
         return self.link.state in (DISCONNECTED, RECONNECTING)
 
     # -- the clocked work ---------------------------------------------------------------------------------
-    def tick_control(self) -> None:
-        """One control tick: a held key's command or the controller's, and run bookkeeping."""
+    def tick_control(self) -> bool:
+        """One control tick: a held key's command or the controller's, and run bookkeeping. True when it
+        handed the link a command the link took."""
         with self.lock:
             self.published = False
             self._follow_observed_life()
@@ -213,17 +199,7 @@ class RobotSession:
             event = MissionFinished(self.loop.algorithm, self.loop.mission_label) if finished else None
         if event is not None:
             self.on_event(event)
-
-    def _lateness(self, due_s: float, last_due_s: float | None) -> float:
-        """How late the commands left: this tick's own end, or the newest command's write to the
-        socket (on the link's thread, so usually the previous tick's) after its tick's due time."""
-        late = time.monotonic() - due_s
-        sent = self.link.telemetry.meter.last_send_mono
-        if sent is not None and sent >= due_s:  # this tick's command is written already
-            late = max(late, sent - due_s)
-        elif sent is not None and last_due_s is not None and sent >= last_due_s:
-            late = max(late, sent - last_due_s)
-        return max(0.0, late)
+        return self.published
 
     def sample(self) -> DataPoint | None:
         """One sample of the robot into the store (at the collection rate); the point recorded, if any."""
@@ -244,96 +220,13 @@ class RobotSession:
 
     def start(self) -> None:
         """Run the clocked work on the session's own thread until :meth:`close`."""
-        if self._thread is None:
-            # A thread that wants the GIL asks the holder to let go after the switch interval; 5 ms by
-            # default is 20 ms of wall time at a Pi-class CPU quota, per hand-off (session, then Twisted's
-            # reactor). 1 ms keeps a command's way through both threads short while the UI paints.
-            sys.setswitchinterval(SWITCH_INTERVAL_S)
-            self._thread = threading.Thread(target=self._run, name="robot-session", daemon=True)
-            self._thread.start()
-
-    def _run(self) -> None:
-        self.collector.begin()
-        try:
-            self._run_clocked()
-        finally:
-            self.collector.end()
-
-    def _run_clocked(self) -> None:
-        periods = {
-            self.tick_control: 1.0 / (self.config.repeat_rate or DEFAULT_CONTROL_HZ),
-            self.sample: 1.0 / self.config.collection_rate,
-            self.step_link: 1.0 / SIM_HZ,
-        }
-        now = time.monotonic()
-        due = {job: now + period for job, period in periods.items()}
-        self.tick_due_s = due[self.tick_control]
-        last_due: float | None = None
-        while not self._stopping.is_set():
-            job = min(due, key=due.__getitem__)
-            wait = due[job] - time.monotonic()
-            if wait > 0 and self._stopping.wait(wait):
-                break
-            started = time.monotonic()
-            written = self.link.telemetry.meter.sent
-            job()
-            upcoming = next_due(due[job], started, periods[job])
-            if job == self.tick_control:
-                self._written(written)  # before the frame and the collection that follow take the GIL
-                with self._tick_written:  # a paint that gave way goes on (give_way)
-                    self.tick_due_s = upcoming
-                    self.ticks_written += 1
-                    self._tick_written.notify_all()
-                self.tick_late_s = self._lateness(due[job], last_due)
-                last_due = due[job]
-                self.driving = self.loop.running or self.teleop.moving
-                self.collector.after_tick(driving=self.driving)
-                self.on_tick()
-                if started - due[job] > periods[job]:
-                    self.late_ticks += 1
-            due[job] = upcoming
-
-    def _written(self, written: int) -> None:
-        """The command this tick published is on the socket before anything else of this thread's
-        tick takes the GIL: the frame it asks for (``on_tick``) and a garbage collection.
-
-        ``RosLink`` stamps and writes each command on its reactor's thread. A collection that started
-        first held that thread between the stamp and the write (measured: one-way latency up to 19 ms
-        instead of under 2 ms at a Pi-class quota, collections every 0.2 s); a frame asked for first
-        woke the UI thread, which then took the GIL before the reactor's thread (and, under a quota,
-        the rest of the scheduling period): the command left late, or stalled between its stamp and
-        the socket (bench/pi.py, a packet capture on the loopback: 9-19 ms). A link that writes in
-        the call (the simulator) or meters nothing has ``sent`` 0 and is not waited for."""
-        meter = self.link.telemetry.meter
-        if self.published and meter.sent > 0:
-            meter.wait_sent(written, WRITE_WAIT_S)
-
-    def give_way(self, guard_s: float) -> bool:
-        """On the UI's thread, between the widgets of a paint: when the next control tick is due within
-        ``guard_s``, wait until it has run and its command is written (at most ``guard_s`` more than
-        its due time). True when it saw the tick run; False when it did not wait, or gave up.
-
-        A paint at 200x60 on a Pi-class quota takes 60-100 ms of wall time, most of a control period,
-        and one that was still running at a tick's time spent the quota of that scheduling period: the
-        tick waited for the next one, then for the GIL, 10-40 ms in all (bench/render_overlap.py). A
-        paint that stops short of the tick instead leaves the quota and the GIL to the session's and
-        the link's threads. The shell asks only where the console has no core to spare."""
-        with self._tick_written:  # the due time and the count read together: no wake-up is missed
-            now = time.monotonic()
-            due, seen = self.tick_due_s, self.ticks_written
-            if not 0.0 < due - now <= guard_s or self._stopping.is_set():
-                return False
-            ran = self._tick_written.wait_for(lambda: self.ticks_written != seen, due - now + guard_s)
-        self.gave_way += 1
-        return ran
+        self.schedule.start()
 
     def close(self) -> None:
         """Stop the robot (one zero) and the clocked work."""
         self.stop("quit")
         self.remote_stop.close()
-        self._stopping.set()
-        if self._thread is not None and self._thread is not threading.current_thread():
-            self._thread.join(timeout=2.0)
+        self.schedule.stop()
 
     # -- commands (any thread) -------------------------------------------------------------------------
     def stop(self, reason: str) -> None:

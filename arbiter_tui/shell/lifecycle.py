@@ -50,15 +50,15 @@ def frames_after_ticks(app: App[object], sampler: FrameSampler) -> FrameClock:
     (the sampler's ``sweep_pause``: where the console has no core to spare)."""
     session, settings, pause = sampler.session, sampler.settings, sampler.sweep_pause
     if cores_available() < SPARE_CORES:  # paints give way to the ticks (give_way.py)
-        give_way.install(partial(session.give_way, give_way.GUARD_S))
+        give_way.install(partial(session.schedule.give_way, give_way.GUARD_S))
     frames = FrameClock(1.0 / settings.ui_rate, 1.0 / (settings.repeat_rate or DEFAULT_CONTROL_HZ))
 
     def ticked() -> None:
-        pause.driving(session.driving)
-        if frames.ticked(session.tick_late_s):
+        pause.driving(session.schedule.driving)
+        if frames.ticked(session.schedule.tick_late_s):
             app.post_message(FrameDue(frames))
 
-    session.on_tick = ticked
+    session.schedule.on_tick = ticked
     return frames
 
 

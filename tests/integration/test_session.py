@@ -11,7 +11,7 @@ from arbiter_tui.analytics.runs import COMPLETED
 from arbiter_tui.latency.tracker_client import TrackerClient
 from arbiter_tui.link.base import CONNECTED, Telemetry
 from arbiter_tui.link.rosbridge import RosLink
-from arbiter_tui.session import robot
+from arbiter_tui.session import schedule
 from arbiter_tui.session.collector import TickCollector
 from arbiter_tui.session.robot import MissionFinished, RobotSession
 from arbiter_tui.session.settings import Settings
@@ -118,7 +118,7 @@ async def test_the_ui_gives_way_when_commands_leave_late(tmp_path):
         app.session.select_algorithm("go_to_goal")
         assert app.session.go() is None
         assert await async_until(lambda: frames.frame_s >= frames.SLOWEST_S, timeout=20)
-        assert app.session.tick_late_s >= 0.03
+        assert app.session.schedule.tick_late_s >= 0.03
         asked = frames.asked  # ...and frames still come, each drawn before the next is asked for
         assert await async_until(lambda: frames.asked >= asked + 2, timeout=5)
         await pilot.press("space")
@@ -129,7 +129,7 @@ def test_a_frame_and_a_collection_wait_until_the_ticks_command_is_on_the_socket(
     may collect garbage; RosLink writes the command on its reactor's thread. Either one first takes
     the GIL before that thread, and held the command before its stamp or between its stamp and the
     socket (at a Pi-class quota: one-way latency 9-19 ms instead of under 1, in a packet capture)."""
-    monkeypatch.setattr(robot, "WRITE_WAIT_S", 5.0)  # the order is under test, not the bound (a loaded CI)
+    monkeypatch.setattr(schedule, "WRITE_WAIT_S", 5.0)  # the order is under test, not the bound (a loaded CI)
     backend = start_backend()
     link = RosLink("127.0.0.1", backend.bridge_port)
     session = RobotSession(Settings(export_dir=tmp_path), link)
@@ -145,10 +145,10 @@ def test_a_frame_and_a_collection_wait_until_the_ticks_command_is_on_the_socket(
     link.send = counted
     seen: list[tuple[int, int]] = []  # at each collection: (commands written, commands handed over)
     framed: list[tuple[int, int]] = []  # the same, at each frame asked for
-    session.collector = TickCollector(
+    session.schedule.collector = TickCollector(
         period_s=0.2, collect=lambda: seen.append((link.telemetry.meter.sent, len(handed)))
     )
-    session.on_tick = lambda: framed.append((link.telemetry.meter.sent, len(handed)))
+    session.schedule.on_tick = lambda: framed.append((link.telemetry.meter.sent, len(handed)))
     try:
         assert wait_for(lambda: link.state == CONNECTED and link.telemetry.odom_count > 0, timeout=15)
         session.start()
@@ -173,25 +173,26 @@ def test_a_paint_gives_way_to_a_tick_that_is_due_and_goes_on_once_it_ran(tmp_pat
     guard = 0.02
     try:
         session.start()
-        assert wait_for(lambda: session.ticks_written >= 2, timeout=10)
+        assert wait_for(lambda: session.schedule.ticks_written >= 2, timeout=10)
         far = 0
         for _ in range(30):  # far from the next tick: no wait (a stall between two lines may bring it near)
-            assert wait_for(lambda: session.tick_due_s - time.monotonic() > 3 * guard, timeout=5)
-            calls = session.gave_way
-            far += not session.give_way(guard) and session.gave_way == calls
+            assert wait_for(lambda: session.schedule.tick_due_s - time.monotonic() > 3 * guard, timeout=5)
+            calls = session.schedule.gave_way
+            far += not session.schedule.give_way(guard) and session.schedule.gave_way == calls
             if far == 3:
                 break
         assert far == 3
-        saw, calls = 0, session.gave_way
+        saw, calls = 0, session.schedule.gave_way
         for _ in range(30):  # close to it: the call returns once the tick has run
-            assert wait_for(lambda: 0 < session.tick_due_s - time.monotonic() <= guard / 2, 5, 0.0005)
-            due, seen = session.tick_due_s, session.ticks_written
-            if session.give_way(guard):  # False: the tick ran before the call, or ran too late
+            soon = lambda: 0 < session.schedule.tick_due_s - time.monotonic() <= guard / 2  # noqa: E731
+            assert wait_for(soon, 5, 0.0005)
+            due, seen = session.schedule.tick_due_s, session.schedule.ticks_written
+            if session.schedule.give_way(guard):  # False: the tick ran before the call, or ran too late
                 saw += 1
-                assert session.ticks_written > seen and time.monotonic() >= due
+                assert session.schedule.ticks_written > seen and time.monotonic() >= due
                 if saw == 3:
                     break
-        assert saw == 3 and session.gave_way >= calls + 3
+        assert saw == 3 and session.schedule.gave_way >= calls + 3
     finally:
         session.close()
-    assert not session.give_way(guard)  # a closed session never holds the UI
+    assert not session.schedule.give_way(guard)  # a closed session never holds the UI

@@ -20,9 +20,9 @@ async def test_paints_wait_for_a_due_tick_only_without_a_core_to_spare(monkeypat
     app = make_app(Settings(mode="sim", live=True, handle_signals=False, export_dir=tmp_path), SimLink())
     async with app.run_test(size=(200, 60)) as pilot:  # the dashboard: many widgets a paint
         await pilot.press("a", "g")  # a mission: the map and the panel repaint at every frame
-        assert await until(pilot, lambda: app.session.ticks_written > 30, timeout=20)
+        assert await until(pilot, lambda: app.session.schedule.ticks_written > 30, timeout=20)
         if cores < 2:
-            assert await until(pilot, lambda: app.session.gave_way > 0, timeout=20)
+            assert await until(pilot, lambda: app.session.schedule.gave_way > 0, timeout=20)
         else:
-            assert app.session.gave_way == 0 and give_way._hook is None
+            assert app.session.schedule.gave_way == 0 and give_way._hook is None
     assert give_way._hook is None  # the app gone, nothing is asked any more

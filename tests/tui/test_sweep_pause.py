@@ -24,7 +24,7 @@ async def test_a_mission_holds_the_sweep_and_the_screen_says_so(monkeypatch, tmp
     app.sampler.sweep_pause = pause
     async with app.run_test(size=(100, 30)) as pilot:
         await pilot.press("a", "g")  # a controller (the first after manual) drives the selected mission
-        assert await until(pilot, lambda: app.session.driving)
+        assert await until(pilot, lambda: app.session.schedule.driving)
         await pilot.press("2")
         assert isinstance(app.screen, AnalyticsScreen)
         line = app.screen.query_one("#link-line")

@@ -8,7 +8,7 @@ import itertools
 
 import pytest
 
-from arbiter_tui.session.robot import next_due
+from arbiter_tui.session.schedule import next_due
 
 PERIOD = 0.1
 
