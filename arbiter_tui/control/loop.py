@@ -36,6 +36,45 @@ BURST = 2.0  # commands the rate ceiling lets through at once (a key press answe
 NO_ODOMETRY = frozenset({STARTING, CONNECTING, DISCONNECTED, RECONNECTING})  # link states with no live pose
 
 
+class RateCeiling:
+    """The command rate is a ceiling (--repeat-rate): a token bucket of ``BURST`` commands, refilled at
+    ``max_rate`` a second (None: no ceiling). Only moving commands take tokens: a stop always goes out."""
+
+    def __init__(self, max_rate: float | None) -> None:
+        self.max_rate = max_rate
+        self._tokens = BURST
+        self._at: float | None = None
+        self.held_back = 0  # moving commands the ceiling did not send
+
+    def take(self, now: float) -> bool:
+        if self.max_rate is None:
+            return True
+        if self._at is not None:
+            self._tokens = min(BURST, self._tokens + (now - self._at) * self.max_rate)
+        self._at = now
+        if self._tokens < 1.0:
+            self.held_back += 1
+            return False
+        self._tokens -= 1.0
+        return True
+
+
+class Trail:
+    """Where the robot went, for the map: a point each ``TRAIL_STEP_M`` moved (standing adds nothing);
+    ``version`` moves with every point (the map redraws only then)."""
+
+    def __init__(self) -> None:
+        self.points: deque[tuple[float, float]] = deque(maxlen=TRAIL_POINTS)
+        self.version = 0
+
+    def add(self, x: float, y: float) -> None:
+        last = self.points[-1] if self.points else None
+        if last is not None and math.hypot(x - last[0], y - last[1]) < TRAIL_STEP_M:
+            return
+        self.points.append((x, y))
+        self.version += 1
+
+
 class ControlLoop:
     """What the robot is told, and what the analytics record: each control tick asks teleop (a held key)
     or the selected controller (a mission run) for a command and sends it on the link; each sample
@@ -59,14 +98,8 @@ class ControlLoop:
         self.controller = make_controller(self.state.algorithm)
         self.command = (0.0, 0.0)  # the last command sent
         self.unsent = 0  # commands refused by the link (disconnected)
-        self.trail: deque[tuple[float, float]] = deque(maxlen=TRAIL_POINTS)
-        self.trail_version = 0  # bumped with every trail point: the map redraws only then
-        # The command rate is a ceiling (--repeat-rate): a token bucket of BURST commands, refilled at
-        # max_rate. Only moving commands take tokens: a stop always goes out at once.
-        self.max_rate = max_rate
-        self._tokens = BURST
-        self._tokens_at: float | None = None
-        self.held_back = 0  # moving commands the ceiling did not send
+        self.trail = Trail()
+        self.ceiling = RateCeiling(max_rate)
         self._still_sampled = False  # one sample of a robot standing still outside a run, then none
         # the odometry life followed (arbiter_core.mission): a new one forgets the missions of the last
         self._telemetry = link.telemetry
@@ -124,11 +157,6 @@ class ControlLoop:
         names = list(MISSIONS)
         self.set_mission(names[(names.index(self.mission_name) + 1) % len(names)])
         return self.mission_name
-
-    def _autonomous(self) -> bool:
-        """Make sure an autonomous controller is selected (the default after manual); False if none can be."""
-        self.set_algorithm(goal_driver(self.algorithm))
-        return self.algorithm != MANUAL
 
     def _run(self, mission: Mission) -> None:
         self.stop()
@@ -194,7 +222,7 @@ class ControlLoop:
         """Drive to the point (x, y) in the odometry frame with :func:`goal_driver` of the selection."""
         if not (math.isfinite(x) and math.isfinite(y)):
             raise ValueError("a goal needs finite coordinates")
-        self._autonomous()
+        self.set_algorithm(goal_driver(self.algorithm))  # the selected controller, else the default
         pose = self.link.telemetry.snapshot()[0]
         self._run(Mission.to_goal(x, y, self.algorithm, pose, self._wall_ms(), self._life))
 
@@ -256,9 +284,6 @@ class ControlLoop:
             self._end_manual_run()
 
     # -- ticks ----------------------------------------------------------------------------
-    def goal(self) -> tuple[float, float]:
-        return self.mission.goal
-
     def autonomy_limits(self) -> Limits:
         """A controller drives no faster than the max speed and turn shown on the control screen."""
         base = self.teleop.limits
@@ -267,13 +292,6 @@ class ControlLoop:
             max_linear=min(self.teleop.speed, base.max_linear),
             max_angular=min(self.teleop.turn, base.max_angular),
         )
-
-    def add_trail(self, x: float, y: float) -> None:
-        """A trail point where the robot is, unless it has not moved ``TRAIL_STEP_M`` since the last."""
-        if self.trail and math.hypot(x - self.trail[-1][0], y - self.trail[-1][1]) < TRAIL_STEP_M:
-            return
-        self.trail.append((x, y))
-        self.trail_version += 1
 
     def tick_control(self, now: float) -> tuple[float, float] | None:
         completed: list[tuple[float, float | None]] = []  # a run that completed at this tick
@@ -288,7 +306,7 @@ class ControlLoop:
     def _tick(self, now: float, completed: list[tuple[float, float | None]]) -> tuple[float, float] | None:
         self.follow_life()
         pose, *_ = self.link.telemetry.snapshot()
-        self.add_trail(pose.x, pose.y)
+        self.trail.add(pose.x, pose.y)
         self.state = M.advancing(self.state, pose)
         limits = self.teleop.limits
         if self.running:
@@ -309,8 +327,7 @@ class ControlLoop:
             return None
         v, w = clamp_twist(*cmd, limits)
         self._track_manual(now, v, w)
-        if (v, w) != (0.0, 0.0) and not self._take_token(now):
-            self.held_back += 1
+        if (v, w) != (0.0, 0.0) and not self.ceiling.take(now):
             return None
         if self.link.send(v, w):
             self.command = (v, w)
@@ -323,17 +340,6 @@ class ControlLoop:
             if (v, w) != (0.0, 0.0):
                 self.stop()
         return (v, w)
-
-    def _take_token(self, now: float) -> bool:
-        if self.max_rate is None:
-            return True
-        if self._tokens_at is not None:
-            self._tokens = min(BURST, self._tokens + (now - self._tokens_at) * self.max_rate)
-        self._tokens_at = now
-        if self._tokens < 1.0:
-            return False
-        self._tokens -= 1.0
-        return True
 
     def sample(self) -> DataPoint | None:
         """Record one DataPoint if collecting (at the collection rate, driven by the caller).

@@ -404,11 +404,11 @@ def map_view(
     observed: Observed | None = None,
 ) -> MapView:
     pose = link.telemetry.snapshot()[0]
-    version = loop.trail_version
+    version = loop.trail.version
     if previous is not None and previous.version == version:
         trail, bounds = previous.trail, previous.bounds
     else:
-        trail = tuple(loop.trail)
+        trail = tuple(loop.trail.points)
         bounds = bounds_of(trail)
     plan = loop.plan(pose)  # the waypoints where g takes the robot, not the mission's own frame
     goal = None if plan is None else plan.goal
@@ -454,7 +454,7 @@ def analytics_view(
     waypoints: tuple[tuple[float, float], ...] = ()
     goal = None
     if loop is not None and loop.algorithm != MANUAL:
-        waypoints, goal = tuple(loop.mission.waypoints), loop.goal()
+        waypoints, goal = tuple(loop.mission.waypoints), loop.mission.goal
     if previous is not None and previous.version == version:
         plots_due = previous.plotted_from != version and now - previous.plotted_at >= PLOT_PERIOD_S
         if not plots_due:

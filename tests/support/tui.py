@@ -126,7 +126,7 @@ def still_app(tmp_path=None, link=None, store=None, tracker_view=True, mode="emb
     app = make_app(settings, link, tracker, store=store, clock=clock)
     app.fake_clock = clock
     for _ in range(30):
-        app.session.loop.add_trail(0.05 * _, 0.01 * _ * _ / 10)
+        app.session.loop.trail.add(0.05 * _, 0.01 * _ * _ / 10)
     return app
 
 

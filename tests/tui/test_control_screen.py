@@ -145,7 +145,7 @@ async def dashboard_at(size: tuple[int, int]) -> dict[str, object]:
         table = screen.query_one(CompareTable)
         live_map = screen.query_one(LiveMap)
         x_axis, y_axis = live_map._axes(app.frame.map)
-        xs, ys = zip(*app.session.loop.trail, (0.0, 0.0), app.frame.map.pose[:2], strict=False)
+        xs, ys = zip(*app.session.loop.trail.points, (0.0, 0.0), app.frame.map.pose[:2], strict=False)
         return {
             "cards": shown_lines(screen.query_one(StatsCards)),
             "stats": app.frame.analytics.stats,
