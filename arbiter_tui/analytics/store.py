@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import math
 import threading
-from collections.abc import Iterator
 
 import numpy as np
 
@@ -40,6 +39,28 @@ from .runs import AlgorithmSummary, RunLog, RunSummary
 
 _COL = {name: i for i, name in enumerate(NUMERIC)}
 MAX_CAPACITY = 10_000_000
+
+
+def _wrapped(size: int, cap: int, nxt: int) -> bool:
+    """True when the ring is full and its oldest point is not in slot 0."""
+    return size == cap and nxt != 0
+
+
+def _order(size: int, cap: int, nxt: int) -> np.ndarray | slice:
+    """Indices of the stored points, oldest first."""
+    if not _wrapped(size, cap, nxt):
+        return slice(0, size)
+    return np.r_[nxt:size, 0:nxt]
+
+
+def _last(size: int, cap: int, nxt: int, n: int | None) -> np.ndarray | slice:
+    """Indices of the newest ``n`` stored points (all when None), oldest first: O(n), not O(ring)."""
+    k = size if n is None else max(0, min(n, size))
+    if not _wrapped(size, cap, nxt):
+        return slice(size - k, size)
+    if k <= nxt:  # nxt holds the oldest point; the newest is at nxt - 1
+        return slice(nxt - k, nxt)
+    return np.r_[size - (k - nxt) : size, 0:nxt]
 
 
 class AnalyticsStore:
@@ -65,16 +86,6 @@ class AnalyticsStore:
         self._gap = np.empty(alloc, dtype=np.bool_)  # the sample follows a gap in the recording
         self._size = 0
         self._next = 0
-
-    def _wrapped(self) -> bool:
-        """True when the ring is full and its oldest point is not in slot 0."""
-        return self._size == self._max and self._next != 0
-
-    def _order(self) -> np.ndarray | slice:
-        """Indices of the stored points, oldest first."""
-        if not self._wrapped():
-            return slice(0, self._size)
-        return np.r_[self._next : self._size, 0 : self._next]
 
     def _grow(self) -> None:
         alloc = self._num.shape[1]
@@ -119,7 +130,7 @@ class AnalyticsStore:
             raise ValueError(f"max_data_points must be an integer in [1, {MAX_CAPACITY}], got {n!r}")
         with self._lock:
             if n != self._max:
-                order = self._order()
+                order = _order(self._size, self._max, self._next)
                 keep_num = self._num[:, order][:, -n:] if self._size else self._num[:, :0]
                 keep_alg = self._alg[order][-n:] if self._size else self._alg[:0]
                 keep_gap = self._gap[order][-n:] if self._size else self._gap[:0]
@@ -284,40 +295,30 @@ class AnalyticsStore:
         """Points recorded since start, including those the ring buffer has dropped."""
         return self._total_recorded
 
-    def _last(self, n: int | None) -> np.ndarray | slice:
-        """Indices of the newest ``n`` stored points (all when None), oldest first: O(n), not O(ring)."""
-        size = self._size
-        k = size if n is None else max(0, min(n, size))
-        if not self._wrapped():
-            return slice(size - k, size)
-        h = self._next  # the oldest point; the newest is at h - 1
-        if k <= h:
-            return slice(h - k, h)
-        return np.r_[size - (k - h) : size, 0:h]
-
     def column(self, name: str, last: int | None = None) -> np.ndarray:
         """A copy of one numeric column, oldest first (optionally only the ``last`` points)."""
         with self._lock:
-            return np.array(self._num[_COL[name], self._last(last or None)], copy=True)
+            idx = _last(self._size, self._max, self._next, last or None)
+            return np.array(self._num[_COL[name], idx], copy=True)
 
     def tail(self, last: int) -> tuple[dict[str, np.ndarray], np.ndarray, list[str]]:
         """The newest ``last`` points as columns (copies), their algorithm codes and the code names:
         what the plots draw, at a cost that depends on ``last``, not on the ring's size."""
         with self._lock:
-            idx = self._last(last)
+            idx = _last(self._size, self._max, self._next, last)
             cols = {name: np.array(self._num[i, idx], copy=True) for name, i in _COL.items()}
             return cols, np.array(self._alg[idx], copy=True), list(self._algos)
 
     def algorithms(self) -> list[str]:
         """Algorithm of each stored point, oldest first."""
         with self._lock:
-            codes = self._alg[self._order()].copy()
+            codes = self._alg[_order(self._size, self._max, self._next)].copy()
             names = list(self._algos)
         return [names[c] for c in codes]
 
     def points(self) -> list[DataPoint]:
         with self._lock:
-            order = self._order()
+            order = _order(self._size, self._max, self._next)
             num = self._num[:, order].copy()
             codes = self._alg[order].copy()
             runs = self._run[order].copy()
@@ -344,9 +345,6 @@ class AnalyticsStore:
             )
         return out
 
-    def __iter__(self) -> Iterator[DataPoint]:
-        return iter(self.points())
-
     def stats(self) -> AnalyticsStats:
         """AnalyticsStats over every stored point, without copying the buffer."""
         with self._lock:
@@ -356,7 +354,7 @@ class AnalyticsStore:
             num = self._num[:, :n]
             x, y, gap = num[1], num[2], self._gap[:n]
             path = S.path_length(x, y, gap)
-            if self._wrapped():
+            if _wrapped(self._size, self._max, self._next):
                 # Storage order wraps: the pair (newest, oldest) is not a real step, and the pair (last
                 # slot, first slot) is, unless the sample in slot 0 follows a gap (path_length dropped the
                 # step into a gap sample: here, the one into slot h is not counted either way)
@@ -371,7 +369,7 @@ class AnalyticsStore:
         """AnalyticsStats per algorithm over the ring, in first-seen order; path length counts only steps
         between two consecutive samples of the same algorithm and the same run (``grouped_stats``)."""
         with self._lock:
-            order = self._order()
+            order = _order(self._size, self._max, self._next)
             num = self._num[:, order]
             codes = self._alg[order]
             runs = self._run[order]
