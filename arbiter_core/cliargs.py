@@ -205,14 +205,21 @@ def can_create_in(directory: Path) -> bool:
 LOG_LEVELS = ("DEBUG", "INFO", "WARNING", "ERROR")
 
 
-def add_version(parser: argparse.ArgumentParser, distribution: str = "arbiter-tui") -> None:
-    """``--version``: the installed package's version (one distribution carries both commands)."""
+DISTRIBUTIONS = ("arbiter-tui", "arbiter-backend")  # the console's (both commands), the robot's (robot/)
+
+
+def add_version(parser: argparse.ArgumentParser) -> None:
+    """``--version``: the installed distribution's version (the console's carries both commands; a robot
+    may have the backend's alone)."""
     from importlib.metadata import PackageNotFoundError, version
 
-    try:
-        text = version(distribution)
-    except PackageNotFoundError:  # running from a source tree that was never installed
-        text = "unknown (not installed)"
+    text = "unknown (not installed)"  # running from a source tree that was never installed
+    for distribution in DISTRIBUTIONS:
+        try:
+            text = f"{version(distribution)} ({distribution})"
+            break
+        except PackageNotFoundError:
+            continue
     parser.add_argument("--version", action="version", version=f"{parser.prog} {text}")
 
 

@@ -121,3 +121,22 @@ def test_pure_console_logic_imports_without_ui_or_network():
 def test_the_blocker_really_blocks():
     r = run_blocked(["textual"], {"textual"})
     assert r.returncode != 0 and "blocked import" in r.stderr
+
+
+def test_the_robots_distribution_is_the_backend_with_the_consoles_own_pins():
+    """robot/pyproject.toml (the robot's install) builds arbiter_core and arbiter_backend only, and each
+    of its dependencies is one of the console's with the same specifier: a robot never runs a version
+    the console's tests did not."""
+    try:
+        import tomllib
+    except ModuleNotFoundError:  # Python 3.10
+        import tomli as tomllib
+
+    console = tomllib.loads((ROOT / "pyproject.toml").read_text())
+    robot = tomllib.loads((ROOT / "robot" / "pyproject.toml").read_text())
+    assert robot["tool"]["setuptools"]["packages"]["find"]["include"] == ["arbiter_core*", "arbiter_backend*"]
+    backend = console["project"]["scripts"]["arbiter-backend"]
+    assert robot["project"]["scripts"] == {"arbiter-backend": backend}
+    assert set(robot["project"]["dependencies"]) <= set(console["project"]["dependencies"])
+    for extra, needs in robot["project"]["optional-dependencies"].items():
+        assert set(needs) <= set(console["project"]["optional-dependencies"][extra]), extra
