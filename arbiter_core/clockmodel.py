@@ -228,8 +228,8 @@ class ClockModel:
         span = pts[-1][0] - pts[0][0]
         if len(pts) < 3 or span < self.min_span_s:
             best = min(pts, key=lambda p: p[2])
-            res = tuple(o - best[1] for _x, o, _h in pts)
-            return _Fit(best[0], best[1], 0.0, allowance, False, tuple(pts), res)
+            flat = tuple(o - best[1] for _x, o, _h in pts)
+            return _Fit(best[0], best[1], 0.0, allowance, False, tuple(pts), flat)
         fit = _wls(pts)
         res = [o - (fit[0] + fit[1] * (x - fit[3])) for x, o, _h in pts]
         mad = _median([abs(r - _median(res)) for r in res]) * MAD_TO_SIGMA
@@ -290,7 +290,7 @@ def t_997(dof: int) -> float:
     return _T997[dof - 1] if dof <= len(_T997) else 3.0 + 7.5 / dof
 
 
-def _median(values: list[float]) -> float:
+def _median(values: Sequence[float]) -> float:
     s = sorted(values)
     n = len(s)
     return s[n // 2] if n % 2 else (s[n // 2 - 1] + s[n // 2]) / 2.0

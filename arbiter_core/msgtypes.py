@@ -122,7 +122,8 @@ def check_message(type_name: str, msg: Any) -> dict[str, Any]:
         if not isinstance(msg, dict):
             raise MessageError(f"msg must be an object, got {_kind(msg)}")
         return msg
-    return _check(spec, msg, "")
+    checked: dict[str, Any] = _check(spec, msg, "")
+    return checked
 
 
 def known(type_name: str) -> bool:

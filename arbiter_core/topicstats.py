@@ -342,8 +342,8 @@ def _topic(obj: Any) -> TopicFigures:
         if isinstance(v, bool) or not isinstance(v, int) or v < 0:
             raise TopicsError(f"{name}: {key} is not a count")
         values[key] = v
-    notes = {k: obj.get(k) if isinstance(obj.get(k), str) else None for k in ("qos_note", "note")}
-    nodes = {k: _names(obj.get(k), name, k) for k in ("publisher_nodes", "subscriber_nodes")}
+    notes: dict[str, Any] = {k: v if isinstance(v := obj.get(k), str) else None for k in ("qos_note", "note")}
+    nodes: dict[str, Any] = {k: _names(obj.get(k), name, k) for k in ("publisher_nodes", "subscriber_nodes")}
     stamped = obj.get("stamped") is True
     steady = obj.get("steady") is True  # an older backend does not say: not known to be steady
     history = _history(obj.get("rate_history"), name)
