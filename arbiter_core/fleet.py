@@ -182,7 +182,7 @@ def _vector(obj: dict[str, Any], where: str, name: str, n: int) -> tuple[float, 
         return None
     if not isinstance(v, list) or len(v) != n:
         raise _fail(f"{where}.{name}", f"null or a list of {n} finite numbers", v)
-    return tuple(_num({"i": x}, f"{where}.{name}", "i") for x in v)
+    return tuple(_num({f"{name}[{i}]": x}, where, f"{name}[{i}]") for i, x in enumerate(v))
 
 
 def _url(obj: dict[str, Any], where: str, name: str, schemes: tuple[str, ...]) -> str | None:

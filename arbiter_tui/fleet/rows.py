@@ -223,8 +223,10 @@ class FleetModel:
         else:
             since = r.alive_since
             fresh = r.status_mono is not None and mono - r.status_mono <= self.stale_after
+            # its token (re)appeared and no status since: alive while it may still be starting
+            waiting = r.status_mono is None or (r.token_mono is not None and r.status_mono < r.token_mono)
             waited = r.token_mono is not None and mono - r.token_mono > self.stale_after
-            state = "alive" if fresh or (r.status_mono is None and not waited) else "stale"
+            state = "alive" if fresh or (waiting and not waited) else "stale"
             if r.status_mono is None:
                 note = "no status yet"
         bad = r.bad if r.bad_mono is not None and mono - r.bad_mono <= BAD_HOLD_S else None
