@@ -26,12 +26,12 @@ from arbiter_core import fleet
 from .rows import COLUMNS, FleetView, Row, cells, console_argv, detail_lines, history_words
 
 REFRESH_S = 0.5
-SEP = 2  # spaces between columns
+SEP = 1  # space between columns
 # column -> width; shown in PRIORITY order while they fit, "note" takes the rest (at least NOTE_MIN)
-WIDTHS = {"robot": 14, "state": 20, "driver": 8, "p95": 8, "clock": 9, "worst topic": 24,
-          "controller": 22, "last run": 26, "runs": 4}  # fmt: skip
+WIDTHS = {"robot": 12, "state": 20, "driver": 8, "p95": 8, "clock": 9, "worst topic": 24,
+          "controller": 24, "last run": 34, "runs": 4}  # fmt: skip
 PRIORITY = ("robot", "state", "driver", "p95", "worst topic", "clock", "controller", "last run", "runs")
-NOTE_MIN = 24
+NOTE_MIN = 22
 STATE_STYLES = {"lost": "bold red", "stale": "yellow", "alive": "green"}
 
 

@@ -95,6 +95,11 @@ class Row:
         return out
 
 
+def _grade(last: fleet.RunGrade, current: str | None) -> str:
+    """The last run's grade, naming its controller when another one is current."""
+    return last.words() if current in (None, last.controller) else f"{last.controller}: {last.words()}"
+
+
 def _plain(v: Any) -> Any:
     return list(v) if isinstance(v, tuple) else round(v, 3) if isinstance(v, float) else v
 
@@ -255,8 +260,8 @@ class FleetModel:
             severity=severity,
             since=since,
             age_s=None if r.last_mono is None else max(0.0, mono - r.last_mono),
-            driver=None if s is None else s.driver,
-            driver_detail=None if s is None else s.driver_detail,
+            driver=None if s is None or state == "lost" else s.driver,  # lost: nobody can tell
+            driver_detail=None if s is None or state == "lost" else s.driver_detail,
             mode=None if s is None else s.mode,
             p50_ms=None if lat is None else lat.p50_ms,
             p95_ms=None if lat is None else lat.p95_ms,
@@ -267,7 +272,7 @@ class FleetModel:
             worst_health=None if worst is None else worst.health,
             controller=controller,
             progress=progress,
-            grade=None if runs is None else runs.last.words(),
+            grade=None if runs is None else _grade(runs.last, controller if s is None else s.controller),
             runs=None if s is None and runs is None else max(s.runs if s else 0, runs.count if runs else 0),
             bad=bad,
             bad_count=r.bad_count,
