@@ -25,7 +25,7 @@ from typing import Any
 from arbiter_core import fleet
 from arbiter_core.hostclock import HostClock
 
-from .rows import FleetModel, FleetView
+from .rows import FleetModel, FleetView, Row
 
 log = logging.getLogger(__name__)
 SYNC_REFRESH_S = 30.0
@@ -50,7 +50,10 @@ class ConsoleSettings:
     connect: tuple[str, ...] = ()
     listen: tuple[str, ...] = ()
     config_file: Path | None = None
-    lease_ms: int = fleet.DEFAULT_LEASE_MS
+    # the console's own lease: how soon its robots and router drop *it* (Zenoh's default, 10 s). Not how
+    # soon a robot reads "lost": that is the robot's lease. A short one here makes robots behind a lossy
+    # link drop the console, and their tokens with it, at every burst of losses.
+    lease_ms: int | None = None
 
     @property
     def mode(self) -> str:
@@ -238,6 +241,11 @@ class FleetClient:
     def view(self, pattern: str = "") -> FleetView:
         with self._lock:
             return self.model.view(self.wall(), self.mono(), pattern, self.session_words(), self.error)
+
+    def row(self, name: str) -> Row | None:
+        """One robot's row now (None: never heard of)."""
+        with self._lock:
+            return self.model.row_of(name, self.wall(), self.mono())
 
     def history(self, name: str, minutes: float = fleet.HISTORY_MINUTES) -> fleet.History | str:
         """The robot's answer to ``arbiter/<name>/history?minutes=N``, or why there is none (one line)."""

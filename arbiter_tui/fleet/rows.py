@@ -285,6 +285,10 @@ class FleetModel:
             velocity=None if s is None else s.velocity,
         )
 
+    def row_of(self, name: str, wall: float, mono: float) -> Row | None:
+        r = self._robots.get(name)
+        return None if r is None else self.row(r, wall, mono)
+
     def _clock(self, lat: Latency | None) -> tuple[float | None, str | None]:
         if lat is None:
             return None, "no latency summary yet"
