@@ -348,3 +348,76 @@ def test_backend_fleet_flags_are_checked_in_one_line(args, words, tmp_path):
     r = subprocess.run(cmd, capture_output=True, text=True, timeout=30)
     assert r.returncode == 2
     assert words in r.stderr and len(r.stderr.strip().splitlines()) == 1, r.stderr
+
+
+def site_pki(directory):
+    """A site CA and a router certificate it signed (for localhost and 127.0.0.1): Zenoh's TLS (rustls)
+    wants a real CA, not a self-signed leaf."""
+    import datetime
+    import ipaddress
+
+    from cryptography import x509
+    from cryptography.hazmat.primitives import hashes, serialization
+    from cryptography.hazmat.primitives.asymmetric import ec
+    from cryptography.x509.oid import NameOID
+
+    now = datetime.datetime.now(datetime.timezone.utc)
+
+    def cert(subject, issuer, public, signer, ca, names=()):
+        b = (
+            x509.CertificateBuilder()
+            .subject_name(subject)
+            .issuer_name(issuer)
+            .public_key(public)
+            .serial_number(x509.random_serial_number())
+            .not_valid_before(now - datetime.timedelta(minutes=5))
+            .not_valid_after(now + datetime.timedelta(days=1))
+            .add_extension(x509.BasicConstraints(ca=ca, path_length=None), critical=True)
+        )
+        if names:
+            b = b.add_extension(x509.SubjectAlternativeName(list(names)), critical=False)
+        return b.sign(signer, hashes.SHA256())
+
+    def write(name, key, c):
+        (directory / f"{name}.key").write_bytes(
+            key.private_bytes(
+                serialization.Encoding.PEM, serialization.PrivateFormat.PKCS8, serialization.NoEncryption()
+            )
+        )
+        (directory / f"{name}.pem").write_bytes(c.public_bytes(serialization.Encoding.PEM))
+
+    ca_key, key = ec.generate_private_key(ec.SECP256R1()), ec.generate_private_key(ec.SECP256R1())
+    ca_name = x509.Name([x509.NameAttribute(NameOID.COMMON_NAME, "arbiter site CA")])
+    write("ca", ca_key, cert(ca_name, ca_name, ca_key.public_key(), ca_key, True))
+    names = (x509.DNSName("localhost"), x509.IPAddress(ipaddress.ip_address("127.0.0.1")))
+    router_name = x509.Name([x509.NameAttribute(NameOID.COMMON_NAME, "router")])
+    write("router", key, cert(router_name, ca_name, key.public_key(), ca_key, False, names))
+
+
+def test_robots_and_console_over_tls_and_a_client_without_the_ca_refused(tmp_path, cleanup):
+    procs, clients = cleanup
+    site_pki(tmp_path)
+    port = free_port()
+    tls = {
+        "link": {
+            "tls": {
+                "listen_certificate": str(tmp_path / "router.pem"),
+                "listen_private_key": str(tmp_path / "router.key"),
+            }
+        }
+    }
+    r = open_router(port, {"listen": {"endpoints": [f"tls/127.0.0.1:{port}"]}, "transport": tls})
+    try:
+        trust = tmp_path / "trust.json5"
+        trust.write_text(
+            json.dumps({"transport": {"link": {"tls": {"root_ca_certificate": str(tmp_path / "ca.pem")}}}})
+        )
+        endpoint = f"tls/localhost:{port}"
+        procs.append(robot(endpoint, "tls-bot", "--zenoh-config", str(trust)))
+        c = console(endpoint, trust)
+        clients.append(c)
+        assert wait_for(lambda: announced(c, "tls-bot"), timeout=10)
+        untrusting = fleet_cli("--connect", endpoint, "--json", "--wait", "1")
+        assert untrusting.returncode == 3 and "cannot reach the router at tls/localhost" in untrusting.stderr
+    finally:
+        r.close()
