@@ -10,7 +10,9 @@ Zenoh client of the console) counts the bytes each robot sends and sees the toke
 
 - CPU: the console process's utime+stime over ``--seconds``, after the rows are all there and a warm-up,
   for each N of ``--robots`` (a new console each time: lost rows are never dropped);
-- kill -> lost: ``kill -9`` of a real backend until its row on the screen (tmux capture, every 50 ms)
+- freeze -> lost: SIGSTOP of a real backend (its socket stays open: only its lease, 1500 ms, tells)
+  until its row reads "lost"; SIGCONT until it is back;
+- kill -> lost: ``kill -9`` of a real backend until its row on the screen (tmux capture, every 20 ms)
   reads "lost since", and until the observer's row does (without the screen's 0.5 s refresh);
   restart -> alive: a new backend with the same name until its row reads "alive" again;
 - bytes/s: payload bytes each robot sent over the CPU window, from the observer's counts;
@@ -232,22 +234,34 @@ def scale(n: int, seconds: float, size: tuple[int, int]) -> dict:
         procs.append(start_sim(n, endpoint))
         shown = wait(lambda: obs.view().total >= n + 3 and all(r.driver for r in obs.view().rows), 60)
         time.sleep(5.0)  # warm-up: every robot's topics period has gone by
-        before = obs.model.received_bytes()
+        # bytes/s per robot, counted by the observer (a second console, subscribed through the console)...
+        before, t0 = obs.model.received_bytes(), time.monotonic()
+        time.sleep(min(seconds, 10.0))
+        after, window = obs.model.received_bytes(), time.monotonic() - t0
+        rates = {k: (after[k] - before.get(k, 0)) / window for k in after}
+        # ...then the console's CPU with the observer gone: the console routes to itself alone
+        obs.close()
+        time.sleep(1.0)
         c0, t0 = cpu_s(pid), time.monotonic()
         time.sleep(seconds)
         cpu = 100.0 * (cpu_s(pid) - c0) / (time.monotonic() - t0)
-        window = time.monotonic() - t0
-        after = obs.model.received_bytes()
-        rates = {k: (after[k] - before.get(k, 0)) / window for k in after}
+        rows_on_screen = sum(
+            1
+            for line in screen().splitlines()
+            if line.split()[:1] and line.split()[0].startswith(("sim-", "real-"))
+        )
+        obs = observer(endpoint)
         sim_rates = [v for k, v in rates.items() if k.startswith("sim-")]
         real_rates = [v for k, v in rates.items() if k.startswith("real-")]
         result = {
             "robots": n + 3,
             "console_cpu_percent": round(cpu, 1),
+            "rows_on_screen": rows_on_screen,
             "all_rows_after_s": None if shown is None else round(shown, 2),
             "sim_bytes_per_s_p50": round(pct(sim_rates, 0.5) or 0, 1),
             "real_bytes_per_s": [round(v, 1) for v in real_rates],
         }
+        wait(lambda: obs.view().total >= n + 3, 10)
         if n == max(ARGS.robots):
             result["kill_restart"] = kill_restart(endpoint, procs, obs)
         return result
@@ -282,6 +296,31 @@ def kill_restart(endpoint: str, procs: list[subprocess.Popen], obs) -> dict:
         "restart_to_alive_observer_s": [],
         "restart_to_listening_s": [],
     }
+    # frozen first (SIGSTOP: its socket stays open, only the lease tells), then thawed
+    out["freeze_to_lost_screen_s"], out["freeze_to_lost_observer_s"], out["thaw_to_alive_observer_s"] = (
+        [],
+        [],
+        [],
+    )
+    for i in (1, 2, 3):
+        name = f"real-{i}"
+        t0 = time.monotonic()
+        os.kill(procs[i - 1].pid, signal.SIGSTOP)
+        lost = first_times(
+            t0,
+            {
+                "screen": lambda n=name: screen_state(n) == "lost",
+                "observer": lambda n=name: obs_state(obs, n) == "lost",
+            },
+            10,
+        )
+        t1 = time.monotonic()
+        os.kill(procs[i - 1].pid, signal.SIGCONT)
+        back = first_times(t1, {"observer": lambda n=name: obs_state(obs, n) == "alive"}, 20)
+        out["freeze_to_lost_screen_s"].append(lost["screen"])
+        out["freeze_to_lost_observer_s"].append(lost["observer"])
+        out["thaw_to_alive_observer_s"].append(back["observer"])
+        time.sleep(1.0)
     for i in (1, 2, 3):
         name = f"real-{i}"
         t0 = time.monotonic()
@@ -388,7 +427,12 @@ def netem(delay_ms: float, loss: float, seconds: float, lease_ms: int) -> dict:
 def main() -> None:
     global ARGS
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--robots", type=lambda t: [int(x) for x in t.split(",")], default=[10, 50, 200])
+    p.add_argument(
+        "--robots",
+        type=lambda t: [int(x) for x in t.split(",") if x.strip()],
+        default=[10, 50, 200],
+        help="simulated robots per run, e.g. 10,50,200 ('' for the --netem case alone)",
+    )
     p.add_argument("--seconds", type=float, default=20.0, help="each CPU window (default 20)")
     p.add_argument("--size", default="200x60")
     p.add_argument("--netem", action="store_true", help="also the robot behind netem (root)")
