@@ -245,10 +245,9 @@ def scale(n: int, seconds: float, size: tuple[int, int]) -> dict:
         c0, t0 = cpu_s(pid), time.monotonic()
         time.sleep(seconds)
         cpu = 100.0 * (cpu_s(pid) - c0) / (time.monotonic() - t0)
+        listed = screen().split("────")[0].splitlines()  # the list, above the detail pane's rule
         rows_on_screen = sum(
-            1
-            for line in screen().splitlines()
-            if line.split()[:1] and line.split()[0].startswith(("sim-", "real-"))
+            1 for line in listed if line.split()[:1] and line.split()[0].startswith(("sim-", "real-"))
         )
         obs = observer(endpoint)
         sim_rates = [v for k, v in rates.items() if k.startswith("sim-")]
