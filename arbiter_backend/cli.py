@@ -338,6 +338,11 @@ async def _run(config: BackendConfig, ros_args: list[str], fleet: FleetSettings 
         announcer = FleetAnnouncer(backend, fleet, link)
         announcer.start()
     print(backend.describe(), flush=True)
+    if fleet is not None:
+        where = ",".join(fleet.endpoints)
+        print(
+            f"arbiter-backend: fleet: announcing as {fleet.name} to {where} (Zenoh {fleet.mode})", flush=True
+        )
     await stop.wait()
     if announcer is not None:
         await announcer.stop()

@@ -128,13 +128,15 @@ class FleetClient:
         if self._closed.is_set():
             session.close()
             return
+        # the session first: the tokens already there arrive while their subscriber is being declared,
+        # and each new robot's history is asked on it at once
+        self.session = session
         self._keep = [
             session.liveliness().declare_subscriber(
                 fleet.key("*", fleet.ALIVE), self._on_token, history=True
             ),
             session.declare_subscriber(fleet.key("*", "*"), self._on_sample),
         ]
-        self.session = session
         self.opened.set()
         threading.Thread(target=self._sync_loop, name="fleet-clock", daemon=True).start()
 

@@ -1,8 +1,9 @@
 """``arbiter-tui fleet``: one row per robot that announces itself on Zenoh (``arbiter-backend --zenoh``).
 
 The screen by default; ``--json`` prints the same rows once, for scripts and CI; ``--history NAME``
-prints a robot's answer to its history queryable. Exit 2 on bad arguments, 3 when the Zenoh session
-cannot be opened (the router unreachable within ``--wait``, a port taken, Zenoh not installed).
+prints a robot's answer to its history queryable. Exit 2 on bad arguments (and without Zenoh, or with a
+config file Zenoh does not take), 3 when the session cannot be opened (the router unreachable within
+``--wait``, a port that cannot be listened on).
 """
 
 from __future__ import annotations
@@ -108,8 +109,14 @@ def run(argv: list[str]) -> int:
         return 2
     try:
         client = FleetClient(settings, FleetModel(stale_after=args.stale_after))
+    except FleetUnavailable as exc:  # Zenoh not installed, a config file Zenoh does not take
+        print(f"arbiter-tui fleet: {exc}", file=sys.stderr)
+        return 2
+    try:
         if args.json or args.history is not None:
             client.open(connect_timeout_ms=max(1, round(args.wait * 1000)))
+        elif settings.listen:
+            client.open()  # as the router: a port that cannot be listened on stops it here, in one line
     except FleetUnavailable as exc:
         print(f"arbiter-tui fleet: {exc}", file=sys.stderr)
         return 3
@@ -157,7 +164,8 @@ def open_console(argv: list[str]) -> int:
 def _screen(client: FleetClient, args: argparse.Namespace) -> int:
     from .app import FleetApp
 
-    client.open_in_background()
+    if not client.opened.is_set():
+        client.open_in_background()  # a client waits for its router on a thread; the screen says so
     app = FleetApp(
         source=client.view,
         history=client.history,

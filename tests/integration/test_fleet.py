@@ -297,7 +297,8 @@ def test_fleet_json_prints_the_rows_the_screen_shows_and_history_answers(router,
     procs += [robot(router, "r1", "--autonomy"), robot(router, "r2", "--expect", "/scan>=10")]
     c = console(router)
     clients.append(c)
-    assert wait_for(lambda: announced(c, "r1") and announced(c, "r2"), timeout=10)
+    with_topics = [lambda n=n: announced(c, n) and row(c, n).worst_topic is not None for n in ("r1", "r2")]
+    assert wait_for(lambda: all(f() for f in with_topics), timeout=10)
     r = fleet_cli("--connect", router, "--json", "--wait", "8")
     assert r.returncode == 0, r.stderr
     printed = json.loads(r.stdout)
@@ -421,3 +422,36 @@ def test_robots_and_console_over_tls_and_a_client_without_the_ca_refused(tmp_pat
         assert untrusting.returncode == 3 and "cannot reach the router at tls/localhost" in untrusting.stderr
     finally:
         r.close()
+
+
+BLOCK_ZENOH = (
+    "import sys\n"
+    "class Block:\n"
+    "    def find_spec(self, name, path=None, target=None):\n"
+    "        if name.split('.')[0] == 'zenoh':\n"
+    "            raise ImportError('no zenoh here')\n"
+    "sys.meta_path.insert(0, Block())\n"
+)
+
+
+@pytest.mark.parametrize(
+    ("main", "args", "words"),
+    [
+        ("arbiter_tui.cli", ["fleet", "--json"], "arbiter-tui fleet needs eclipse-zenoh (the [fleet] extra)"),
+        ("arbiter_backend.cli", ["--zenoh", "tcp/127.0.0.1:7447"], "--zenoh needs eclipse-zenoh"),
+    ],
+)
+def test_without_zenoh_the_fleet_says_how_to_install_it_in_one_line(main, args, words):
+    code = (
+        BLOCK_ZENOH
+        + f"import runpy; sys.argv = ['x', *{args!r}]; runpy.run_module({main!r}, run_name='__main__')"
+    )
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=30)
+    assert r.returncode == 2
+    assert words in r.stderr and "pip install 'arbiter-tui[fleet]'" in r.stderr, r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1
+
+
+def test_the_console_as_router_refuses_a_port_it_cannot_listen_on(router):
+    r = fleet_cli("--listen", router, "--json", "--wait", "0.2")
+    assert r.returncode == 3 and "cannot listen on" in r.stderr and len(r.stderr.strip().splitlines()) == 1
