@@ -605,6 +605,8 @@ def session_settings(
         out["connect/timeout_ms"] = -1
     if listen:
         out["listen/endpoints"] = list(listen)
+    elif mode == "peer" and not own_file:
+        out["listen/endpoints"] = []  # a peer listens on every interface by default: a robot need not
     if lease_ms is not None:
         out["transport/link/tx/lease"] = lease_ms
     if not own_file:

@@ -283,3 +283,11 @@ def test_session_settings_retry_for_ever_and_turn_scouting_off_without_a_file():
     assert s["transport/link/tx/lease"] == 1500
     assert s["scouting/multicast/enabled"] is False
     assert "scouting/multicast/enabled" not in fleet.session_settings("client", ["tcp/x:1"], own_file=True)
+
+
+def test_a_robot_as_a_peer_listens_nowhere_unless_its_file_says():
+    assert fleet.session_settings("peer", ["tcp/10.0.0.1:7447"])["listen/endpoints"] == []
+    assert "listen/endpoints" not in fleet.session_settings("peer", ["tcp/10.0.0.1:7447"], own_file=True)
+    assert fleet.session_settings("router", (), ["tcp/0.0.0.0:7447"])["listen/endpoints"] == [
+        "tcp/0.0.0.0:7447"
+    ]
