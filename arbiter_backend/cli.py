@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from arbiter_core import auth, topics
+from arbiter_core import fleet as fleet_core
 from arbiter_core.cliargs import (
     OneLineParser,
     add_log_level,
@@ -33,6 +34,7 @@ from .pacing import WAIT_S as PACED_WAIT_S
 from .server import Backend, BackendConfig
 
 if TYPE_CHECKING:
+    from .fleet import FleetSettings
     from .ros.backend import RosBackend as RosBackendT
 
 
@@ -206,6 +208,7 @@ def build_parser() -> argparse.ArgumentParser:
         f"1.2 MB as JSON); larger ones get a status error (default: {MAX_FRAME_BYTES}, "
         f"at most {TRANSPORT_MAX_FRAME})",
     )
+    add_fleet_arguments(p)
     p.add_argument("--log-file", help="write logs to this file, rotated at 1 MB, 3 kept (default: stderr)")
     add_log_level(p)
     add_version(p)
@@ -214,6 +217,58 @@ def build_parser() -> argparse.ArgumentParser:
         "-r __ns:=/robot1. Parameters override the flags."
     )
     return p
+
+
+def lease_ms(text: str) -> int:
+    value = count(text, 60_000)
+    if value < 200:
+        raise argparse.ArgumentTypeError(f"must be between 200 and 60000, got {value}")
+    return value
+
+
+FLEET_FLAGS = ("zenoh", "robot_name", "zenoh_config", "expect", "advertise_host")
+
+
+def add_fleet_arguments(p: argparse.ArgumentParser) -> None:
+    """``--zenoh`` and its companions (README "Many robots: the fleet"); checked by ``fleet.py``."""
+    g = p.add_argument_group("fleet: announce this robot to fleet consoles over Zenoh (the [fleet] extra)")
+    g.add_argument(
+        "--zenoh",
+        metavar="ENDPOINT[,...]",
+        help="the Zenoh router(s) to announce to, e.g. tcp/192.168.1.10:7447 or tls/router.lan:7447: a "
+        "liveliness token and status, latency, topics and runs payloads under arbiter/<name>/, at most "
+        f"{fleet_core.BOUND_BYTES_PER_S} payload bytes/s, and a history queryable",
+    )
+    g.add_argument(
+        "--robot-name",
+        metavar="NAME",
+        help="the name in its keys (letters, digits, _ . -; default: the namespace, else the host name)",
+    )
+    g.add_argument("--zenoh-mode", choices=("client", "peer"), default="client", help="(default: client)")
+    g.add_argument(
+        "--zenoh-lease",
+        type=lease_ms,
+        default=fleet_core.DEFAULT_LEASE_MS,
+        metavar="MS",
+        help="the liveliness lease this robot announces: its router drops it (consoles read 'lost') this "
+        f"long after it goes silent (default: {fleet_core.DEFAULT_LEASE_MS})",
+    )
+    g.add_argument(
+        "--zenoh-config",
+        type=Path,
+        metavar="FILE",
+        help="a Zenoh config file (JSON5) for what the flags do not set: user/password, TLS certificates",
+    )
+    g.add_argument(
+        "--expect",
+        metavar="TOPIC>=HZ,...",
+        help="the rates the topics payload judges each topic against, e.g. '/scan>=9.5,/odom>=45'",
+    )
+    g.add_argument(
+        "--advertise-host",
+        metavar="HOST",
+        help="the host in the URLs consoles open (default: --host; this host's name for 0.0.0.0)",
+    )
 
 
 def split_ros_args(argv: list[str]) -> tuple[list[str], list[str]]:
@@ -245,7 +300,16 @@ class UsageError(Exception):
     pass
 
 
-async def _run(config: BackendConfig, ros_args: list[str]) -> int:
+async def _run(config: BackendConfig, ros_args: list[str], fleet: FleetSettings | None = None) -> int:
+    link = None
+    if fleet is not None:
+        from .fleet import FleetConfigError, FleetLink
+
+        try:
+            link = FleetLink(fleet)  # Zenoh and its config checked before anything starts
+        except FleetConfigError as exc:
+            print(f"arbiter-backend: {exc}", file=sys.stderr)
+            return 2
     try:
         backend = make_backend(config, ros_args)
     except UsageError as exc:
@@ -267,8 +331,21 @@ async def _run(config: BackendConfig, ros_args: list[str]) -> int:
     loop = asyncio.get_running_loop()
     for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
         loop.add_signal_handler(sig, stop.set)
+    announcer = None
+    if link is not None and fleet is not None:
+        from .fleet import FleetAnnouncer
+
+        announcer = FleetAnnouncer(backend, fleet, link)
+        announcer.start()
     print(backend.describe(), flush=True)
+    if fleet is not None:
+        where = ",".join(fleet.endpoints)
+        print(
+            f"arbiter-backend: fleet: announcing as {fleet.name} to {where} (Zenoh {fleet.mode})", flush=True
+        )
     await stop.wait()
+    if announcer is not None:
+        await announcer.stop()
     await backend.stop()
     print("arbiter-backend: stopped", flush=True)
     return 0
@@ -321,6 +398,15 @@ def main(argv: list[str] | None = None) -> int:
     except topics.TopicNameError as exc:
         print(f"arbiter-backend: --{exc}", file=sys.stderr)
         return 2
+    fleet = None
+    if any(getattr(args, flag) is not None for flag in FLEET_FLAGS):
+        from .fleet import FleetConfigError, settings_from_args
+
+        try:
+            fleet = settings_from_args(args, ns)
+        except FleetConfigError as exc:
+            print(f"arbiter-backend: {exc}", file=sys.stderr)
+            return 2
     if args.tls_key is not None and args.tls_cert is None:
         print("arbiter-backend: --tls-key needs --tls-cert", file=sys.stderr)
         return 2
@@ -365,7 +451,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"arbiter-backend: cannot use --tls-cert/--tls-key: {exc}", file=sys.stderr)
         return 2
     try:
-        return _event_loop_runner()(_run(config, ros_args))
+        return _event_loop_runner()(_run(config, ros_args, fleet))
     except KeyboardInterrupt:
         return 0
 

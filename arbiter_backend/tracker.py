@@ -221,6 +221,12 @@ class LatencyTracker:
         head = json.dumps(body, allow_nan=False, separators=(",", ":"))
         return '{"records":[' + ",".join(texts) + "]," + head[1:]
 
+    def window_latencies(self) -> np.ndarray:
+        """A copy of the latencies the stats cover (the fleet's p50 and p95; not in arrival order)."""
+        with self._lock:
+            n = len(self._texts)
+            return (self._latencies[:n] if n < self.max_records else self._latencies).copy()
+
     def health(self) -> dict[str, Any]:
         now = self._monotonic()
         with self._lock:

@@ -25,6 +25,10 @@ def _command(name: str) -> Callable[[list[str]], int] | None:
         from .commands.topics import run as run_topics
 
         return run_topics
+    if name == "fleet":
+        from .fleet.command import run as run_fleet
+
+        return run_fleet
     return None
 
 

@@ -1,0 +1,479 @@
+"""``arbiter-backend --zenoh ENDPOINT[,...]``: the robot announces itself to fleet consoles over Zenoh.
+
+It opens one Zenoh session (client by default, or peer; TLS/QUIC where the endpoint says so, with the
+files and user/password of ``--zenoh-config``), declares the liveliness token ``arbiter/<name>/alive``
+and publishes the payloads of ``arbiter_core.fleet`` at that module's rates, read from the backend's own
+state: the tracker, the topic monitor, the robot-side autonomy and the odometry. A queryable answers
+``arbiter/<name>/history`` with the last minutes of them. Nothing here subscribes: a robot never reads
+another's keys.
+
+The session is opened on a thread of its own and retried for ever: a robot started before its router
+serves its console as soon as the router is up, and one whose router restarts comes back by itself.
+Zenoh is imported only here (and only with ``--zenoh``): the backend without it needs no Zenoh.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+import logging
+import socket
+import threading
+import time
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from arbiter_core import fleet, topics
+from arbiter_core.hostclock import HostClock
+from arbiter_core.kinematics import pose_of_odometry
+from arbiter_core.mission import Phase
+from arbiter_core.stats import percentile
+from arbiter_core.topicstats import Expectation, TopicFigures
+
+from .autonomy import AutonomyService
+from .topicwatch import TopicWatch
+from .tracker import LatencyTracker
+
+log = logging.getLogger(__name__)
+TICK_S = 0.25  # the announcer's beat: what is due is published on it
+SYNC_REFRESH_S = 30.0  # the host's clock-sync probe (it may take a second: off the loop)
+DRIVER_RECENT_S = 1.0  # a command this recent says who drives
+MODES = ("client", "peer")
+
+
+class FleetConfigError(Exception):
+    """``--zenoh`` cannot be used as given: one line for the command line."""
+
+
+@dataclass(frozen=True)
+class FleetSettings:
+    endpoints: tuple[str, ...]
+    name: str
+    mode: str = "client"
+    lease_ms: int = fleet.DEFAULT_LEASE_MS
+    config_file: Path | None = None
+    expect: tuple[Expectation, ...] = ()
+    advertise_host: str | None = None
+
+
+def import_zenoh() -> Any:
+    try:
+        import zenoh
+    except ImportError:
+        raise FleetConfigError(f"--zenoh {fleet.ZENOH_MISSING}") from None
+    return zenoh
+
+
+def zenoh_config(zenoh: Any, settings: FleetSettings) -> Any:
+    """The session's ``zenoh.Config``: the user's file (auth, TLS, ...) with our flags over it."""
+    try:
+        if settings.config_file is not None:
+            config = zenoh.Config.from_file(str(settings.config_file))
+        else:
+            config = zenoh.Config()
+        values = fleet.session_settings(
+            settings.mode,
+            settings.endpoints,
+            (),
+            settings.lease_ms,
+            own_file=settings.config_file is not None,
+        )
+        for path, value in values.items():
+            config.insert_json5(path, json.dumps(value))
+    except Exception as exc:  # zenoh.ZError: the file or a value is not a Zenoh config
+        where = f"--zenoh-config {settings.config_file}" if settings.config_file else "--zenoh"
+        raise FleetConfigError(f"{where}: {str(exc).splitlines()[0][:160]}") from None
+    return config
+
+
+# -- what the announcer reads of the backend --------------------------------------------------------
+@dataclass
+class Sources:
+    """The backend's state, whichever transport: what the payloads are made of."""
+
+    tracker: LatencyTracker
+    watch: TopicWatch | None
+    autonomy: AutonomyService | None
+    odometry: Callable[[], dict[str, Any] | None]  # the last odometry message (rosbridge JSON), or None
+    cmd_topic: str  # the robot's cmd_vel, resolved: commands there that are none of ours are "foreign"
+    namespace: str
+    mode: str
+    token: bool
+    secure: bool
+    host: str
+    bridge_port: int | None
+    api_port: int | None
+
+
+def sources_of(backend: Any, advertise_host: str | None = None) -> Sources:
+    """Read an embedded (``server.Backend``) or ROS (``ros.backend.RosBackend``) backend, started."""
+    config = backend.config
+    autonomy = getattr(backend, "autonomy", None)
+    node = getattr(backend, "autonomy_node", None)
+    if node is not None:
+        autonomy = node.service
+    last: dict[str, Any] = {}
+    odom_topic = getattr(backend, "topic_odom", None)
+    bus = getattr(backend, "bus", None)
+    if odom_topic is not None and hasattr(bus, "taps"):  # the embedded bus: every publish passes its taps
+
+        def tap(topic: str, type_name: str, msg: dict[str, Any]) -> None:
+            if topic == odom_topic:
+                last["odom"] = msg
+
+        bus.taps.append(tap)
+    words = [config.transport, *(["sim"] if backend.sim_enabled else []), *(["autonomy"] if autonomy else [])]
+    if config.deploy_mode != "native":
+        words.append(config.deploy_mode)
+    host = advertise_host or config.host
+    if host in ("0.0.0.0", "::", ""):
+        host = socket.gethostname()
+    topic_source = getattr(backend, "topics", None)
+    return Sources(
+        tracker=backend.tracker,
+        watch=getattr(topic_source, "watch", None),
+        autonomy=autonomy,
+        odometry=lambda: last.get("odom"),
+        cmd_topic=topics.resolve("cmd_vel", config.namespace),
+        namespace=config.namespace,
+        mode=", ".join(words)[:40],
+        token=config.token is not None,
+        secure=config.tls_cert is not None,
+        host=host,
+        bridge_port=backend.bridge_port,
+        api_port=backend.api_port,
+    )
+
+
+def _urls(src: Sources) -> tuple[str | None, str | None]:
+    host = f"[{src.host}]" if ":" in src.host else src.host
+    ws, http = ("wss", "https") if src.secure else ("ws", "http")
+    bridge = None if src.bridge_port is None else f"{ws}://{host}:{src.bridge_port}"
+    api = None if src.api_port is None else f"{http}://{host}:{src.api_port}"
+    return bridge, api
+
+
+def _r(v: float | None, places: int = 3) -> float | None:
+    return None if v is None else round(float(v), places)
+
+
+class Announcer:
+    """Builds the payloads from the backend's state and says which are due; keeps the history. No Zenoh
+    and no event loop: the clocks are passed in (``now``: wall seconds, ``mono``: monotonic seconds)."""
+
+    def __init__(self, settings: FleetSettings, src: Sources, started: float, host_clock: HostClock) -> None:
+        self.settings = settings
+        self.src = src
+        self.started = started
+        self.host_clock = host_clock
+        self.name = settings.name
+        self._due = dict.fromkeys((fleet.STATUS, fleet.LATENCY, fleet.TOPICS), 0.0)
+        self._figures: list[TopicFigures] = []
+        self._graded: object = None  # the last run graded (a Mission value)
+        self.runs = 0
+        self._run: fleet.RunGrade | None = None  # ended, not sent yet
+        self._runs_sent = -1e9
+        self._history: deque[tuple[float, fleet.Payload]] = deque()
+        self._history_at = dict.fromkeys(fleet.KINDS, -1e9)
+        self._lock = threading.Lock()  # the history is read on Zenoh's thread (queries)
+
+    def restart(self) -> None:
+        """Everything due at once (the session has just opened)."""
+        self._due = dict.fromkeys(self._due, 0.0)
+
+    # -- who drives -------------------------------------------------------------------------------
+    def driver(self, mono: float, now: float) -> tuple[str, str | None]:
+        svc = self.src.autonomy
+        mission = None if svc is None else svc.autonomy.mission
+        if mission is not None and (
+            mission.running or (mission.ended_ms is not None and now * 1e3 - mission.ended_ms < 1e3)
+        ):
+            return "robot", f"{mission.algorithm} on {mission.name}"[:120]
+        since = self.src.tracker.health()["seconds_since_last_command"]
+        if since is not None and since < DRIVER_RECENT_S:
+            return "console", f"last command {since * 1e3:.0f} ms ago"
+        for f in self._figures:
+            if f.name == self.src.cmd_topic and f.age_ms is not None and f.age_ms < DRIVER_RECENT_S * 1e3:
+                rate = "" if f.rate_hz is None else f" at {f.rate_hz:.3g} Hz"
+                return "foreign", f"commands on {f.name}{rate}"[:120]
+        return "nobody", None if since is None else f"last command {since:.0f} s ago"
+
+    # -- the payloads -----------------------------------------------------------------------------
+    def status(self, mono: float, now: float) -> fleet.Status:
+        if self.src.watch is not None:
+            self._figures = self.src.watch.figures()
+        driver, detail = self.driver(mono, now)
+        svc = self.src.autonomy
+        mission = None if svc is None else svc.autonomy.mission
+        pose = velocity = None
+        odom = self.src.odometry()
+        if odom is not None:
+            with contextlib.suppress(KeyError, TypeError, ValueError):
+                p = pose_of_odometry(odom)
+                pose = (round(p.x, 3), round(p.y, 3), round(p.theta, 3))
+                tw = odom["twist"]["twist"]
+                velocity = (round(float(tw["linear"]["x"]), 3), round(float(tw["angular"]["z"]), 3))
+        elif svc is not None and svc.pose is not None:
+            pose = (round(svc.pose.x, 3), round(svc.pose.y, 3), round(svc.pose.theta, 3))
+        bridge, api = _urls(self.src)
+        return fleet.Status(
+            robot=self.name,
+            t=round(now, 3),
+            started=round(self.started, 3),
+            driver=driver,
+            driver_detail=detail,
+            mode=self.src.mode,
+            auth="token" if self.src.token else "none",
+            controller=None if mission is None else mission.algorithm[:40],
+            mission=None if mission is None else mission.name[:40],
+            run_state=None if mission is None else mission.phase.value,
+            waypoint=None if mission is None else mission.reached,
+            waypoints=None if mission is None else mission.total,
+            pose=pose,
+            velocity=velocity,
+            rosbridge=bridge,
+            tracker=api,
+            namespace=self.src.namespace or None,
+            runs=self.runs,
+            lease_ms=self.settings.lease_ms,
+        )
+
+    def latency(self, now: float) -> fleet.Latency:
+        lat = self.src.tracker.window_latencies()
+        health = self.src.tracker.health()
+        sync = self.host_clock.cached()
+        n = int(lat.size)
+        return fleet.Latency(
+            robot=self.name,
+            t=round(now, 3),
+            count=n,
+            total=health["total_seen"],
+            p50_ms=_r(percentile(lat, 0.5)) if n else None,
+            p95_ms=_r(percentile(lat, 0.95)) if n else None,
+            max_ms=_r(float(lat.max())) if n else None,
+            stale=health["stale"],
+            rejected=health["rejected"],
+            sync_source=sync.source if sync is not None else "unknown",
+            sync_ok=sync.synchronised if sync is not None else None,
+            sync_error_ms=_r(sync.error_ms) if sync is not None and sync.error_ms is not None else None,
+        )
+
+    def topics(self, now: float) -> fleet.Topics | None:
+        if self.src.watch is None:
+            return None
+        window = self.src.watch.window_s
+        return fleet.topics_payload(self.name, round(now, 3), window, self._figures, self.settings.expect)
+
+    def grade_runs(self, now: float) -> None:
+        """A robot-side run that ended since the last look: graded once, counted, sent when the gap
+        allows (a second one ending within the gap replaces the first in the payload; the count has
+        both)."""
+        svc = self.src.autonomy
+        mission = None if svc is None else svc.autonomy.mission
+        if mission is None or mission.running or mission is self._graded or mission.ended_ms is None:
+            return
+        self._graded = mission
+        self.runs += 1
+        final = svc.autonomy.final_error_m if mission.phase is Phase.COMPLETED and svc is not None else None
+        self._run = fleet.RunGrade(
+            n=self.runs,
+            controller=mission.algorithm[:40],
+            mission=mission.name[:40],
+            outcome=mission.phase.value if mission.phase.value in fleet.OUTCOMES else "aborted",
+            time_s=round(max(0.0, mission.time_s()), 2),
+            reached=mission.reached,
+            waypoints=mission.total,
+            final_error_m=_r(final),
+            ended=round(mission.ended_ms / 1e3, 3),
+        )
+
+    def due(self, mono: float, now: float) -> list[fleet.Payload]:
+        """The payloads to publish now, and remembered for the history."""
+        self.grade_runs(now)
+        out: list[fleet.Payload] = []
+        if mono >= self._due[fleet.STATUS]:
+            out.append(self.status(mono, now))
+            self._due[fleet.STATUS] = mono + fleet.STATUS_PERIOD_S
+        if mono >= self._due[fleet.LATENCY]:
+            out.append(self.latency(now))
+            self._due[fleet.LATENCY] = mono + fleet.LATENCY_PERIOD_S
+        if mono >= self._due[fleet.TOPICS]:
+            t = self.topics(now)
+            if t is not None:
+                out.append(t)
+            self._due[fleet.TOPICS] = mono + fleet.TOPICS_PERIOD_S
+        if self._run is not None and mono - self._runs_sent >= fleet.RUNS_MIN_GAP_S:
+            out.append(fleet.Runs(self.name, round(now, 3), self.runs, self._run))
+            self._run, self._runs_sent = None, mono
+        for p in out:
+            self.remember(p, now)
+        return out
+
+    # -- history ----------------------------------------------------------------------------------
+    THIN = {fleet.STATUS: fleet.HISTORY_STATUS_S, fleet.TOPICS: fleet.HISTORY_TOPICS_S}
+
+    def remember(self, p: fleet.Payload, now: float) -> None:
+        if now - self._history_at[p.kind] < self.THIN.get(p.kind, 0.0):
+            return
+        self._history_at[p.kind] = now
+        with self._lock:
+            self._history.append((now, p))
+            while self._history and now - self._history[0][0] > fleet.HISTORY_MINUTES * 60:
+                self._history.popleft()
+
+    def history(self, minutes: float, now: float) -> bytes:
+        """The history answer's bytes: the payloads of the last ``minutes``, as many of the newest as
+        fit its size limit."""
+        with self._lock:
+            entries = [p for at, p in self._history if now - at <= minutes * 60]
+        while True:
+            answer = fleet.History(self.name, round(now, 3), minutes, tuple(entries))
+            try:
+                return fleet.encode(answer)
+            except ValueError:
+                entries = entries[len(entries) // 4 + 1 :]
+
+
+# -- the Zenoh side ---------------------------------------------------------------------------------
+class FleetLink:
+    """The robot's Zenoh session: opened on its own thread (retried for ever), then the token, one
+    publisher per payload, the history queryable. ``put`` before it is open does nothing."""
+
+    def __init__(self, settings: FleetSettings) -> None:
+        self.settings = settings
+        self.zenoh = import_zenoh()
+        self.config = zenoh_config(self.zenoh, settings)
+        self.session: Any = None
+        self.opened = threading.Event()
+        self.sent_bytes = dict.fromkeys(fleet.KINDS, 0)
+        self._keep: list[Any] = []
+        self._closed = False
+        self._history: Callable[[float], bytes] | None = None
+
+    def open_in_background(self, history: Callable[[float], bytes]) -> None:
+        self._history = history
+        threading.Thread(target=self._open, name="zenoh-open", daemon=True).start()
+
+    def _open(self) -> None:
+        name = self.settings.name
+        try:
+            session = self.zenoh.open(self.config)
+        except Exception as exc:
+            log.error("fleet: cannot open a Zenoh session on %s: %s", ",".join(self.settings.endpoints),
+                      str(exc).splitlines()[0][:160])  # fmt: skip
+            return
+        if self._closed:
+            session.close()
+            return
+        self._publishers = {k: session.declare_publisher(fleet.key(name, k)) for k in fleet.KINDS}
+        self._keep = [
+            session.liveliness().declare_token(fleet.key(name, fleet.ALIVE)),
+            session.declare_queryable(fleet.key(name, fleet.HISTORY), self._on_query),
+        ]
+        self.session = session
+        self.opened.set()
+        log.info("fleet: announcing as %s on %s", name, ",".join(self.settings.endpoints))
+
+    def _on_query(self, query: Any) -> None:
+        """A history query (on Zenoh's thread): answered, never raised out of."""
+        try:
+            assert self._history is not None
+            minutes = fleet.history_minutes(str(query.parameters))
+            query.reply(fleet.key(self.settings.name, fleet.HISTORY), self._history(minutes))
+        except Exception as exc:
+            log.warning("fleet: history query not answered: %s", exc)
+
+    def put(self, kind: str, data: bytes) -> None:
+        if not self.opened.is_set() or self._closed:
+            return
+        self._publishers[kind].put(data)
+        self.sent_bytes[kind] += len(data)
+
+    def close(self) -> None:
+        self._closed = True
+        if self.session is not None:
+            with contextlib.suppress(Exception):
+                for item in self._keep:
+                    item.undeclare()
+                self.session.close()
+
+
+class FleetAnnouncer:
+    """The announcer on the backend's event loop, publishing through the link."""
+
+    def __init__(self, backend: Any, settings: FleetSettings, link: FleetLink) -> None:
+        self.link = link
+        self.host_clock = HostClock()
+        src = sources_of(backend, settings.advertise_host)
+        self.announcer = Announcer(settings, src, time.time(), self.host_clock)
+        self._task: asyncio.Task[None] | None = None
+
+    def start(self) -> None:
+        self.link.open_in_background(lambda minutes: self.announcer.history(minutes, time.time()))
+        self._task = asyncio.get_running_loop().create_task(self._run())
+
+    async def _run(self) -> None:
+        loop = asyncio.get_running_loop()
+        loop.run_in_executor(None, self.host_clock.read)
+        synced, was_open = time.monotonic(), False
+        while True:
+            mono, now = time.monotonic(), time.time()
+            if self.link.opened.is_set() and not was_open:
+                was_open = True
+                self.announcer.restart()
+            if mono - synced > SYNC_REFRESH_S:
+                synced = mono
+                loop.run_in_executor(None, self.host_clock.read)
+            try:
+                for p in self.announcer.due(mono, now):
+                    if was_open:
+                        self.link.put(p.kind, fleet.encode(p))
+            except Exception:  # a bug here must not take the robot's servers down
+                log.exception("fleet: a payload was not published")
+            await asyncio.sleep(TICK_S)
+
+    async def stop(self) -> None:
+        if self._task is not None:
+            self._task.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await self._task
+        await asyncio.to_thread(self.link.close)
+
+
+def settings_from_args(args: Any, namespace: str) -> FleetSettings | None:
+    """The ``--zenoh`` flags checked (FleetConfigError in one line); None without ``--zenoh``."""
+    from arbiter_core.topicstats import parse_expect
+
+    if args.zenoh is None:
+        for flag in ("robot_name", "zenoh_config", "expect", "advertise_host"):
+            if getattr(args, flag) is not None:
+                raise FleetConfigError(f"--{flag.replace('_', '-')} needs --zenoh ENDPOINT")
+        return None
+    try:
+        endpoints = fleet.parse_endpoints(args.zenoh)
+        name = (
+            fleet.robot_name(args.robot_name)
+            if args.robot_name is not None
+            else fleet.default_name(namespace, socket.gethostname())
+        )
+        expect = tuple(parse_expect(args.expect)) if args.expect is not None else ()
+    except ValueError as exc:
+        flag = (
+            "--robot-name" if "robot name" in str(exc) else "--expect" if "expect" in str(exc) else "--zenoh"
+        )
+        raise FleetConfigError(f"{flag}: {exc}") from None
+    if args.zenoh_config is not None and not args.zenoh_config.is_file():
+        raise FleetConfigError(f"--zenoh-config {args.zenoh_config}: no such file")
+    return FleetSettings(
+        endpoints=endpoints,
+        name=name,
+        mode=args.zenoh_mode,
+        lease_ms=args.zenoh_lease,
+        config_file=args.zenoh_config,
+        expect=expect,
+        advertise_host=args.advertise_host,
+    )

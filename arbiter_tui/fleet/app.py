@@ -1,0 +1,283 @@
+"""The fleet screen: one line per robot, the worst first, the selected one in full below.
+
+The screen takes a frozen ``FleetView`` from its source every ``REFRESH_S`` (the Zenoh callbacks only
+change the model; nothing is drawn on their threads) and hands it to the list by ``data_bind``; the
+list draws only the rows that fit (200 robots cost what 20 do). ``/`` filters by name glob, Enter opens
+the single-robot console on the selected robot (the app suspends, the console runs in this terminal,
+the fleet comes back when it quits), ``h`` asks the robot's history on a worker thread.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from rich.text import Text
+from textual import on, work
+from textual.app import App, ComposeResult, SuspendNotSupported
+from textual.binding import Binding
+from textual.message import Message
+from textual.reactive import reactive
+from textual.screen import Screen
+from textual.widget import Widget
+from textual.widgets import Footer, Input, Static
+
+from arbiter_core import fleet
+
+from .rows import COLUMNS, FleetView, Row, cells, console_argv, detail_lines, history_words
+
+REFRESH_S = 0.5
+SEP = 1  # space between columns
+# column -> width; shown in PRIORITY order while they fit, "note" takes the rest (at least NOTE_MIN)
+WIDTHS = {"robot": 12, "state": 20, "driver": 8, "p95": 8, "clock": 9, "worst topic": 24,
+          "controller": 24, "last run": 34, "runs": 4}  # fmt: skip
+PRIORITY = ("robot", "state", "driver", "p95", "worst topic", "clock", "controller", "last run", "runs")
+NOTE_MIN = 22
+STATE_STYLES = {"lost": "bold red", "stale": "yellow", "alive": "green"}
+
+
+def layout(width: int) -> list[tuple[int, int]]:
+    """(index into COLUMNS, width) of the columns shown at ``width``, in COLUMNS order; the note last."""
+    shown, used = [], 0
+    for name in PRIORITY:
+        need = WIDTHS[name] + SEP
+        if used + need + NOTE_MIN > width:
+            break
+        shown.append(name)
+        used += need
+    out = [(COLUMNS.index(c), WIDTHS[c]) for c in COLUMNS if c in shown]
+    return [*out, (COLUMNS.index("note"), max(0, width - used))]
+
+
+def fit(text: str, width: int) -> str:
+    return text if len(text) <= width else text[: max(0, width - 1)] + "…"
+
+
+def line(row: Row, width: int, selected: bool) -> Text:
+    values = cells(row)
+    cols = layout(width)
+    shown = {i for i, _ in cols}
+    note = values[-1]
+    if not note and COLUMNS.index("worst topic") not in shown and row.worst_topic:
+        note = row.worst_topic  # no room for its column: the note says it
+    text = Text(no_wrap=True, overflow="crop")
+    for i, w in cols:
+        value = note if COLUMNS[i] == "note" else values[i]
+        style = ""
+        if COLUMNS[i] == "state":
+            style = STATE_STYLES.get(row.state, "")
+        elif COLUMNS[i] == "note" and row.bad is not None:
+            style = "bold magenta"
+        elif COLUMNS[i] in ("worst topic", "note") and row.worst_health in ("missing", "below", "silent"):
+            style = "yellow"
+        text.append(fit(value, w).ljust(w) if COLUMNS[i] != "note" else fit(value, w), style)
+        if COLUMNS[i] != "note":
+            text.append(" " * SEP)
+    if selected:
+        text.stylize("reverse")
+    return text
+
+
+class FleetList(Widget, can_focus=True):
+    """The rows, the worst first; the selected one highlighted. Drawn as text, only what fits."""
+
+    DEFAULT_CSS = "FleetList { height: 1fr; }"
+    BINDINGS = [
+        Binding("up", "move(-1)", "Up", show=False),
+        Binding("down", "move(1)", "Down", show=False),
+        Binding("pageup", "move(-10)", "Page up", show=False),
+        Binding("pagedown", "move(10)", "Page down", show=False),
+        Binding("home", "move(-100000)", "First", show=False),
+        Binding("end", "move(100000)", "Last", show=False),
+        Binding("enter", "open", "Open console"),
+    ]
+    view: reactive[FleetView] = reactive(FleetView)
+    selected: reactive[str | None] = reactive(None)
+
+    class Chosen(Message):
+        """Enter on a row: open its console."""
+
+        def __init__(self, row: Row) -> None:
+            super().__init__()
+            self.row = row
+
+    class Highlighted(Message):
+        def __init__(self, row: Row | None) -> None:
+            super().__init__()
+            self.row = row
+
+    _top = 0
+
+    def current(self) -> Row | None:
+        rows = self.view.rows
+        for r in rows:
+            if r.name == self.selected:
+                return r
+        return rows[0] if rows else None
+
+    def watch_view(self, view: FleetView) -> None:
+        if view.rows and self.selected not in {r.name for r in view.rows}:
+            self.selected = view.rows[0].name
+        self.post_message(self.Highlighted(self.current()))
+
+    def watch_selected(self) -> None:
+        self.post_message(self.Highlighted(self.current()))
+
+    def action_move(self, step: int) -> None:
+        names = [r.name for r in self.view.rows]
+        if not names:
+            return
+        i = names.index(self.selected) if self.selected in names else 0
+        self.selected = names[max(0, min(len(names) - 1, i + step))]
+
+    def action_open(self) -> None:
+        row = self.current()
+        if row is not None:
+            self.post_message(self.Chosen(row))
+
+    def render(self) -> Text:
+        width, height = self.size.width, max(1, self.size.height)
+        head = Text(no_wrap=True, overflow="crop", style="bold")
+        for i, w in layout(width):
+            head.append(fit(COLUMNS[i], w).ljust(w) + (" " * SEP if COLUMNS[i] != "note" else ""))
+        rows = self.view.rows
+        if not rows:
+            what = f"no robot matches {self.view.filter!r}" if self.view.filter else "no robot announced yet"
+            return Text.assemble(head, "\n", Text(what, style="dim"))
+        names = [r.name for r in rows]
+        i = names.index(self.selected) if self.selected in names else 0
+        room = height - 1
+        self._top = min(max(self._top, i - room + 1), i, max(0, len(rows) - room))
+        out = [head]
+        out += [line(r, width, r.name == self.selected) for r in rows[self._top : self._top + room]]
+        return Text("\n").join(out)
+
+
+class FleetScreen(Screen[None]):
+    BINDINGS = [
+        Binding("slash", "filter", "Filter"),
+        Binding("escape", "clear", "Clear filter"),
+        Binding("h", "history", "History"),
+        Binding("q", "app.quit", "Quit"),
+        Binding("ctrl+q", "app.quit", "Quit", show=False, priority=True),
+    ]
+    view: reactive[FleetView] = reactive(FleetView)
+    pattern: reactive[str] = reactive("")
+    history_line: reactive[str] = reactive("")
+
+    def __init__(self, pattern: str = "") -> None:
+        super().__init__()
+        self.set_reactive(FleetScreen.pattern, pattern)
+
+    def compose(self) -> ComposeResult:
+        yield Static(id="fleet-head")
+        yield Input(self.pattern, placeholder="filter by name glob (/)", id="fleet-filter")
+        yield FleetList(id="fleet-list").data_bind(FleetScreen.view)
+        yield Static(id="fleet-detail")
+        yield Footer()
+
+    def on_mount(self) -> None:
+        self.sample()
+        self.set_interval(REFRESH_S, self.sample)
+        self.query_one(FleetList).focus()
+
+    @property
+    def fleet_app(self) -> FleetApp:
+        assert isinstance(self.app, FleetApp)
+        return self.app
+
+    def sample(self) -> None:
+        self.view = self.fleet_app.source(self.pattern)
+
+    def watch_view(self, view: FleetView) -> None:
+        counts = dict(view.counts)
+        parts = [f"{counts.get(s, 0)} {s}" for s in ("alive", "stale", "lost")]
+        if counts.get("bad"):
+            parts.append(f"{counts['bad']} bad data")
+        shown = f"{len(view.rows)} of {view.total}" if view.filter else f"{view.total}"
+        head = f"fleet · {shown} robots: {', '.join(parts)} · {view.session}"
+        if view.ignored:
+            head += f" · {view.ignored} more names ignored"
+        self.query_one("#fleet-head", Static).update(Text(head, no_wrap=True, overflow="ellipsis"))
+
+    @on(FleetList.Highlighted)
+    def show_detail(self, event: FleetList.Highlighted) -> None:
+        row = event.row
+        lines = [] if row is None else detail_lines(row, self.view.now)
+        if row is not None and self.history_line.startswith(f"{row.name}: "):
+            lines.append(self.history_line.removeprefix(f"{row.name}: "))
+        self.query_one("#fleet-detail", Static).update(
+            Text("\n".join(lines), no_wrap=True, overflow="ellipsis")
+        )
+
+    def watch_history_line(self) -> None:
+        self.show_detail(FleetList.Highlighted(self.query_one(FleetList).current()))
+
+    @on(Input.Changed, "#fleet-filter")
+    def filter_changed(self, event: Input.Changed) -> None:
+        self.pattern = event.value.strip()
+        self.sample()
+
+    @on(Input.Submitted, "#fleet-filter")
+    def filter_done(self) -> None:
+        self.query_one(FleetList).focus()
+
+    def action_filter(self) -> None:
+        self.query_one("#fleet-filter", Input).focus()
+
+    def action_clear(self) -> None:
+        self.query_one("#fleet-filter", Input).value = ""
+        self.query_one(FleetList).focus()
+
+    def action_history(self) -> None:
+        row = self.query_one(FleetList).current()
+        if row is not None and self.fleet_app.history is not None:
+            self.history_line = f"{row.name}: history: asking..."
+            self.ask_history(row.name)
+
+    @work(thread=True, exclusive=True)
+    def ask_history(self, name: str) -> None:
+        assert self.fleet_app.history is not None
+        words = history_words(self.fleet_app.history(name, fleet.HISTORY_MINUTES))
+        self.app.call_from_thread(setattr, self, "history_line", f"{name}: {words}")
+
+    @on(FleetList.Chosen)
+    def open_console(self, event: FleetList.Chosen) -> None:
+        self.fleet_app.open_robot(event.row)
+
+
+class FleetApp(App[None]):
+    CSS_PATH = "fleet.tcss"
+    TITLE = "arbiter fleet"
+
+    def __init__(
+        self,
+        source: Callable[[str], FleetView],
+        opener: Callable[[list[str]], int],
+        history: Callable[[str, float], fleet.History | str] | None = None,
+        pattern: str = "",
+        token_file: str | None = None,
+        ca_file: str | None = None,
+    ) -> None:
+        super().__init__()
+        self.source, self.opener, self.history = source, opener, history
+        self.pattern, self.token_file, self.ca_file = pattern, token_file, ca_file
+        self.opened: list[list[str]] = []  # the consoles opened, in order (what a test reads)
+
+    def on_mount(self) -> None:
+        self.push_screen(FleetScreen(self.pattern))
+
+    def open_robot(self, row: Row) -> None:
+        """The single-robot console on ``row``'s advertised URLs, in this terminal; back here when it
+        quits. A row that cannot be opened says why."""
+        argv = console_argv(row, self.token_file, self.ca_file)
+        if isinstance(argv, str):
+            self.notify(argv, severity="warning")
+            return
+        self.opened.append(argv)
+        try:
+            with self.suspend():
+                code = self.opener(argv)
+        except SuspendNotSupported:  # no terminal to hand over (a test's headless driver)
+            code = self.opener(argv)
+        self.notify(f"back from {row.name}" + (f" (exit {code})" if code else ""))
+        self.refresh(layout=True)

@@ -1,0 +1,270 @@
+"""The fleet console's Zenoh session: robots' tokens and payloads into a ``FleetModel``.
+
+A client of the site's router (``--connect``), or the router itself (``--listen``, for a site with
+none). It subscribes to ``arbiter/*/alive`` liveliness (with history: the robots already there are
+listed at once) and to ``arbiter/*/*`` payloads, and asks ``arbiter/<name>/history`` on demand. Every
+payload is checked by ``arbiter_core.fleet.decode`` (its size before it is copied) on Zenoh's thread,
+outside the model's lock; the model is then changed under the lock, and the screen takes frozen views.
+Nothing a robot sends can raise out of a callback: it marks that robot's row, or is counted.
+
+The only module of the console that imports Zenoh, and only when asked for (``import_zenoh``).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import logging
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from arbiter_core import fleet
+from arbiter_core.hostclock import HostClock
+
+from .rows import FleetModel, FleetView, Row
+
+log = logging.getLogger(__name__)
+SYNC_REFRESH_S = 30.0
+HISTORY_TIMEOUT_S = 3.0
+BACKFILL_MINUTES = 1.0  # a robot first seen: its latest latency, topics and runs from its history
+
+
+class FleetUnavailable(Exception):
+    """The fleet cannot run as asked: one line."""
+
+
+def import_zenoh() -> Any:
+    try:
+        import zenoh
+    except ImportError:
+        raise FleetUnavailable(f"arbiter-tui fleet {fleet.ZENOH_MISSING}") from None
+    return zenoh
+
+
+@dataclass(frozen=True)
+class ConsoleSettings:
+    connect: tuple[str, ...] = ()
+    listen: tuple[str, ...] = ()
+    config_file: Path | None = None
+    # the console's own lease: how soon its robots and router drop *it* (Zenoh's default, 10 s). Not how
+    # soon a robot reads "lost": that is the robot's lease. A short one here makes robots behind a lossy
+    # link drop the console, and their tokens with it, at every burst of losses.
+    lease_ms: int | None = None
+
+    @property
+    def mode(self) -> str:
+        return "router" if self.listen else "client"
+
+    def describe(self) -> str:
+        if self.listen:
+            more = f", connected to {','.join(self.connect)}" if self.connect else ""
+            return f"router on {','.join(self.listen)}{more}"
+        return f"client of {','.join(self.connect)}"
+
+
+def zenoh_config(zenoh: Any, settings: ConsoleSettings, connect_timeout_ms: int | None = None) -> Any:
+    """The session's config: the user's file (auth, TLS, ACL for a router) with the flags over it;
+    ``connect_timeout_ms``: give up connecting after that long (``--json``), else retry for ever."""
+    try:
+        config = zenoh.Config.from_file(str(settings.config_file)) if settings.config_file else zenoh.Config()
+        values = fleet.session_settings(
+            settings.mode,
+            settings.connect,
+            settings.listen,
+            settings.lease_ms,
+            settings.config_file is not None,
+        )
+        if connect_timeout_ms is not None and settings.connect:
+            values["connect/timeout_ms"] = connect_timeout_ms
+            values["connect/exit_on_failure"] = True
+        for path, value in values.items():
+            config.insert_json5(path, json.dumps(value))
+    except Exception as exc:  # zenoh.ZError: not a Zenoh config
+        where = f"--zenoh-config {settings.config_file}" if settings.config_file else "the Zenoh settings"
+        raise FleetUnavailable(f"{where}: {str(exc).splitlines()[0][:160]}") from None
+    return config
+
+
+class FleetClient:
+    def __init__(
+        self,
+        settings: ConsoleSettings,
+        model: FleetModel | None = None,
+        wall: Callable[[], float] = time.time,
+        mono: Callable[[], float] = time.monotonic,
+        host_clock: HostClock | None = None,
+    ) -> None:
+        self.settings = settings
+        self.zenoh = import_zenoh()
+        zenoh_config(self.zenoh, settings)  # a bad config file is one line now, not on the open thread
+        self.model = model if model is not None else FleetModel()
+        self.wall, self.mono = wall, mono
+        self.host_clock = host_clock if host_clock is not None else HostClock()
+        self.session: Any = None
+        self.error: str | None = None
+        self.opened = threading.Event()
+        self._closed = threading.Event()
+        self._lock = threading.Lock()
+        self._keep: list[Any] = []
+        self._asked: set[str] = set()  # robots whose history was asked when they first appeared
+        self._pending = 0
+
+    # -- the session ------------------------------------------------------------------------------
+    def open(self, connect_timeout_ms: int | None = None) -> None:
+        """Open the session (blocking; as a client it waits for the router, for ever unless
+        ``connect_timeout_ms``); FleetUnavailable in one line when it cannot."""
+        config = zenoh_config(self.zenoh, self.settings, connect_timeout_ms)
+        try:
+            session = self.zenoh.open(config)
+        except Exception as exc:
+            first = str(exc).splitlines()[0]
+            what = "listen on" if self.settings.listen else "reach the router at"
+            where = ",".join(self.settings.listen or self.settings.connect)
+            raise FleetUnavailable(f"cannot {what} {where}: {first.split(' at /')[0][:160]}") from None
+        if self._closed.is_set():
+            session.close()
+            return
+        # the session first: the tokens already there arrive while their subscriber is being declared,
+        # and each new robot's history is asked on it at once
+        self.session = session
+        self._keep = [
+            session.liveliness().declare_subscriber(
+                fleet.key("*", fleet.ALIVE), self._on_token, history=True
+            ),
+            session.declare_subscriber(fleet.key("*", "*"), self._on_sample),
+        ]
+        self.opened.set()
+        threading.Thread(target=self._sync_loop, name="fleet-clock", daemon=True).start()
+
+    def open_in_background(self) -> None:
+        def run() -> None:
+            try:
+                self.open()
+            except FleetUnavailable as exc:
+                self.error = str(exc)
+
+        threading.Thread(target=run, name="fleet-open", daemon=True).start()
+
+    def close(self) -> None:
+        self._closed.set()
+        if self.session is not None:
+            with contextlib.suppress(Exception):
+                for item in self._keep:
+                    item.undeclare()
+                self.session.close()
+
+    def _sync_loop(self) -> None:
+        """This host's clock sync (for the offset bounds), read now and every SYNC_REFRESH_S."""
+        while not self._closed.is_set():
+            sync = self.host_clock.read()
+            with self._lock:
+                self.model.console_sync = sync
+            self._closed.wait(SYNC_REFRESH_S)
+
+    # -- what arrives (on Zenoh's threads) --------------------------------------------------------
+    def _on_token(self, sample: Any) -> None:
+        try:
+            parsed = fleet.parse_key(str(sample.key_expr))
+            if parsed is None or parsed[1] != fleet.ALIVE:
+                with self._lock:
+                    self.model.unknown_key()
+                return
+            present = sample.kind == self.zenoh.SampleKind.PUT
+            with self._lock:
+                first = parsed[0] not in self._asked and present
+                self.model.token(parsed[0], present, self.wall(), self.mono())
+                if first:
+                    self._asked.add(parsed[0])
+                    self._pending += 1
+            if first:  # its figures now, not a topics period later: asked off Zenoh's thread
+                threading.Thread(target=self._backfill, args=(parsed[0],), daemon=True).start()
+        except Exception:  # never out of a callback
+            log.exception("fleet: a liveliness sample was not taken")
+
+    def _backfill(self, name: str) -> None:
+        try:
+            answer = self.history(name, BACKFILL_MINUTES)
+            if not isinstance(answer, str):
+                with self._lock:
+                    self.model.backfill(answer, self.mono())
+        finally:
+            with self._lock:
+                self._pending -= 1
+
+    def pending(self) -> int:
+        """History questions asked of robots just seen and not answered yet."""
+        with self._lock:
+            return self._pending
+
+    def _on_sample(self, sample: Any) -> None:
+        try:
+            self.take(str(sample.key_expr), sample.payload, sample.kind == self.zenoh.SampleKind.PUT)
+        except Exception:  # never out of a callback
+            log.exception("fleet: a sample was not taken")
+
+    def take(self, key: str, payload: Any, put: bool = True) -> None:
+        """One sample on ``arbiter/*/*``: checked (its size before its bytes are copied), then into
+        the model. ``payload``: Zenoh's ZBytes, or bytes."""
+        parsed = fleet.parse_key(key)
+        if parsed is None or parsed[1] not in fleet.KINDS or not put:
+            if parsed is None or parsed[1] not in (fleet.HISTORY, fleet.ALIVE):
+                with self._lock:
+                    self.model.unknown_key()
+            return
+        name, kind = parsed
+        size = len(payload)
+        try:
+            if size > fleet.MAX_BYTES[kind]:
+                raise fleet.FleetPayloadError(
+                    f"{kind}: {fleet.size_words(size)}, over the {fleet.size_words(fleet.MAX_BYTES[kind])} "
+                    f"a {kind} may be"
+                )
+            data = payload if isinstance(payload, bytes) else payload.to_bytes()
+            decoded = fleet.decode(data, kind, name)
+        except fleet.FleetPayloadError as exc:
+            with self._lock:
+                self.model.reject(name, str(exc), self.mono())
+            return
+        with self._lock:
+            self.model.accept(decoded, size, self.mono())  # type: ignore[arg-type]
+
+    # -- what the screen asks ---------------------------------------------------------------------
+    def session_words(self) -> str:
+        if self.error is not None:
+            return self.error
+        if not self.opened.is_set():
+            return f"connecting: {self.settings.describe()}"
+        return self.settings.describe()
+
+    def view(self, pattern: str = "") -> FleetView:
+        with self._lock:
+            return self.model.view(self.wall(), self.mono(), pattern, self.session_words(), self.error)
+
+    def row(self, name: str) -> Row | None:
+        """One robot's row now (None: never heard of)."""
+        with self._lock:
+            return self.model.row_of(name, self.wall(), self.mono())
+
+    def history(self, name: str, minutes: float = fleet.HISTORY_MINUTES) -> fleet.History | str:
+        """The robot's answer to ``arbiter/<name>/history?minutes=N``, or why there is none (one line)."""
+        if self.session is None:
+            return "not connected"
+        try:
+            replies = self.session.get(
+                f"{fleet.key(name, fleet.HISTORY)}?minutes={minutes:g}", timeout=HISTORY_TIMEOUT_S
+            )
+            for reply in replies:
+                if reply.ok is None:
+                    return f"{name} answered with an error"
+                answer = fleet.decode(reply.ok.payload.to_bytes(), fleet.HISTORY, name)
+                assert isinstance(answer, fleet.History)
+                return answer
+        except fleet.FleetPayloadError as exc:
+            return f"{name}'s history: {exc}"
+        except Exception as exc:
+            return f"{name}'s history: {str(exc).splitlines()[0][:120]}"
+        return f"{name} did not answer in {HISTORY_TIMEOUT_S:g} s"

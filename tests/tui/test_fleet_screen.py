@@ -1,0 +1,204 @@
+"""The fleet screen (arbiter_tui.fleet.app): snapshots at 80x24 and 200x60 with live, stale, lost and bad-data
+rows, and the keys a user presses (Pilot): severity order, the name filter, Enter opening the single-robot
+console on the advertised URLs and coming back, a lost robot not opened, the history on ``h``."""
+
+import time
+
+import pytest
+
+from arbiter_core import fleet
+from arbiter_core.timesync import TimeSync
+from arbiter_tui.fleet.app import FleetApp, FleetList
+from arbiter_tui.fleet.rows import FleetModel
+
+W = 1_800_000_000.0  # 2027-01-15 08:00:00 UTC
+MONO = 1000.0
+
+
+@pytest.fixture(autouse=True)
+def utc(monkeypatch):
+    """'lost since HH:MM:SS' is local time: UTC here, so the snapshots are the same on every machine."""
+    monkeypatch.setenv("TZ", "UTC")
+    time.tzset()
+    yield
+    monkeypatch.undo()
+    time.tzset()
+
+
+def status(name, **kw):
+    base = dict(
+        robot=name,
+        t=W,
+        started=W - 600,
+        driver="nobody",
+        mode="embedded, sim",
+        rosbridge=f"ws://{name}.lab:9090",
+        tracker=f"http://{name}.lab:8085",
+    )
+    return fleet.Status(**{**base, **kw})
+
+
+def latency(name, p95, ok=True):
+    return fleet.Latency(
+        name,
+        W,
+        count=400,
+        total=9000,
+        p50_ms=p95 / 2,
+        p95_ms=p95,
+        sync_source="chrony",
+        sync_ok=ok,
+        sync_error_ms=0.4 if ok else None,
+    )
+
+
+def topics(name, *items):
+    return fleet.Topics(name, W, 5.0, 12, tuple(fleet.TopicHealth(*i) for i in items))
+
+
+def fleet_model():
+    """Eight robots: live ones driven by a console, a robot-side controller and Nav2, one with a topic
+    below its rate, one stale, two lost (one for an hour), one sending bad data."""
+    m = FleetModel(console_sync=TimeSync("chrony", True, 0.01, 0.3))
+
+    def robot(name, at=MONO, **kw):
+        m.token(name, True, W - 900, MONO - 900)
+        m.accept(status(name, **kw), 400, at)
+
+    robot(
+        "lab-01",
+        driver="console",
+        driver_detail="last command 40 ms ago",
+        pose=(1.2, -0.5, 0.3),
+        velocity=(0.4, 0.1),
+        namespace="/lab01",
+    )
+    m.accept(latency("lab-01", 6.2), 200, MONO)
+    m.accept(topics("lab-01", ("/cmd_vel", "quiet"), ("/odom", "ok", 50.0)), 300, MONO)
+    robot(
+        "lab-02",
+        driver="robot",
+        driver_detail="pure_pursuit on square",
+        controller="pure_pursuit",
+        mission="square",
+        run_state="running",
+        waypoint=2,
+        waypoints=4,
+        runs=3,
+    )
+    m.accept(latency("lab-02", 3.4), 200, MONO)
+    grade = fleet.RunGrade(3, "stanley", "slalom", "completed", 41.2, 7, 7, 0.08, W - 300)
+    m.accept(fleet.Runs("lab-02", W - 300, 3, grade), 300, MONO)
+    robot("yard-07", driver="foreign", driver_detail="commands on /cmd_vel at 20 Hz")
+    m.accept(latency("yard-07", 48.0, ok=False), 200, MONO)
+    m.accept(topics("yard-07", ("/scan", "below", 4.1, 20.0, 10.0), ("/odom", "ok", 50.0)), 300, MONO)
+    robot("lab-03", at=MONO - 12)  # its last status 12 s ago: stale
+    robot("yard-02")
+    m.token("yard-02", False, W - 125, MONO - 125)  # lost two minutes ago
+    robot("yard-09")
+    m.token("yard-09", False, W - 3700, MONO - 3700)
+    robot("lab-05", driver="nobody")
+    m.reject("lab-05", "latency: not JSON a robot may send: NaN (numbers must be finite)", MONO - 3)
+    m.reject("lab-05", "status: 10.5 MB, over the 1.5 kB a status may be", MONO - 1)
+    robot("lab-04", driver="nobody")
+    m.accept(latency("lab-04", 2.1), 200, MONO)
+    return m
+
+
+SESSION = "router on tcp/0.0.0.0:7447"
+
+
+def fleet_app(opened=None, history=None, pattern=""):
+    model = fleet_model()
+    calls = [] if opened is None else opened
+
+    def opener(argv):
+        calls.append(argv)
+        return 0
+
+    return FleetApp(
+        source=lambda p: model.view(W, MONO, p, SESSION), opener=opener, history=history, pattern=pattern
+    )
+
+
+@pytest.mark.parametrize("size", [(80, 24), (200, 60)], ids=["80x24", "200x60"])
+def test_fleet_screen(snap_compare, size):
+    assert snap_compare(fleet_app(), terminal_size=size)
+
+
+def test_fleet_screen_filtered_with_a_lost_robot_selected(snap_compare):
+    assert snap_compare(fleet_app(), terminal_size=(80, 24), press=["slash", "y", "a", "r", "d", "enter"])
+
+
+async def test_rows_come_worst_first_and_the_filter_narrows_them():
+    app = fleet_app()
+    async with app.run_test(size=(120, 40)) as pilot:
+        rows = app.screen.view.rows
+        assert [r.name for r in rows] == [
+            "yard-02",
+            "yard-09",
+            "lab-05",
+            "lab-03",
+            "yard-07",
+            "lab-01",
+            "lab-02",
+            "lab-04",
+        ]
+        assert [r.state for r in rows[:4]] == ["lost", "lost", "alive", "stale"]
+        assert rows[2].bad.startswith("status: 10.5 MB")
+        await pilot.press("slash", *"lab-0[12]")
+        await pilot.pause()
+        assert [r.name for r in app.screen.view.rows] == ["lab-01", "lab-02"]
+        assert "2 of 8 robots" in str(app.screen.query_one("#fleet-head").content)
+        await pilot.press("escape")
+        await pilot.pause()
+        assert len(app.screen.view.rows) == 8
+
+
+async def test_enter_opens_the_console_on_the_advertised_urls_and_comes_back():
+    opened = []
+    app = fleet_app(opened)
+    async with app.run_test(size=(120, 40)) as pilot:
+        lst = app.screen.query_one(FleetList)
+        await pilot.press("enter")  # the first row: yard-02, lost
+        await pilot.pause()
+        assert opened == []
+        assert any("yard-02 is lost since 07:57:55" in n.message for n in app._notifications)
+        lst.selected = "lab-01"
+        await pilot.pause()
+        assert "Enter opens ws://lab-01.lab:9090" in str(app.screen.query_one("#fleet-detail").content)
+        await pilot.press("enter")
+        await pilot.pause()
+        assert opened == [
+            [
+                "--rosbridge",
+                "ws://lab-01.lab:9090",
+                "--tracker",
+                "http://lab-01.lab:8085",
+                "--namespace",
+                "/lab01",
+            ]
+        ]
+        assert app.screen.query_one(FleetList).has_focus  # back on the fleet, as it was
+        assert any("back from lab-01" in n.message for n in app._notifications)
+
+
+async def test_history_of_the_selected_robot_on_h():
+    asked = []
+
+    def history(name, minutes):
+        asked.append((name, minutes))
+        grade = fleet.RunGrade(1, "stanley", "square", "completed", 30.0, 4, 4, 0.1, W)
+        return fleet.History(
+            name, W, minutes, (latency(name, 2.0), latency(name, 5.0), fleet.Runs(name, W, 1, grade))
+        )
+
+    app = fleet_app(history=history)
+    async with app.run_test(size=(120, 40)) as pilot:
+        await pilot.press("down", "down", "h")
+        await app.workers.wait_for_complete()
+        await pilot.pause()
+        assert asked == [("lab-05", 10.0)]
+        detail = str(app.screen.query_one("#fleet-detail").content)
+        assert "history (10 min): 3 summaries, p95 2-5 ms, 1 runs, last stanley completed 30.0 s" in detail
+        assert "bad data (2): status: 10.5 MB" in detail
