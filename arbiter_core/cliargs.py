@@ -216,7 +216,7 @@ def add_version(parser: argparse.ArgumentParser) -> None:
     text = "unknown (not installed)"  # running from a source tree that was never installed
     for distribution in DISTRIBUTIONS:
         try:
-            text = f"{version(distribution)} ({distribution})"
+            text = version(distribution)
             break
         except PackageNotFoundError:
             continue
