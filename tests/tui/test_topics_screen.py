@@ -22,7 +22,8 @@ TOPICS = (
     TopicFigures("/scan", "sensor_msgs/msg/LaserScan", "slow", 1, 1, 22, 800, 4.3, 98.0, 260.0, 40.0,
                  6_400.0, 1_496.0, True, 1.2, 2.5, 230.0, 10.0, qos_note="a reliable subscriber cannot "
                  "match a best-effort publisher"),
-    TopicFigures("/tf", "tf2_msgs/msg/TFMessage", "silent", 2, 3, 0, 1200, usual_rate_hz=100.0),
+    TopicFigures("/tf", "tf2_msgs/msg/TFMessage", "silent", 2, 3, 0, 1200, age_ms=12_400.0,
+                 usual_rate_hz=100.0),
 )  # fmt: skip
 QUIET = TopicFigures("/stamped_cmd_vel", "std_msgs/msg/String", "quiet", 1, 1, 0, 240)  # commands, then none
 # the last minute as the backend sampled it (once a second): each topic at its rate, then half of it
