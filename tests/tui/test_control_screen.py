@@ -311,7 +311,8 @@ async def test_the_dashboard_comes_and_goes_with_the_terminal_size():
 
 def key_words(key: str) -> str:
     """A binding's key as README and help write it."""
-    return {"question_mark": "?", "space": "space", "delete": "delete", "slash": "/"}.get(key, key)
+    words = {"question_mark": "?", "space": "space", "delete": "delete", "slash": "/", "escape": "esc"}
+    return words.get(key, key)
 
 
 def test_readme_and_help_name_every_key_the_screens_bind():

@@ -35,8 +35,9 @@ HELP = f"""[b]arbiter-tui[/b] — teleop console, analytics and latency monitor
 
 [b]Latency[/b]  polls GET /api/latency at 2 Hz; one-way = receive - stamp
 
-[b]Topics[/b]  / filter  s sort (name, rate, bandwidth, delay, age)
-  r reverse (flip)  the header marks the sorted column ▼ or ▲
+[b]Topics[/b]  / filter (esc or enter: back to the table)
+  s sort (name, rate, bandwidth, delay, age)  r reverse (flip)
+  the header marks the sorted column ▼ or ▲
   up/down select; rate, bandwidth, delay, age of every topic as
   the backend measures it (GET /api/topics, 2 Hz)
 

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from rich.text import Text
-from textual import on
+from textual import events, on
 from textual.app import ComposeResult
 from textual.binding import Binding
 from textual.containers import Horizontal
@@ -210,10 +210,45 @@ class RatePlot(Plot[TopicsState, RatesKey]):
         self.set_axes(x, y)
 
 
+class FilterInput(Input):
+    """The filter: it takes keys only once opened (``/`` or a click), so keys typed as the screen opens,
+    or any time after, go to the table; ``esc`` and ``enter`` close it (the screen's)."""
+
+    can_focus = False
+    # Its editing keys (backspace, arrows, home...) are bindings, which Textual answers once a key has
+    # bubbled up to the app: after an enter or esc typed behind them (a burst), which has moved the focus
+    # by then, so they were lost. Answered as they reach it, they keep their place among the typed text.
+    EDITING = {k: b.action for b in Input.BINDINGS if isinstance(b, Binding) for k in b.key.split(",")}
+
+    async def _on_key(self, event: events.Key) -> None:
+        action = self.EDITING.get(event.key)
+        if action is None:
+            await super()._on_key(event)
+            return
+        event.stop()
+        event.prevent_default()
+        await self.run_action(action)
+
+    def open(self) -> None:
+        self.can_focus = True
+        self.screen.set_focus(self)  # now, not after the keys already queued: they are typed into it
+
+    def close(self) -> None:
+        self.can_focus = False
+
+    def on_click(self) -> None:
+        self.open()
+
+
 class TopicsScreen(BaseScreen):
     CSS_PATH = ["base.tcss", "topics.tcss"]
+    AUTO_FOCUS = "#topics-list"  # never the filter: a key typed as the screen first opens is the table's
     BINDINGS = [
-        Binding("slash", "filter", "Filter"),
+        # priority: answered as they come, before the keys typed after them are handed on (a burst such
+        # as "/odom" or "odom<esc>s" lands where it was meant); check_action passes them on otherwise
+        Binding("slash", "filter", "Filter", priority=True),
+        Binding("slash", "filter", "Filter", show=False),  # a / typed while the screen was still opening
+        Binding("escape,enter", "table", "Table", show=False, priority=True),
         Binding("s", "sort", "Sort"),
         Binding("r", "reverse", "Flip", tooltip="Reverse the order of the sorted column"),
     ]
@@ -223,8 +258,8 @@ class TopicsScreen(BaseScreen):
     sort: reactive[str] = reactive("name", repaint=False)
 
     def compose_body(self) -> ComposeResult:
-        yield Input(placeholder="/ filters by name or type; esc returns to the table; ctrl+k stops the robot",
-                    id="topics-filter")  # fmt: skip
+        hint = "/ filters by name or type; esc returns to the table; ctrl+k stops the robot"
+        yield FilterInput(placeholder=hint, id="topics-filter")
         yield TopicsList(id="topics-list").data_bind(TopicsScreen.state, TopicsScreen.sort)
         with Horizontal(id="topics-side"):
             yield TopicDetail(id="topics-detail").data_bind(TopicsScreen.state, TopicsScreen.selected)
@@ -237,9 +272,7 @@ class TopicsScreen(BaseScreen):
 
     def on_mount(self) -> None:
         super().on_mount()
-        table = self.query_one(TopicsList)
-        self.watch(table, "selected", self._select, init=True)
-        table.focus()
+        self.watch(self.query_one(TopicsList), "selected", self._select, init=True)
 
     def _select(self, name: str | None) -> None:
         if name != self.selected:
@@ -263,15 +296,25 @@ class TopicsScreen(BaseScreen):
     def _filtered(self, event: Input.Changed) -> None:
         self.query_one(TopicsList).text = event.value
 
-    @on(Input.Submitted, "#topics-filter")
-    def _submitted(self) -> None:
-        self.query_one(TopicsList).focus()
+    def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
+        """``/`` opens the filter, and is text in it; ``esc`` and ``enter`` leave it (elsewhere: theirs)."""
+        if action == "filter":
+            return not isinstance(self.focused, FilterInput)
+        if action == "table":
+            return isinstance(self.focused, FilterInput)
+        return True
 
-    def key_escape(self) -> None:
-        self.query_one(TopicsList).focus()
+    def action_table(self) -> None:
+        self.query_one(FilterInput).close()
+        self.set_focus(self.query_one(TopicsList))  # now: the keys queued behind this one are the table's
+
+    @on(events.DescendantFocus)
+    def _focused(self, event: events.DescendantFocus) -> None:
+        if not isinstance(event.widget, FilterInput):  # a click on the table: the filter closes too
+            self.query_one(FilterInput).close()
 
     def action_filter(self) -> None:
-        self.query_one("#topics-filter", Input).focus()
+        self.query_one(FilterInput).open()
 
     def action_sort(self) -> None:
         self.sort = SORT_ORDER[(SORT_ORDER.index(self.sort) + 1) % len(SORT_ORDER)]
