@@ -144,6 +144,18 @@ async def test_keys_typed_at_once_on_the_first_visit_go_to_the_table_not_the_fil
         assert await until(pilot, filter_open)
 
 
+async def test_client_side_simulation_says_there_is_no_backend_to_ask_not_waiting_for_one():
+    """--sim: no backend, so no /api/topics; the screen says so instead of waiting for it forever."""
+    app = still_app(mode="sim")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await pilot.press("4")
+        table, detail = app.screen.query_one(TopicsList), app.screen.query_one(TopicDetail)
+        assert await until(pilot, lambda: "no backend" in table.render().plain)
+        text = table.render().plain
+        assert "client-side simulation" in text and "waiting" not in text
+        assert "select a topic" not in str(detail.render())  # there is none to select
+
+
 async def test_the_header_marks_the_sorted_column_and_the_footer_lists_every_key_within_80_columns():
     from textual.widgets._footer import FooterKey
 

@@ -116,6 +116,8 @@ class TopicsList(Widget, can_focus=True):
 
     def _empty(self) -> str:
         s = self.state
+        if s.unavailable is not None:
+            return s.unavailable
         if s.polls == 0:
             return "waiting for the backend's /api/topics ..."
         if s.error and not s.topics:
@@ -156,7 +158,7 @@ class TopicDetail(Widget):
     def render(self) -> Text:
         t = next((t for t in self.state.topics if t.name == self.selected), None)
         if t is None:
-            return Text("select a topic (up/down)", style="dim")
+            return Text("" if self.state.unavailable else "select a topic (up/down)", style="dim")
         lines = detail(t, self.state.window_s)
         out = Text(lines[0] + "\n", style="bold")
         out.append("\n".join(lines[1:]))
