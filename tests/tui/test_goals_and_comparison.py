@@ -121,7 +121,7 @@ async def test_a_finished_run_stays_on_the_panel_until_the_next_key(tmp_path):
         assert not app.session.loop.running
         await pilot.pause()
         first = panel()
-        assert "goal (+0.60, +0.00) done: 1/1 in " in first
+        assert "Mission  goal (+0.60, +0.00)" in first and "done: 1/1 in " in first  # the row fits: two
         seconds = first.split("done: 1/1 in ")[1].split(" s")[0]
         assert (
             seconds == f"{app.session.store.run(run).time_s:.1f}"

@@ -1,0 +1,62 @@
+"""Every line fits where it is shown (issue 46): the control panel at every width, the latency figures,
+the analytics plots and table, the topics columns, the help dialog. Pilot checks of what each widget
+draws, and snapshots where it is about layout."""
+
+import pytest
+from rich.cells import cell_len
+
+from arbiter_tui.session.views import RobotView
+from arbiter_tui.shell.widgets import LABEL, RobotPanel
+
+from ..support.tui import show_frame, still_app
+
+SIZES = [(80, 24), (120, 36), (200, 60)]
+IDS = ["80x24", "120x36", "200x60"]
+# the longest of every row: the longest algorithm's name and a state, a pose 10 m and more from the
+# origin, a figure eight done, an error of metres
+LONG = RobotView(
+    v_cmd=0.5, w_cmd=-1.0, speed=0.5, turn=1.0, x=12.34, y=-15.0, theta=-3.14, v_odom=0.5, w_odom=-1.0,
+    algorithm="regulated_pure_pursuit", state="stopped", mission="figure_eight", done=16, total=16,
+    finished="done: 16/16 in 45.3 s", goal=(14.54, -104.31), e_d=15.17, e_th=-3.14,
+)  # fmt: skip
+
+
+async def shown_panel(pilot, view: RobotView) -> list[str]:
+    show_frame(pilot.app, robot=view)
+    await pilot.pause()
+    panel = pilot.app.screen.query_one(RobotPanel)
+    await pilot.pause()
+    return panel.render().plain.splitlines()
+
+
+@pytest.mark.parametrize("size", SIZES, ids=IDS)
+async def test_every_row_of_the_control_panel_fits_its_width_and_no_word_stands_alone(size):
+    """At 120 and 200 columns the rows took more than the panel (``Algo regulated_pure_pursuit`` over
+    ``(stopped)``; ``rad`` alone once |x| >= 10): now each row fits, in its short form where the panel is
+    narrow, and a row broken in two never leaves a word alone on the second."""
+    app = still_app()
+    async with app.run_test(size=size) as pilot:
+        lines = await shown_panel(pilot, LONG)
+        panel = app.screen.query_one(RobotPanel)
+        width = panel.content_size.width
+        assert all(cell_len(line) <= width for line in lines), (width, lines)
+        for line in lines:
+            if line.startswith(" " * LABEL):  # a row's continuation: never a single word
+                assert len(line.split()) >= 2, lines
+        labels = [line.split()[0] for line in lines if not line.startswith(" ")]
+        assert labels == ["Command", "Max", "Pose", "Odom", "Algo", *(["State"] if width < 41 else []),
+                          "Mission", "Goal", "Errors"], lines  # fmt: skip
+        text = "\n".join(lines)
+        assert "stopped" in text and "done: 16/16 in 45.3 s" in text and "x +12.34 y -15.00 θ -3.14" in text
+        if size[0] >= 100:  # wide enough for every row's long form
+            assert "Algo     regulated_pure_pursuit (stopped)" in text
+            assert "θ -3.14 rad" in text and "Mission  figure_eight done: 16/16 in 45.3 s" in text
+            assert panel.region.height >= len(lines)  # every row shown
+
+
+@pytest.mark.parametrize("size", [(80, 24), (120, 36)], ids=["80x24", "120x36"])
+def test_the_control_panel_with_its_longest_rows(snap_compare, size):
+    async def longest(pilot):
+        await shown_panel(pilot, LONG)
+
+    assert snap_compare(still_app(), terminal_size=size, run_before=longest)
