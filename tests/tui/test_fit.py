@@ -2,11 +2,14 @@
 the analytics plots and table, the topics columns, the help dialog. Pilot checks of what each widget
 draws, and snapshots where it is about layout."""
 
+from dataclasses import replace
+
 import pytest
 from rich.cells import cell_len
 
+from arbiter_core.timesync import TimeSync
 from arbiter_tui.session.views import RobotView
-from arbiter_tui.shell.widgets import LABEL, RobotPanel
+from arbiter_tui.shell.widgets import LABEL, ClientLine, RobotPanel, TrackerLine
 
 from ..support.tui import show_frame, still_app
 
@@ -60,3 +63,42 @@ def test_the_control_panel_with_its_longest_rows(snap_compare, size):
         await shown_panel(pilot, LONG)
 
     assert snap_compare(still_app(), terminal_size=size, run_before=longest)
+
+
+UNSYNCED = TimeSync("adjtimex", False)
+WHOLE = (  # phrases that were broken at 80 columns, each to be read on one line
+    "raw one-way p50 12.220 ms",
+    "lost 0 in 10 s (0 total)",
+    "robot host adjtimex NOT synchronised",
+    "CLOCK OFFSET +11.9 ms exceeds 10 ms: raw one-way figures include it",
+)
+
+
+@pytest.mark.parametrize("size", SIZES, ids=IDS)
+async def test_the_latency_figures_break_between_whole_parts_and_none_is_cut(size):
+    """At 80x24 the console's line broke mid-phrase (``raw one-way`` / ``p50 12.220 ms``, ``(0`` /
+    ``total)``) and the time sync line was cut: each line now breaks between its parts, every row shown."""
+    app = still_app()
+    async with app.run_test(size=size) as pilot:
+        await pilot.press("3")
+        show_frame(app, latency=replace(app.frame.latency, local_sync=UNSYNCED, robot_sync=UNSYNCED))
+        await pilot.pause()
+        await pilot.pause()
+        for widget in (app.screen.query_one(TrackerLine), app.screen.query_one(ClientLine)):
+            lines = widget.render().plain.rstrip("\n").splitlines()
+            width = widget.content_size.width
+            assert all(cell_len(line) <= width for line in lines), (width, lines)
+            assert widget.content_size.height >= len(lines), lines  # not cut at the bottom
+        text = app.screen.query_one(ClientLine).render().plain.splitlines()
+        for phrase in WHOLE:
+            assert any(phrase in line for line in text), (phrase, text)
+
+
+def test_the_latency_screen_at_80x24_with_every_line(snap_compare):
+    async def with_time_sync(pilot):
+        await pilot.press("3")
+        app = pilot.app
+        show_frame(app, latency=replace(app.frame.latency, local_sync=UNSYNCED, robot_sync=UNSYNCED))
+        await pilot.pause()
+
+    assert snap_compare(still_app(), terminal_size=(80, 24), run_before=with_time_sync)
