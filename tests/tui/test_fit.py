@@ -11,7 +11,7 @@ from arbiter_core.timesync import TimeSync
 from arbiter_tui.session.views import RobotView
 from arbiter_tui.shell.widgets import LABEL, ClientLine, RobotPanel, TrackerLine
 
-from ..support.tui import show_frame, still_app
+from ..support.tui import show_frame, still_app, until
 
 SIZES = [(80, 24), (120, 36), (200, 60)]
 IDS = ["80x24", "120x36", "200x60"]
@@ -102,3 +102,19 @@ def test_the_latency_screen_at_80x24_with_every_line(snap_compare):
         await pilot.pause()
 
     assert snap_compare(still_app(), terminal_size=(80, 24), run_before=with_time_sync)
+
+
+async def test_the_analytics_trajectory_has_rows_enough_at_80x24():
+    """At 80x24 the trajectory was 3 rows on a -10...10 axis: at equal aspect the metres per row (the
+    path's height over 3 rows) set the metres per column, so 29 columns spanned 36 m. The plots now keep
+    at least 10 rows on a short terminal (the comparison above them scrolls), 5 of them for the path."""
+    from arbiter_tui.shell.plots import TrajectoryPlot
+
+    app = still_app()
+    async with app.run_test(size=(80, 24)) as pilot:
+        await pilot.press("2")
+        plot = app.screen.query_one(TrajectoryPlot)
+        assert await until(pilot, lambda: plot.draws >= 1)
+        _cols, rows = plot.scale_size()
+        assert rows >= 5, rows
+        assert plot._user_x_max - plot._user_x_min <= 16.0, (plot._user_x_min, plot._user_x_max)

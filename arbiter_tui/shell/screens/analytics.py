@@ -28,6 +28,7 @@ from .base import BaseScreen
 
 LINK_PLOT_WIDTH = 120  # the error-vs-latency plot from this width on
 FULL_WIDTH = 104  # columns the full table needs; below it the compact view (every number still shown)
+SHORT_HEIGHT = 30  # below it the plots keep 10 rows and the table above them scrolls (analytics.tcss)
 
 
 def _cell(table: T.Table, row: int, column: int) -> Text:
@@ -142,6 +143,7 @@ class RingWarning(Bound[AnalyticsView]):
 
     DEFAULT_CSS = "RingWarning { height: auto; color: $warning; text-style: bold; padding: 0 1; }"
     view: reactive[AnalyticsView] = reactive(AnalyticsView)
+    short: reactive[bool] = reactive(False, layout=True)  # a short terminal: its first sentence only
 
     def pick(self, frame: Frame) -> AnalyticsView:
         return frame.analytics
@@ -156,11 +158,8 @@ class RingWarning(Bound[AnalyticsView]):
         parts = ", ".join(
             f"run {r.id} {'all' if r.in_ring == 0 else r.dropped} of {r.stats.sampleCount}" for r in dropped
         )
-        return Text(
-            f"⚠ ring buffer ({self.view.ring} points) dropped: {parts}. "
-            "Rows still count every sample; cards and plots show only the ring.",
-            no_wrap=False,
-        )
+        why = "" if self.short else " Rows still count every sample; cards and plots show only the ring."
+        return Text(f"⚠ ring buffer ({self.view.ring} points) dropped: {parts}.{why}", no_wrap=False)
 
 
 class EmptyState(Bound[AnalyticsView]):
@@ -203,6 +202,7 @@ class LinkLine(Bound[LinkSweepView]):
 
 class AnalyticsScreen(BaseScreen):
     CSS_PATH = ["base.tcss", "analytics.tcss"]
+    VERTICAL_BREAKPOINTS = [(0, "-short"), (SHORT_HEIGHT, "-tall")]  # below: the plots keep their rows
     BINDINGS = [
         Binding("r", "toggle_collect", "Rec"),
         Binding("v", "toggle_view", "Runs"),
@@ -228,6 +228,7 @@ class AnalyticsScreen(BaseScreen):
         # the error-vs-latency plot only where the other two keep room for their legends; its line of
         # text (the measured latency on the curve) is always shown
         self.set_class(size.width < LINK_PLOT_WIDTH, "no-link-plot")
+        self.query_one(RingWarning).short = size.height < SHORT_HEIGHT
 
     def action_toggle_collect(self) -> None:
         self.console.session.toggle_collection()
