@@ -118,3 +118,23 @@ async def test_the_analytics_trajectory_has_rows_enough_at_80x24():
         _cols, rows = plot.scale_size()
         assert rows >= 5, rows
         assert plot._user_x_max - plot._user_x_min <= 16.0, (plot._user_x_min, plot._user_x_max)
+
+
+@pytest.mark.parametrize("size", [(120, 36), (200, 60)], ids=["120x36", "200x60"])
+async def test_the_analytics_table_is_full_where_it_fits_and_compact_where_it_would_scroll(size):
+    """At 120x36 the full table needed sideways scrolling while the compact one fits (the switch was at a
+    fixed 104 columns): the full view is shown only where all of it fits."""
+    from arbiter_tui.shell.screens.analytics import CompareTable
+
+    app = still_app()
+    async with app.run_test(size=size) as pilot:
+        await pilot.press("2")
+        table = app.screen.query_one(CompareTable)
+        assert await until(pilot, lambda: table.row_count > 0)
+        await pilot.pause()
+        assert table.compact == (size[0] < 160)
+        assert table.max_scroll_x == 0, (table.virtual_size, table.scrollable_content_region)
+        await pilot.press("v")  # per run: its own columns, the same rule
+        assert await until(pilot, lambda: table.mode == "run" and table.row_count > 0)
+        await pilot.pause()
+        assert table.max_scroll_x == 0, (table.virtual_size, table.scrollable_content_region)

@@ -208,7 +208,7 @@ async def test_g_after_an_override_resumes_and_capital_g_restarts(tmp_path):
 
 async def test_the_comparison_ranks_marks_sorts_and_warns(tmp_path):
     app = still_app(tmp_path)
-    async with app.run_test(size=(120, 30)) as pilot:  # wide: the full table (units, a mission column)
+    async with app.run_test(size=(200, 40)) as pilot:  # wide: the full table (units, a mission column)
         await pilot.press("2")
         table = app.screen.query_one(CompareTable)
         assert await until(pilot, lambda: len(table.table.rows) == 2)
