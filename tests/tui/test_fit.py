@@ -138,3 +138,25 @@ async def test_the_analytics_table_is_full_where_it_fits_and_compact_where_it_wo
         assert await until(pilot, lambda: table.mode == "run" and table.row_count > 0)
         await pilot.pause()
         assert table.max_scroll_x == 0, (table.virtual_size, table.scrollable_content_region)
+
+
+@pytest.mark.parametrize("size", [(120, 36), (200, 60)], ids=["120x36", "200x60"])
+async def test_topic_types_are_whole_where_the_name_column_has_room(size):
+    """At 120x36 ``sensor_msgs/LaserSc…`` was cut while the name column had 20 columns to spare: the free
+    columns go to the name and the type, each up to its longest cell."""
+    from arbiter_core.topicstats import TopicFigures
+    from arbiter_tui.latency.topics_table import short_type
+    from arbiter_tui.shell.screens.topics import TopicsList
+
+    from .test_topics_screen import STATE, topics_app
+
+    events = TopicFigures("/parameter_events", "rcl_interfaces/msg/ParameterEvent", "quiet", 3, 3, 0, 40)
+    app = topics_app(replace(STATE, topics=(*STATE.topics, events)))
+    async with app.run_test(size=size) as pilot:
+        await pilot.press("4")
+        table = app.screen.query_one(TopicsList)
+        assert await until(pilot, lambda: "/parameter_events" in table.render().plain)
+        lines = table.render().plain.splitlines()[1:]
+        for t in table.rows():
+            line = next(line for line in lines if line.startswith(t.name + " "))
+            assert f" {short_type(t.type)} " in line and "…" not in line, line

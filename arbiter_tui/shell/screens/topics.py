@@ -4,9 +4,11 @@ over the last minute."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from rich.cells import cell_len
 from rich.text import Text
 from textual import events, on
 from textual.app import ComposeResult
@@ -17,11 +19,20 @@ from textual.widget import Widget
 from textual.widgets import Input
 from textual_plot import HiResMode
 
-from arbiter_core.topicstats import SAMPLE_S
+from arbiter_core.topicstats import SAMPLE_S, TopicFigures
 
 from ...analytics import axes
 from ...latency.topics_client import TopicsState
-from ...latency.topics_table import COLUMNS, SORT_ORDER, aligned, cells, detail, headers, select
+from ...latency.topics_table import (
+    COLUMNS,
+    SORT_ORDER,
+    aligned,
+    cells,
+    detail,
+    headers,
+    select,
+    short_type,
+)
 from ...session.frames import Frame
 from ...session.views import PLOT_PERIOD_S
 from ..plots import MIN_GAP_X, MIN_GAP_Y, Plot
@@ -42,6 +53,26 @@ def layout(width: int) -> tuple[int, ...]:
         shown.append(name)
         used += need
     return tuple(i for i, c in enumerate(COLUMNS) if c in shown)
+
+
+def column_widths(width: int, rows: Sequence[TopicFigures]) -> tuple[tuple[int, ...], list[int]]:
+    """The columns shown at ``width`` (``layout``) and their widths: the columns free beyond the fixed
+    ones go to the topic's name and type, each up to its longest cell in ``rows`` and in proportion to
+    what it lacks when both cannot have it; what is left, to the name."""
+    shown = layout(width)
+    names = [COLUMNS[i] for i in shown]
+    widths = [WIDTHS[c] for c in names]
+    free = max(0, width - sum(widths) - len(widths) + 1)
+    longest = {
+        "topic": max((cell_len(t.name) for t in rows), default=0),
+        "type": max((cell_len(short_type(t.type)) for t in rows), default=0),
+    }
+    lack = {c: max(0, longest[c] - WIDTHS[c]) for c in ("topic", "type") if c in names}
+    wanted = sum(lack.values())
+    for column, short in lack.items():
+        widths[names.index(column)] += short if wanted <= free else free * short // wanted
+    widths[0] += max(0, width - sum(widths) - len(widths) + 1)  # the rest: the topic column
+    return shown, widths
 
 
 STYLES = {"slow": "yellow", "silent": "bold red", "quiet": "dim", "waiting": "dim", "unmeasured": "dim"}
@@ -91,14 +122,12 @@ class TopicsList(Widget, can_focus=True):
 
     def render(self) -> Text:
         self.renders += 1
-        shown = layout(self.size.width)
-        widths = [WIDTHS[COLUMNS[i]] for i in shown]
-        widths[0] += max(0, self.size.width - sum(widths) - len(widths) + 1)  # the topic column
+        rows = self.rows()
+        shown, widths = column_widths(self.size.width, rows)
         out = Text(no_wrap=True, overflow="ellipsis")
         names_shown = tuple(COLUMNS[i] for i in shown)
         titles = headers(self.sort, self.reverse)  # the sorted column marked ▼ or ▲
         out.append(_line(tuple(titles[i] for i in shown), widths, names_shown) + "\n", style="bold")
-        rows = self.rows()
         if not rows:
             out.append(self._empty(), style="dim")
             return out
