@@ -160,3 +160,24 @@ async def test_topic_types_are_whole_where_the_name_column_has_room(size):
         for t in table.rows():
             line = next(line for line in lines if line.startswith(t.name + " "))
             assert f" {short_type(t.type)} " in line and "…" not in line, line
+
+
+@pytest.mark.parametrize("size", SIZES, ids=IDS)
+async def test_the_help_shows_one_scrollbar_against_its_frame_and_none_where_it_fits(size):
+    """The help's frame was thick (a solid bar each side) and its scrollbar floated in the padding beside
+    it: two bars on the right, read as two thumbs. Now the frame is a line, the scrollbar the only bar,
+    against the frame and the whole height inside it, and there is none where the help fits."""
+    from textual.containers import VerticalScroll
+
+    from arbiter_tui.shell.screens.help import HelpScreen
+
+    app = still_app()
+    async with app.run_test(size=size) as pilot:
+        await pilot.press("question_mark")
+        assert await until(pilot, lambda: isinstance(app.screen, HelpScreen))
+        await pilot.pause()
+        scroll = app.screen.query_one(VerticalScroll)
+        bars = [w for s in app.screen_stack for w in (s, *s.walk_children()) if w.show_vertical_scrollbar]
+        assert bars == ([scroll] if size[1] < 36 else []), bars
+        assert {edge for edge, _ in (scroll.styles.border_left, scroll.styles.border_right)} == {"round"}
+        assert scroll.styles.padding.right == 0 and scroll.styles.padding.top == 0  # the bar at the frame
