@@ -10,7 +10,8 @@ answer with :func:`parse_topics` into frozen :class:`TopicFigures`. One definiti
   (for a steady publisher this is mean size x rate, as ``ros2 topic bw`` reports it), and the mean size;
 - delay: receive wall time - ``header.stamp`` of each stamped message (as ``ros2 topic delay``), mean
   and p95;
-- age: now - the last message's receive time;
+- age: now - the last message's receive time, kept when the window is empty (a topic silent for a
+  minute is a minute old);
 - rate history: the rate, once a second (``sample``, which the backend calls whether or not anyone asks),
   over the last ``RATE_HISTORY`` seconds, so the console can plot the last minute the moment it opens;
 - state: ``waiting`` (never a message), ``silent`` (a steady topic that stopped, see below), ``quiet``
@@ -119,6 +120,7 @@ class TopicWindow:
         self.sizes: deque[int] = deque(maxlen=MAX_SAMPLES)
         self.delays: deque[tuple[float, float]] = deque(maxlen=MAX_SAMPLES)  # (receive time, delay s)
         self.total = 0
+        self.last: float | None = None  # the latest message's receive time, in the window or not
         self.malformed_stamps = 0
         self.usual_hz: float | None = None
         self._usual_at = 0.0
@@ -134,6 +136,7 @@ class TopicWindow:
         self.times.append(now)
         self.sizes.append(size)
         self.total += 1
+        self.last = now if self.last is None else max(self.last, now)
         if delay_s is not None:
             self.delays.append((now, delay_s))
 
@@ -194,7 +197,7 @@ class TopicWindow:
         delays = [d for _, d in self.delays]
         delay_mean = sum(delays) / len(delays) * 1e3 if delays else None
         delay_p95 = percentile(delays, 0.95) * 1e3 if delays else None
-        age = (now - self.times[-1]) * 1e3 if self.times else None  # nothing in the window: no age
+        age = None if self.last is None else (now - self.last) * 1e3  # None: never a message
         usual = self._usual(now, rate)
         if self.unmeasured is not None:
             state = "unmeasured"

@@ -211,6 +211,13 @@ def build(
     )
 
 
+def width(table: Table, padding: int = 1, marks: int = 2) -> int:
+    """Columns the table takes, every cell whole: each column as wide as its header (with ``marks`` more
+    for a sort mark) or its widest cell, plus ``padding`` on each side."""
+    columns = zip(table.headers, *table.rows, strict=True) if table.rows else ((h,) for h in table.headers)
+    return sum(max(len(column[0]) + marks, *(len(c) for c in column)) + 2 * padding for column in columns)
+
+
 def legend(table: Table) -> str:
     """The rule, the overall answer and (compact) the units, as the screen shows them under the table."""
     if table.compact:

@@ -18,6 +18,7 @@ if TYPE_CHECKING:
     from .tracker_client import TrackerClient
 
 PERIOD_S = 0.5  # 2 Hz: the screen updates at most this often
+NO_BACKEND = "client-side simulation (--sim): no backend, so no topics to watch"
 
 
 @dataclass(frozen=True)
@@ -30,6 +31,7 @@ class TopicsState:
     topics: tuple[TopicFigures, ...] = ()
     skipped: int = 0  # topics in the answer that were not the documented shape
     echo: tuple[str, str] | None = None  # (topic, its latest message as text, or why there is none)
+    unavailable: str | None = None  # why there is no backend to ask at all (client-side simulation)
 
     def rates(self, name: str) -> tuple[float | None, ...]:
         """``name``'s rate once a second over the last minute, oldest first (None: no rate then), as the

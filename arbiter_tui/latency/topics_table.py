@@ -141,7 +141,7 @@ def detail(t: TopicFigures, window_s: float) -> list[str]:
         lines.append(f"delay mean {ms(t.delay_mean_ms)}  p95 {ms(t.delay_p95_ms)} (now - header.stamp)")
     if t.malformed_stamps:
         lines.append(f"malformed stamps {t.malformed_stamps}")
-    lines.append(f"last message {age(t.age_ms)} ago" if t.age_ms is not None else "no message in the window")
+    lines.append(f"last message {age(t.age_ms)} ago" if t.age_ms is not None else "no message yet")
     if t.qos_note:
         lines.append(f"QoS: {t.qos_note}")
     return lines

@@ -18,7 +18,7 @@ from dataclasses import dataclass, field, fields, replace
 from typing import TypeVar
 
 from ..analytics.linkcurve import RUNNING, LinkSweepView, measured_p95
-from ..latency.topics_client import TopicsState
+from ..latency.topics_client import NO_BACKEND, TopicsState
 from ..latency.tracker_client import LatencyView, TrackerClient
 from ..link.base import STARTING
 from .cpu_share import cores_available
@@ -161,7 +161,8 @@ class FrameSampler:
         self.session = session
         self.settings = settings
         self.clock = clock
-        self.frame = Frame()
+        # client-side simulation: no backend, so no topics answer will ever come (the screen says why)
+        self.frame = Frame(topics=TopicsState(unavailable=NO_BACKEND)) if settings.mode == SIM else Frame()
         self.tracker = tracker  # the tracker the pollers ask (None: none yet)
         self.start_error: str | None = None
         self._slow_at = {ANALYTICS: float("-inf"), LATENCY: float("-inf"), TOPICS: float("-inf")}

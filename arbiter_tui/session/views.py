@@ -104,6 +104,26 @@ def _cut(text: str, width: int) -> str:
     return out + DROPPED if width > 0 else ""
 
 
+def fit_fields(forms: Sequence[Sequence[str]], width: int | None, sep: str = " ") -> list[str]:
+    """A value made of fields (``x +1.25``, ``y -0.50``, ``θ +0.60 rad``) in at most ``width`` columns
+    (None or 0: no limit): its first form (fields joined by ``sep``) that fits, on one row; when none does,
+    its last form on as many rows as it takes, broken between whole fields (a field wider than
+    ``width`` on a row of its own)."""
+    joined = [sep.join(fields) for fields in forms]
+    if not width:
+        return joined[:1]
+    for text in joined:
+        if cells(text) <= width:
+            return [text]
+    rows: list[str] = []
+    for f in forms[-1]:
+        if rows and cells(rows[-1] + sep + f) <= width:
+            rows[-1] += sep + f
+        else:
+            rows.append(f)
+    return rows
+
+
 # priorities of the status line's parts (0: never left out; the highest goes first)
 ALARM, RECORDING, API_DOWN, ALGORITHM, TARGET, HINT, DEPLOY = 0, 1, 2, 3, 4, 5, 6
 

@@ -23,13 +23,14 @@ from ..analytics.store import STATS_FIELDS
 from ..control.teleop import legend_compact
 from ..latency.clocksync import OffsetEstimate
 from ..session.frames import Frame
-from ..session.views import AnalyticsView, LatencySnapshot, RobotView, StatusView
+from ..session.views import AnalyticsView, LatencySnapshot, RobotView, StatusView, fit_fields
 from . import give_way
 
 LINK_DOWN = (  # two lines of the 36 columns inside the panel: the rows below stay in view
     "LINK DOWN: nothing is sent.\nThe robot stops on its own timeout.\n"
 )
 STALE = "*"  # marks a value that is the last received, not live
+LABEL = 9  # the control panel's label column: "Command  "
 KEY_HELP = legend_compact()
 FIT = "fit"  # the dashboard's class for a widget that lays its figures out to its width, never wrapping one
 PART = " · "  # what separates the parts of a line of figures: where a line may break
@@ -140,11 +141,20 @@ class StatusLine(Bound[StatusView]):
 
 class RobotPanel(Bound[RobotView]):
     view: reactive[RobotView] = reactive(RobotView)
+    _rows = 0  # rows the last paint took: a height: auto widget is sized when laid out
 
     def pick(self, frame: Frame) -> RobotView:
         return frame.robot
 
     def draw(self) -> Text:
+        t = self.draw_rows()
+        rows = t.plain.count("\n") + 1
+        if rows != self._rows:  # a row more or less (a state row, the link down): laid out again
+            self._rows = rows
+            self.refresh(layout=True)
+        return t
+
+    def draw_rows(self) -> Text:
         r = self.view
         t = Text()
         if r.link_down:
@@ -155,36 +165,34 @@ class RobotPanel(Bound[RobotView]):
             t.append("Terminal too small: robot stopped.\n", "bold red")
         if r.warning:
             t.append(f"{r.warning}\n", "bold red")
-        t.append("Command  ", "bold")
-        t.append(f"v {r.v_cmd:+.2f} m/s  ω {r.w_cmd:+.2f} rad/s\n")
-        t.append("Max      ", "bold")
-        t.append(f"speed {r.speed:.2f}  turn {r.turn:.2f}\n")
+        v, w = f"v {r.v_cmd:+.2f}", f"ω {r.w_cmd:+.2f}"
+        self.row(t, "Command", [[f"{v} m/s", f"{w} rad/s"], [v, w]], sep="  ")
+        self.row(t, "Max", [[f"speed {r.speed:.2f}", f"turn {r.turn:.2f}"]], sep="  ")
         # Pose and odometry that are not live are marked (a star and dim, not colour alone) and kept:
         # where the robot was last seen is still worth knowing.
-        mark, look = (STALE, "dim") if r.stale else (" ", "")
-        t.append(f"Pose{mark}    ", "bold")
-        t.append(f"x {r.x:+.2f} y {r.y:+.2f} θ {r.theta:+.2f} rad\n", look)
-        t.append(f"Odom{mark}    ", "bold")
-        t.append(f"v {r.v_odom:+.2f}  ω {r.w_odom:+.2f}", look)
+        mark, look = (STALE, "dim") if r.stale else ("", "")
+        x, y, theta = f"x {r.x:+.2f}", f"y {r.y:+.2f}", f"θ {r.theta:+.2f}"
+        self.row(t, f"Pose{mark}", [[x, y, f"{theta} rad"], [x, y, theta]], look)  # narrow: no unit
+        self.row(t, f"Odom{mark}", [[f"v {r.v_odom:+.2f}", f"ω {r.w_odom:+.2f}"]], look, sep="  ", end="")
         t.append("  * stale\n" if r.stale else "\n", "bold yellow")
         if r.observing is not None:
             self.draw_observed(t, r)
         else:
-            t.append("Algo     ", "bold")
-            t.append(f"{r.algorithm} ({r.state})\n")
-            t.append("Mission  ", "bold")
+            if self.fits(f"{r.algorithm} ({r.state})"):
+                self.row(t, "Algo", [[r.algorithm, f"({r.state})"]])
+            else:  # narrow: the state on a row of its own, never a word alone under the name
+                self.row(t, "Algo", [[r.algorithm]])
+                self.row(t, "State", [[r.state]])
             if r.finished is not None:
-                t.append(f"{r.mission} {r.finished}\n", "bold green")
+                self.row(t, "Mission", [[r.mission, r.finished]], "bold green")
             else:
-                t.append(f"{r.mission} {r.done}/{r.total}\n")
-        t.append("Goal     ", "bold")
+                self.row(t, "Mission", [[r.mission, f"{r.done}/{r.total}"]])
         none = "none (manual)" if r.observing is None else "none (no observed run)"
-        t.append(f"{none}\n" if r.goal is None else f"({r.goal[0]:+.2f}, {r.goal[1]:+.2f})\n")
-        t.append("Errors   ", "bold")
+        self.row(t, "Goal", [[none if r.goal is None else f"({r.goal[0]:+.2f}, {r.goal[1]:+.2f})"]])
         if r.e_d is None or r.e_th is None:
-            t.append("—")
+            self.row(t, "Errors", [["—"]], end="")
         else:
-            t.append(f"e_d {r.e_d:.2f} m  e_θ {r.e_th:+.2f} rad")
+            self.row(t, "Errors", [[f"e_d {r.e_d:.2f} m", f"e_θ {r.e_th:+.2f} rad"]], sep="  ", end="")
         if r.observing is not None:
             rs = r.robot_side
             t.append("\nRobot    ", "bold")
@@ -199,6 +207,23 @@ class RobotPanel(Bound[RobotView]):
                 if not rs.running:
                     t.append(f"\n         g: {goal_driver(r.algorithm)} on {r.mission}", "dim")
         return t
+
+    def room(self) -> int | None:
+        """Columns for a row's value, right of its label (None: not laid out yet, no limit)."""
+        width = self.content_size.width
+        return max(1, width - LABEL) if width else None
+
+    def fits(self, value: str) -> bool:
+        room = self.room()
+        return room is None or cell_len(value) <= room
+
+    def row(
+        self, t: Text, label: str, forms: list[list[str]], style: str = "", sep: str = " ", end: str = "\n"
+    ) -> None:
+        """``label`` and its value in the first form that fits the panel, else broken between whole fields,
+        the rows after the first under the value (``views.fit_fields``)."""
+        t.append(f"{label:<{LABEL}}", "bold")
+        t.append(f"\n{'':<{LABEL}}".join(fit_fields(forms, self.room(), sep)) + end, style)
 
     @staticmethod
     def draw_observed(t: Text, r: RobotView) -> None:

@@ -83,6 +83,9 @@ def test_a_command_topic_that_stops_is_quiet_not_silent(backend):
         seen.append(topics(backend)["/stamped_cmd_vel"]["state"])
         time.sleep(0.1)
     assert "silent" not in seen and seen[-1] == "quiet", seen
+    # nothing in the window, and still an age: how long ago its last message came (4 s and more)
+    quiet = topics(backend)["/stamped_cmd_vel"]
+    assert quiet["count"] == 0 and quiet["age_ms"] >= 4000.0, quiet
 
 
 def test_the_first_answer_already_holds_each_topics_rate_over_the_time_before_it():

@@ -147,3 +147,27 @@ def show_frame(app, **parts) -> None:
     for screen in app.screen_stack:
         if isinstance(screen, BaseScreen):
             screen.frame = frame
+
+
+def burst(app, *keys: str) -> None:
+    """``keys`` (names, as Pilot's ``press`` takes them) typed in one burst, as Textual's terminal driver
+    delivers them: parsed on its input thread, through ``direct_keys`` (the headless driver here), then
+    queued for the app, all before the app answers the first. Pilot's ``press`` waits for each key's
+    answer before the next; a user's fingers do not."""
+    import threading
+
+    from textual import events
+    from textual.drivers.headless_driver import HeadlessDriver
+    from textual.keys import key_to_character
+
+    from arbiter_tui.shell.keys import direct_keys
+
+    driver = direct_keys(HeadlessDriver, lambda: app.keys)(app)
+
+    def deliver() -> None:
+        for key in keys:
+            driver.process_message(events.Key(key, key_to_character(key)))
+
+    thread = threading.Thread(target=deliver)
+    thread.start()
+    thread.join()

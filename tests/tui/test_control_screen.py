@@ -311,7 +311,8 @@ async def test_the_dashboard_comes_and_goes_with_the_terminal_size():
 
 def key_words(key: str) -> str:
     """A binding's key as README and help write it."""
-    return {"question_mark": "?", "space": "space", "delete": "delete", "slash": "/"}.get(key, key)
+    words = {"question_mark": "?", "space": "space", "delete": "delete", "slash": "/", "escape": "esc"}
+    return words.get(key, key)
 
 
 def test_readme_and_help_name_every_key_the_screens_bind():
@@ -343,6 +344,26 @@ def test_readme_and_help_name_every_key_the_screens_bind():
                 assert words in HELP, f"help lacks {words}"
                 checked += 1
     assert checked >= 21
+
+
+async def test_readme_names_the_missions_n_cycles_and_the_algorithms_a_cycles_in_their_order():
+    """README's control row said ``n`` cycled two missions (square, figure_eight); it cycles four."""
+    from pathlib import Path
+
+    readme = Path(__file__).resolve().parents[2].joinpath("README.md").read_text()
+    row = next(line for line in readme.splitlines() if line.startswith("| control |"))
+    app = still_app()
+    async with app.run_test(size=(100, 30)) as pilot:
+        missions, algorithms = [app.session.loop.mission_name], [app.session.loop.algorithm]
+        for _ in range(8):
+            await pilot.press("n")
+            missions.append(app.session.loop.mission_name)
+            await pilot.press("a")
+            algorithms.append(app.session.loop.algorithm)
+    cycle = missions[: missions.index(missions[0], 1)]  # once round
+    assert len(cycle) == 4 and f"`n` mission ({', '.join(cycle)})" in row, (cycle, row)
+    cycle = algorithms[: algorithms.index(algorithms[0], 1)]
+    assert f"`a` algorithm ({', '.join(cycle)})" in row, (cycle, row)
 
 
 async def test_the_map_follows_the_robot_at_most_every_follow_period_and_ends_where_it_is():

@@ -121,7 +121,7 @@ async def test_a_finished_run_stays_on_the_panel_until_the_next_key(tmp_path):
         assert not app.session.loop.running
         await pilot.pause()
         first = panel()
-        assert "goal (+0.60, +0.00) done: 1/1 in " in first
+        assert "Mission  goal (+0.60, +0.00)" in first and "done: 1/1 in " in first  # the row fits: two
         seconds = first.split("done: 1/1 in ")[1].split(" s")[0]
         assert (
             seconds == f"{app.session.store.run(run).time_s:.1f}"
@@ -208,7 +208,7 @@ async def test_g_after_an_override_resumes_and_capital_g_restarts(tmp_path):
 
 async def test_the_comparison_ranks_marks_sorts_and_warns(tmp_path):
     app = still_app(tmp_path)
-    async with app.run_test(size=(120, 30)) as pilot:  # wide: the full table (units, a mission column)
+    async with app.run_test(size=(200, 40)) as pilot:  # wide: the full table (units, a mission column)
         await pilot.press("2")
         table = app.screen.query_one(CompareTable)
         assert await until(pilot, lambda: len(table.table.rows) == 2)

@@ -8,7 +8,7 @@ from arbiter_core.topicstats import NOT_INSTALLED, TopicFigures
 from arbiter_tui.latency.topics_client import TopicsState
 from arbiter_tui.shell.screens.topics import RatePlot, TopicDetail, TopicsList
 
-from ..support.tui import still_app
+from ..support.tui import burst, still_app, until
 
 TOPICS = (
     TopicFigures("/camera/image_raw", "sensor_msgs/msg/Image", "ok", 1, 1, 75, 900, 15.0, 62.1, 71.0, 2.2,
@@ -22,7 +22,8 @@ TOPICS = (
     TopicFigures("/scan", "sensor_msgs/msg/LaserScan", "slow", 1, 1, 22, 800, 4.3, 98.0, 260.0, 40.0,
                  6_400.0, 1_496.0, True, 1.2, 2.5, 230.0, 10.0, qos_note="a reliable subscriber cannot "
                  "match a best-effort publisher"),
-    TopicFigures("/tf", "tf2_msgs/msg/TFMessage", "silent", 2, 3, 0, 1200, usual_rate_hz=100.0),
+    TopicFigures("/tf", "tf2_msgs/msg/TFMessage", "silent", 2, 3, 0, 1200, age_ms=12_400.0,
+                 usual_rate_hz=100.0),
 )  # fmt: skip
 QUIET = TopicFigures("/stamped_cmd_vel", "std_msgs/msg/String", "quiet", 1, 1, 0, 240)  # commands, then none
 # the last minute as the backend sampled it (once a second): each topic at its rate, then half of it
@@ -88,6 +89,71 @@ async def test_filter_sort_and_select_with_the_keys_a_user_presses():
         # teleop keys do nothing here, and 1 goes back to driving
         await pilot.press("escape", "1")
         assert app.current_mode == "control"
+
+
+async def test_keys_typed_at_once_on_the_first_visit_go_to_the_table_not_the_filter():
+    """4 and 1 typed at once on the first visit: back on the control screen (the 1 used to be swallowed).
+    A burst after 4 reaches the table (s sorts, down selects), and nothing lands in the filter until /
+    opens it; esc and enter give the keys back to the table."""
+    from textual.widgets import Input
+
+    first = topics_app()
+    async with first.run_test(size=(120, 36)) as pilot:
+        await pilot.pause()
+        burst(first, "4", "1", "a")  # a: the next algorithm, on the control screen
+        assert await until(pilot, lambda: first.session.loop.algorithm == "go_to_goal")
+        assert first.current_mode == "control"
+    app = topics_app()
+    async with app.run_test(size=(120, 36)) as pilot:
+        await pilot.pause()
+        burst(app, "4", "s", "down", "o", "d", "o", "m")
+
+        def sorted_by_rate() -> bool:
+            return app.current_mode == "topics" and app.screen.query_one(TopicsList).sort == "rate"
+
+        assert await until(pilot, sorted_by_rate)
+        await pilot.pause()
+        table, field = app.screen.query_one(TopicsList), app.screen.query_one("#topics-filter", Input)
+        assert table.has_focus and field.value == ""
+        assert table.selected == "/camera/image_raw"  # the busiest is /odom, then one down
+        # / opens the filter: what follows is typed into it
+        burst(app, "slash", "o", "d", "o", "m")
+        assert await until(pilot, lambda: field.value == "odom")
+        assert field.has_focus and [t.name for t in table.rows()] == ["/odom"]
+        burst(app, "escape", "s")  # back to the table: s sorts again (by bandwidth), not typed
+        assert await until(pilot, lambda: table.sort == "bandwidth")
+        assert table.has_focus and field.value == "odom"
+        burst(app, "slash", "backspace", "backspace", "left", "delete", "backspace", "enter", "r")
+        assert await until(pilot, lambda: table.reverse)
+        assert table.has_focus and field.value == ""
+        # tab does not wander into the filter either: only / (or a click) opens it
+        await pilot.press("tab")
+        assert not field.has_focus
+        await pilot.click("#topics-filter")
+        assert field.has_focus
+        await pilot.press("escape")
+        assert table.has_focus
+    again = topics_app()  # / typed right behind 4, as the screen first opens: the filter opens
+    async with again.run_test(size=(120, 36)) as pilot:
+        await pilot.pause()
+        burst(again, "4", "slash")
+
+        def filter_open() -> bool:
+            return again.current_mode == "topics" and isinstance(again.focused, Input)
+
+        assert await until(pilot, filter_open)
+
+
+async def test_client_side_simulation_says_there_is_no_backend_to_ask_not_waiting_for_one():
+    """--sim: no backend, so no /api/topics; the screen says so instead of waiting for it forever."""
+    app = still_app(mode="sim")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await pilot.press("4")
+        table, detail = app.screen.query_one(TopicsList), app.screen.query_one(TopicDetail)
+        assert await until(pilot, lambda: "no backend" in table.render().plain)
+        text = table.render().plain
+        assert "client-side simulation" in text and "waiting" not in text
+        assert "select a topic" not in str(detail.render())  # there is none to select
 
 
 async def test_the_header_marks_the_sorted_column_and_the_footer_lists_every_key_within_80_columns():

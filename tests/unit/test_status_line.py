@@ -72,3 +72,16 @@ def test_fit_parts_rules():
 @pytest.mark.parametrize("width", [0, 1, 2])
 def test_tiny_widths_never_overflow(width):
     assert cells(PAUSED.text(width)) <= width
+
+
+def test_a_panel_value_takes_its_first_form_that_fits_else_breaks_between_whole_fields():
+    from arbiter_tui.session.views import fit_fields
+
+    pose = [["x +12.34", "y -15.00", "θ -3.14 rad"], ["x +12.34", "y -15.00", "θ -3.14"]]
+    assert fit_fields(pose, None) == ["x +12.34 y -15.00 θ -3.14 rad"]  # not laid out: the longest
+    assert fit_fields(pose, 29) == ["x +12.34 y -15.00 θ -3.14 rad"]
+    assert fit_fields(pose, 27) == ["x +12.34 y -15.00 θ -3.14"]  # narrow: no unit, never a lone "rad"
+    assert fit_fields(pose, 20) == ["x +12.34 y -15.00", "θ -3.14"]  # the last form, between fields
+    done = ["figure_eight", "done: 16/16 in 45.3 s"]
+    assert fit_fields([done], 27) == done
+    assert fit_fields([["a-very-long-single-field"]], 5) == ["a-very-long-single-field"]  # left to the widget

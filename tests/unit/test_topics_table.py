@@ -6,7 +6,7 @@ from arbiter_tui.latency.topics_table import cells, detail, headers, select
 ROWS = [
     TopicFigures("/odom", "nav_msgs/msg/Odometry", "ok", rate_hz=50.0, bandwidth_bps=30_900.0, age_ms=5.0,
                  stamped=True, delay_mean_ms=0.1, mean_size_bytes=618.0, publishers=1, subscribers=2),
-    TopicFigures("/scan", "sensor_msgs/msg/LaserScan", "silent", rate_hz=None, age_ms=None),
+    TopicFigures("/scan", "sensor_msgs/msg/LaserScan", "silent", rate_hz=None, age_ms=9_500.0, total=80),
     TopicFigures("/camera/image", "sensor_msgs/msg/Image", "ok", rate_hz=15.0, bandwidth_bps=15.7e6,
                  age_ms=40.0, stamped=True, delay_mean_ms=3.0),
     TopicFigures("/rosout", "rcl_interfaces/msg/Log", "waiting"),
@@ -37,6 +37,7 @@ def test_cells():
     assert odom[:4] == ("/odom", "nav_msgs/Odometry", "ok", "50.0")
     assert odom[5:] == ("30.9k", "618", "0.1ms", "<0.1s", "1/2")  # a fresh age does not flicker
     assert cells(ROWS[1])[2] == "SILENT" and cells(ROWS[1])[3] == "—"
+    assert cells(ROWS[1])[8] == "9.5s"  # nothing in the window: still how long ago its last message came
     assert cells(ROWS[2])[5] == "15.7M"
 
 
@@ -52,6 +53,8 @@ def test_the_detail_shows_an_absent_figure_as_a_dash_with_no_unit_as_the_table_d
     never = detail(ROWS[3], 5.0)  # waiting: nothing measured
     assert "bandwidth —  mean size —" in never
     assert "rate — (0 msgs in the last 5 s, 0 in all)" in never
+    assert "no message yet" in never
+    assert "last message 9.5s ago" in detail(ROWS[1], 5.0)  # silent longer than the window
     assert cells(ROWS[3])[3:7] == ("—", "—", "—", "—")
     measured = detail(ROWS[0], 5.0)
     assert "bandwidth 30.9kB/s  mean size 618B" in measured

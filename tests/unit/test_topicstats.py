@@ -70,10 +70,24 @@ def test_states_waiting_silent_slow_ok_and_unmeasured():
         w.add(6.0 + i / 2, 10)
     assert w.figures(10.5).state == "slow"
     assert w.figures(20.0).state == "silent"  # steady from its first message, then stopped
-    assert w.figures(20.0).rate_hz is None and w.figures(20.0).age_ms is None
+    assert w.figures(20.0).rate_hz is None and w.figures(20.0).count == 0
     u = TopicWindow("/img", "sensor_msgs/msg/Image", 2.0)
     u.unmeasured = NOT_INSTALLED
     assert u.figures(1.0).state == "unmeasured" and u.figures(1.0).note == NOT_INSTALLED
+
+
+def test_age_is_now_minus_the_last_message_even_once_the_window_is_empty():
+    """A topic silent longer than the window still has an age: how long ago its last message came."""
+    w = TopicWindow("/scan", "sensor_msgs/msg/LaserScan", 2.0)
+    assert w.figures(1.0).age_ms is None  # never a message: no age
+    for i in range(50):  # 10 Hz for 5 s, the last at 4.9 s
+        w.add(i / 10, 10)
+    assert w.figures(5.0).age_ms == pytest.approx(100.0)
+    for now in (7.0, 30.0, 600.0):  # the window emptied at 6.9 s
+        f = w.figures(now)
+        assert f.count == 0 and f.age_ms == pytest.approx((now - 4.9) * 1e3)
+    w.add(600.5, 10)  # it speaks again
+    assert w.figures(601.0).age_ms == pytest.approx(500.0)
 
 
 def walk(w: TopicWindow, arrivals: list[float], until: float, step: float = 0.1) -> list[tuple[float, str]]:

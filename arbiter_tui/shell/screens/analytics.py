@@ -27,7 +27,11 @@ from ..widgets import Bound, StatsCards
 from .base import BaseScreen
 
 LINK_PLOT_WIDTH = 120  # the error-vs-latency plot from this width on
-FULL_WIDTH = 104  # columns the full table needs; below it the compact view (every number still shown)
+# The full view where every column fits the width the table has (its columns, their widest cell), else
+# the compact one (every number still shown); before it is laid out, as if it had FULL_WIDTH columns
+FULL_WIDTH = 104
+SCROLLBAR = 2  # a vertical scrollbar's columns, when its rows scroll
+SHORT_HEIGHT = 30  # below it the plots keep 10 rows and the table above them scrolls (analytics.tcss)
 
 
 def _cell(table: T.Table, row: int, column: int) -> Text:
@@ -46,7 +50,7 @@ class CompareTable(DataTable[Text]):
 
     can_focus = True
     mode: reactive[str] = reactive(T.BY_ALGORITHM)
-    compact: reactive[bool] = reactive(False)
+    room: reactive[int] = reactive(0)  # the columns it is given (0: not laid out yet)
     sort: reactive[str] = reactive(T.RANK)
     descending: reactive[bool] = reactive(False)
     frame: reactive[Frame] = reactive(Frame, repaint=False, init=False)  # bound to the screen's
@@ -64,13 +68,16 @@ class CompareTable(DataTable[Text]):
     def watch_mode(self) -> None:
         self._refill()
 
-    def watch_compact(self) -> None:
+    def watch_room(self) -> None:
         self._refill()
 
     def on_resize(self) -> None:
         # the width it is given: the whole screen, or half of the dashboard
-        width = self.parent.size.width if isinstance(self.parent, Widget) else self.app.size.width
-        self.compact = width < FULL_WIDTH
+        self.room = self.parent.size.width if isinstance(self.parent, Widget) else self.app.size.width
+
+    @property
+    def compact(self) -> bool:
+        return self.table.compact
 
     def watch_sort(self) -> None:
         self._refill()
@@ -84,7 +91,9 @@ class CompareTable(DataTable[Text]):
         view = view or self.frame.analytics
         # built each time (a few rows), shown only when what it prints changed: a run whose samples the
         # ring drops, or one sample more outside every run, changes nothing here
-        table = T.build(self.mode, view.runs, view.by_algorithm, self.sort, self.descending, self.compact)
+        table = T.build(self.mode, view.runs, view.by_algorithm, self.sort, self.descending)
+        if T.width(table) + SCROLLBAR > (self.room or FULL_WIDTH):  # the full view would scroll sideways
+            table = T.build(self.mode, view.runs, view.by_algorithm, self.sort, self.descending, compact=True)
         key = (self.sort, self.descending, table)
         if key == self._shown:
             return
@@ -142,6 +151,7 @@ class RingWarning(Bound[AnalyticsView]):
 
     DEFAULT_CSS = "RingWarning { height: auto; color: $warning; text-style: bold; padding: 0 1; }"
     view: reactive[AnalyticsView] = reactive(AnalyticsView)
+    short: reactive[bool] = reactive(False, layout=True)  # a short terminal: its first sentence only
 
     def pick(self, frame: Frame) -> AnalyticsView:
         return frame.analytics
@@ -156,11 +166,8 @@ class RingWarning(Bound[AnalyticsView]):
         parts = ", ".join(
             f"run {r.id} {'all' if r.in_ring == 0 else r.dropped} of {r.stats.sampleCount}" for r in dropped
         )
-        return Text(
-            f"⚠ ring buffer ({self.view.ring} points) dropped: {parts}. "
-            "Rows still count every sample; cards and plots show only the ring.",
-            no_wrap=False,
-        )
+        why = "" if self.short else " Rows still count every sample; cards and plots show only the ring."
+        return Text(f"⚠ ring buffer ({self.view.ring} points) dropped: {parts}.{why}", no_wrap=False)
 
 
 class EmptyState(Bound[AnalyticsView]):
@@ -203,6 +210,7 @@ class LinkLine(Bound[LinkSweepView]):
 
 class AnalyticsScreen(BaseScreen):
     CSS_PATH = ["base.tcss", "analytics.tcss"]
+    VERTICAL_BREAKPOINTS = [(0, "-short"), (SHORT_HEIGHT, "-tall")]  # below: the plots keep their rows
     BINDINGS = [
         Binding("r", "toggle_collect", "Rec"),
         Binding("v", "toggle_view", "Runs"),
@@ -228,6 +236,7 @@ class AnalyticsScreen(BaseScreen):
         # the error-vs-latency plot only where the other two keep room for their legends; its line of
         # text (the measured latency on the curve) is always shown
         self.set_class(size.width < LINK_PLOT_WIDTH, "no-link-plot")
+        self.query_one(RingWarning).short = size.height < SHORT_HEIGHT
 
     def action_toggle_collect(self) -> None:
         self.console.session.toggle_collection()

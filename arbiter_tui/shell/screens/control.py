@@ -23,11 +23,13 @@ from .base import BaseScreen
 from .topics import TopicsPane
 
 DASHBOARD_WIDTH, DASHBOARD_HEIGHT = 160, 45
+WIDE_PANEL = 100  # from this width the control panel is wide enough for every row's longest form
 WIDE_WIDTH = 180  # the dashboard shows the trajectory and the latency histogram from this width on
 
 
 class ControlScreen(BaseScreen):
     CSS_PATH = ["base.tcss", "control.tcss"]
+    HORIZONTAL_BREAKPOINTS = [(0, "-narrow"), (WIDE_PANEL, "-wide")]  # the panel's width (control.tcss)
     BINDINGS = [
         Binding("a", "cycle_algorithm", "Algo"),
         Binding("n", "cycle_mission", "Mission"),

@@ -35,8 +35,8 @@ HELP = f"""[b]arbiter-tui[/b] — teleop console, analytics and latency monitor
 
 [b]Latency[/b]  polls GET /api/latency at 2 Hz; one-way = receive - stamp
 
-[b]Topics[/b]  / filter  s sort (name, rate, bandwidth, delay, age)
-  r reverse (flip)  the header marks the sorted column ▼ or ▲
+[b]Topics[/b]  / filter (esc, enter: back)  s sort (name, rate, bandwidth,
+  delay, age)  r reverse (flip)  the header marks the sorted column ▼ ▲
   up/down select; rate, bandwidth, delay, age of every topic as
   the backend measures it (GET /api/topics, 2 Hz)
 
@@ -44,12 +44,15 @@ Press escape or ? to close."""
 
 
 class HelpScreen(ModalScreen[None]):
+    # One scrollbar, where a scrollbar is: against the dialog's frame, the whole height inside it, and a
+    # frame drawn as a line. (A thick frame is a solid bar on each side, and the scrollbar floated inside
+    # the padding beside it: two bars on the right, read as two thumbs.)
     DEFAULT_CSS = """
     HelpScreen { align: center middle; }
     HelpScreen > VerticalScroll {
-        width: 78; height: auto; max-height: 100%; border: thick $primary; background: $surface;
-        padding: 1 2;
+        width: 78; height: auto; max-height: 100%; border: round $primary; background: $surface;
     }
+    HelpScreen > VerticalScroll > Static { padding: 1 2; }
     """
     BINDINGS = [Binding("escape,question_mark,q", "dismiss", "Close"), STOP_HINT]
 

@@ -11,7 +11,7 @@ from textual.reactive import reactive
 from ...session.frames import Frame
 from ...session.views import LatencySnapshot
 from ..plots import LatencyHistogram, LatencyPlot
-from ..widgets import Bound, ClientLine, TrackerCards, TrackerLine, fmt_ms
+from ..widgets import FIT, Bound, ClientLine, TrackerCards, TrackerLine, fmt_ms
 from .base import BaseScreen
 
 
@@ -38,11 +38,13 @@ class RecordsList(Bound[LatencySnapshot]):
 
 class LatencyScreen(BaseScreen):
     CSS_PATH = ["base.tcss", "latency.tcss"]
+    VERTICAL_BREAKPOINTS = [(0, "-short"), (30, "-tall")]  # below 30 rows the plots give way (latency.tcss)
 
     def compose_body(self) -> ComposeResult:
-        yield TrackerLine(id="lat-state").data_bind(BaseScreen.frame)
+        # the lines of figures break between their parts, never between a label and its figure (FIT)
+        yield TrackerLine(id="lat-state", classes=FIT).data_bind(BaseScreen.frame)
         yield TrackerCards(id="lat-cards").data_bind(BaseScreen.frame)
-        yield ClientLine(id="lat-client").data_bind(BaseScreen.frame)
+        yield ClientLine(id="lat-client", classes=FIT).data_bind(BaseScreen.frame)
         with Horizontal(id="lat-plots"):
             yield LatencyPlot("one-way (ms) vs time (s)", id="lat-plot").data_bind(BaseScreen.frame)
             yield LatencyHistogram("one-way (ms) histogram", id="lat-hist").data_bind(BaseScreen.frame)

@@ -4,11 +4,13 @@ over the last minute."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from rich.cells import cell_len
 from rich.text import Text
-from textual import on
+from textual import events, on
 from textual.app import ComposeResult
 from textual.binding import Binding
 from textual.containers import Horizontal
@@ -17,11 +19,20 @@ from textual.widget import Widget
 from textual.widgets import Input
 from textual_plot import HiResMode
 
-from arbiter_core.topicstats import SAMPLE_S
+from arbiter_core.topicstats import SAMPLE_S, TopicFigures
 
 from ...analytics import axes
 from ...latency.topics_client import TopicsState
-from ...latency.topics_table import COLUMNS, SORT_ORDER, aligned, cells, detail, headers, select
+from ...latency.topics_table import (
+    COLUMNS,
+    SORT_ORDER,
+    aligned,
+    cells,
+    detail,
+    headers,
+    select,
+    short_type,
+)
 from ...session.frames import Frame
 from ...session.views import PLOT_PERIOD_S
 from ..plots import MIN_GAP_X, MIN_GAP_Y, Plot
@@ -42,6 +53,26 @@ def layout(width: int) -> tuple[int, ...]:
         shown.append(name)
         used += need
     return tuple(i for i, c in enumerate(COLUMNS) if c in shown)
+
+
+def column_widths(width: int, rows: Sequence[TopicFigures]) -> tuple[tuple[int, ...], list[int]]:
+    """The columns shown at ``width`` (``layout``) and their widths: the columns free beyond the fixed
+    ones go to the topic's name and type, each up to its longest cell in ``rows`` and in proportion to
+    what it lacks when both cannot have it; what is left, to the name."""
+    shown = layout(width)
+    names = [COLUMNS[i] for i in shown]
+    widths = [WIDTHS[c] for c in names]
+    free = max(0, width - sum(widths) - len(widths) + 1)
+    longest = {
+        "topic": max((cell_len(t.name) for t in rows), default=0),
+        "type": max((cell_len(short_type(t.type)) for t in rows), default=0),
+    }
+    lack = {c: max(0, longest[c] - WIDTHS[c]) for c in ("topic", "type") if c in names}
+    wanted = sum(lack.values())
+    for column, short in lack.items():
+        widths[names.index(column)] += short if wanted <= free else free * short // wanted
+    widths[0] += max(0, width - sum(widths) - len(widths) + 1)  # the rest: the topic column
+    return shown, widths
 
 
 STYLES = {"slow": "yellow", "silent": "bold red", "quiet": "dim", "waiting": "dim", "unmeasured": "dim"}
@@ -91,14 +122,12 @@ class TopicsList(Widget, can_focus=True):
 
     def render(self) -> Text:
         self.renders += 1
-        shown = layout(self.size.width)
-        widths = [WIDTHS[COLUMNS[i]] for i in shown]
-        widths[0] += max(0, self.size.width - sum(widths) - len(widths) + 1)  # the topic column
+        rows = self.rows()
+        shown, widths = column_widths(self.size.width, rows)
         out = Text(no_wrap=True, overflow="ellipsis")
         names_shown = tuple(COLUMNS[i] for i in shown)
         titles = headers(self.sort, self.reverse)  # the sorted column marked ▼ or ▲
         out.append(_line(tuple(titles[i] for i in shown), widths, names_shown) + "\n", style="bold")
-        rows = self.rows()
         if not rows:
             out.append(self._empty(), style="dim")
             return out
@@ -116,6 +145,8 @@ class TopicsList(Widget, can_focus=True):
 
     def _empty(self) -> str:
         s = self.state
+        if s.unavailable is not None:
+            return s.unavailable
         if s.polls == 0:
             return "waiting for the backend's /api/topics ..."
         if s.error and not s.topics:
@@ -156,7 +187,7 @@ class TopicDetail(Widget):
     def render(self) -> Text:
         t = next((t for t in self.state.topics if t.name == self.selected), None)
         if t is None:
-            return Text("select a topic (up/down)", style="dim")
+            return Text("" if self.state.unavailable else "select a topic (up/down)", style="dim")
         lines = detail(t, self.state.window_s)
         out = Text(lines[0] + "\n", style="bold")
         out.append("\n".join(lines[1:]))
@@ -210,10 +241,45 @@ class RatePlot(Plot[TopicsState, RatesKey]):
         self.set_axes(x, y)
 
 
+class FilterInput(Input):
+    """The filter: it takes keys only once opened (``/`` or a click), so keys typed as the screen opens,
+    or any time after, go to the table; ``esc`` and ``enter`` close it (the screen's)."""
+
+    can_focus = False
+    # Its editing keys (backspace, arrows, home...) are bindings, which Textual answers once a key has
+    # bubbled up to the app: after an enter or esc typed behind them (a burst), which has moved the focus
+    # by then, so they were lost. Answered as they reach it, they keep their place among the typed text.
+    EDITING = {k: b.action for b in Input.BINDINGS if isinstance(b, Binding) for k in b.key.split(",")}
+
+    async def _on_key(self, event: events.Key) -> None:
+        action = self.EDITING.get(event.key)
+        if action is None:
+            await super()._on_key(event)
+            return
+        event.stop()
+        event.prevent_default()
+        await self.run_action(action)
+
+    def open(self) -> None:
+        self.can_focus = True
+        self.screen.set_focus(self)  # now, not after the keys already queued: they are typed into it
+
+    def close(self) -> None:
+        self.can_focus = False
+
+    def on_click(self) -> None:
+        self.open()
+
+
 class TopicsScreen(BaseScreen):
     CSS_PATH = ["base.tcss", "topics.tcss"]
+    AUTO_FOCUS = "#topics-list"  # never the filter: a key typed as the screen first opens is the table's
     BINDINGS = [
-        Binding("slash", "filter", "Filter"),
+        # priority: answered as they come, before the keys typed after them are handed on (a burst such
+        # as "/odom" or "odom<esc>s" lands where it was meant); check_action passes them on otherwise
+        Binding("slash", "filter", "Filter", priority=True),
+        Binding("slash", "filter", "Filter", show=False),  # a / typed while the screen was still opening
+        Binding("escape,enter", "table", "Table", show=False, priority=True),
         Binding("s", "sort", "Sort"),
         Binding("r", "reverse", "Flip", tooltip="Reverse the order of the sorted column"),
     ]
@@ -223,8 +289,8 @@ class TopicsScreen(BaseScreen):
     sort: reactive[str] = reactive("name", repaint=False)
 
     def compose_body(self) -> ComposeResult:
-        yield Input(placeholder="/ filters by name or type; esc returns to the table; ctrl+k stops the robot",
-                    id="topics-filter")  # fmt: skip
+        hint = "/ filters by name or type; esc returns to the table; ctrl+k stops the robot"
+        yield FilterInput(placeholder=hint, id="topics-filter")
         yield TopicsList(id="topics-list").data_bind(TopicsScreen.state, TopicsScreen.sort)
         with Horizontal(id="topics-side"):
             yield TopicDetail(id="topics-detail").data_bind(TopicsScreen.state, TopicsScreen.selected)
@@ -237,9 +303,7 @@ class TopicsScreen(BaseScreen):
 
     def on_mount(self) -> None:
         super().on_mount()
-        table = self.query_one(TopicsList)
-        self.watch(table, "selected", self._select, init=True)
-        table.focus()
+        self.watch(self.query_one(TopicsList), "selected", self._select, init=True)
 
     def _select(self, name: str | None) -> None:
         if name != self.selected:
@@ -263,15 +327,25 @@ class TopicsScreen(BaseScreen):
     def _filtered(self, event: Input.Changed) -> None:
         self.query_one(TopicsList).text = event.value
 
-    @on(Input.Submitted, "#topics-filter")
-    def _submitted(self) -> None:
-        self.query_one(TopicsList).focus()
+    def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
+        """``/`` opens the filter, and is text in it; ``esc`` and ``enter`` leave it (elsewhere: theirs)."""
+        if action == "filter":
+            return not isinstance(self.focused, FilterInput)
+        if action == "table":
+            return isinstance(self.focused, FilterInput)
+        return True
 
-    def key_escape(self) -> None:
-        self.query_one(TopicsList).focus()
+    def action_table(self) -> None:
+        self.query_one(FilterInput).close()
+        self.set_focus(self.query_one(TopicsList))  # now: the keys queued behind this one are the table's
+
+    @on(events.DescendantFocus)
+    def _focused(self, event: events.DescendantFocus) -> None:
+        if not isinstance(event.widget, FilterInput):  # a click on the table: the filter closes too
+            self.query_one(FilterInput).close()
 
     def action_filter(self) -> None:
-        self.query_one("#topics-filter", Input).focus()
+        self.query_one(FilterInput).open()
 
     def action_sort(self) -> None:
         self.sort = SORT_ORDER[(SORT_ORDER.index(self.sort) + 1) % len(SORT_ORDER)]
