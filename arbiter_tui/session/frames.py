@@ -169,6 +169,7 @@ class FrameSampler:
         self._count_at = float("-inf")
         self._topics: TopicsState | None = None  # the last topics answer, for the next slow frame
         self.robot_side: RobotSideView | None = None  # observe mode: the robot-side controller's last answer
+        self.recording: AnalyticsView | None = None  # a file shown instead of the live analytics
         self._sweep_version = -1  # the store version the measured p95 is from
         # holds the sweep's child while the robot drives, where the console has no core to spare
         self.sweep_pause = sweep_pause if sweep_pause is not None else SweepPause(cores_available)
@@ -177,6 +178,11 @@ class FrameSampler:
     def topics_polled(self, state: TopicsState) -> None:
         """A topics answer: shown with the next frame that takes the slow parts."""
         self._topics = state
+
+    def recording_opened(self, view: AnalyticsView | None) -> None:
+        """A recording to show instead of the live session's analytics (None: the live session again);
+        shown with the next frame that takes the analytics part (the shell forces one)."""
+        self.recording = view
 
     def robot_side_polled(self, view: RobotSideView) -> None:
         """The robot-side controller's answer (observe mode): shown with the next frame."""
@@ -241,7 +247,10 @@ class FrameSampler:
             robot = _kept(f.robot, robot_view(s.link, s.loop, s.too_small, observed=observed))
             trail = _kept(f.map, map_view(s.link, s.loop, f.map, observed=observed))
         if ANALYTICS in slow and shown.shows(ANALYTICS):
-            analytics = analytics_view(s.store, f.analytics, s.loop)
+            if self.recording is not None:  # a file instead of the live session: as it was read
+                analytics = _kept(f.analytics, self.recording)
+            else:  # (after a file, from scratch: nothing of the file's view is the live one's)
+                analytics = analytics_view(s.store, None if f.analytics.source else f.analytics, s.loop)
             sweep = self._measured_p95(sweep)
             if sweep.paused != (self.sweep_pause.paused and sweep.state == RUNNING):
                 sweep = replace(sweep, paused=not sweep.paused)
@@ -274,9 +283,10 @@ class FrameSampler:
         s = self.session
         simulated = self.settings.mode == SIM
         observing = self.settings.observe_label if self.settings.observe else None
+        shown_file = None if self.recording is None else self.recording.source
         return status_view(
             s.link, self.target(), s.loop, s.store, self.tracker_view(), simulated, self.start_error,
-            observing=observing,
+            observing=observing, recording=shown_file,
         )  # fmt: skip
 
     def _status(self, shown: StatusView, now: float, slow: bool, force: bool) -> StatusView:

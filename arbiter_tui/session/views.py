@@ -142,6 +142,7 @@ class StatusView:
     error: str | None = None  # why the console could not start its link, or why the link is down
     warning: str | None = None  # e.g. "no odometry on /robot1/odom"
     observing: str | None = None  # observe mode: the observed controller's label
+    recording: str | None = None  # the analytics show a file, not the live session
 
     @property
     def alarm(self) -> bool:
@@ -156,6 +157,8 @@ class StatusView:
         if self.observing:  # the mode is never left out: keys do not do here what they do elsewhere
             parts.append(Part(((f"OBSERVING {self.observing}", ALARM),)))
         parts.append(Part.of(self.target, TARGET))
+        if self.recording:  # the figures on screen are a file's: never taken for the live robot's
+            parts.append(Part((("FILE " + self.recording, RECORDING), ("FILE", ALARM))))
         if self.error:
             parts.append(Part.of(self.error, ALARM))
         if self.deploy:
@@ -257,6 +260,8 @@ class AnalyticsView:
     plotted_from: int = field(default=-1, compare=False)  # the store version the plots show
     waypoints: tuple[tuple[float, float], ...] = ()
     goal: tuple[float, float] | None = None
+    source: str = ""  # a recording shown instead of the live session: what it is ("" = live)
+    notes: tuple[str, ...] = ()  # what the recording's figures cannot vouch for
 
     @property
     def dropped_runs(self) -> tuple[RunSummary, ...]:
@@ -306,6 +311,7 @@ def status_view(
     error: str | None = None,
     now: float | None = None,
     observing: str | None = None,
+    recording: str | None = None,
 ) -> StatusView:
     api = deploy = None
     if not simulated and tracker is not None:
@@ -325,6 +331,7 @@ def status_view(
         error=error or getattr(link, "error", None),
         warning=odometry_warning(link, time.monotonic() if now is None else now),
         observing=observing,
+        recording=recording,
     )
 
 

@@ -48,6 +48,8 @@ from .messages import (
     FrameDue,
     GoalPicked,
     LinkSweepFailed,
+    RecordingFailed,
+    RecordingOpened,
     RunFinished,
     StopReported,
 )
@@ -331,6 +333,18 @@ class ArbiterApp(RegistryTheme):
     @on(LinkSweepFailed)
     def _link_sweep_failed(self, event: LinkSweepFailed) -> None:
         self.notify(f"latency sweep failed: {event.error}", severity="warning", timeout=8)
+
+    @on(RecordingOpened)
+    def _recording_opened(self, event: RecordingOpened) -> None:
+        self.sampler.recording_opened(event.view)
+        self.refresh_frame(force=True)
+        if event.view is not None:
+            text = f"showing {event.view.source}: escape on screen 2 for the live session"
+            self.notify(text, timeout=5, markup=False)
+
+    @on(RecordingFailed)
+    def _recording_failed(self, event: RecordingFailed) -> None:
+        self.notify(f"cannot open {event.path}: {event.error}", severity="error", timeout=10, markup=False)
 
     @on(StopReported)
     def _stop_reported(self, event: StopReported) -> None:

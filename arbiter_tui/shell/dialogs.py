@@ -54,3 +54,16 @@ def export(app: App[object], console: Console, *formats: str) -> list[ExportResu
             text = f"EXPORT FAILED ({r.fmt}): {r.error} — collected data kept"
             app.notify(text, severity="error", timeout=8, markup=False)
     return results
+
+
+def open_recording(app: App[object]) -> None:
+    """Open a recording on the analytics screen (``recording.py``)."""
+    from . import recording
+
+    recording.ask(app)
+
+
+def live_again(app: App[object]) -> None:
+    from . import recording
+
+    recording.close(app)

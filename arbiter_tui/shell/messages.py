@@ -15,6 +15,7 @@ from ..control.stop import StopReport
 from ..latency.tracker_client import TrackerClient
 from ..link.base import Link
 from ..session.frames import FrameClock
+from ..session.views import AnalyticsView
 
 
 class BackendStarted(Message):
@@ -76,3 +77,21 @@ class StopReported(Message):
     def __init__(self, report: StopReport) -> None:
         super().__init__()
         self.report = report
+
+
+class RecordingOpened(Message):
+    """A recording or an export was read and graded (``session/recording.py``): the analytics show it
+    (None: the user asked for the live session again)."""
+
+    def __init__(self, view: AnalyticsView | None) -> None:
+        super().__init__()
+        self.view = view
+
+
+class RecordingFailed(Message):
+    """A file the user asked to open could not be read: one line saying why."""
+
+    def __init__(self, path: str, error: str) -> None:
+        super().__init__()
+        self.path = path
+        self.error = error

@@ -58,6 +58,14 @@ def commands(app: App[object], console: Console, switch: Callable[[str], None]) 
         "Start/pause collection", "Toggle analytics collection", then_show(session.toggle_collection)
     )
     yield SystemCommand("Clear collected data", "Asks first", lambda: dialogs.ask_clear(app, console))
+    yield SystemCommand(
+        "Open a recording…", "A ros2 bag or an export, graded as `stats` grades it (f on screen 2)",
+        lambda: dialogs.open_recording(app),
+    )  # fmt: skip
+    yield SystemCommand(
+        "Back to the live session", "Leave the recording shown on screen 2 (escape there)",
+        lambda: dialogs.live_again(app),
+    )  # fmt: skip
     for fmt in FORMATS:
         yield SystemCommand(
             f"Export {fmt.upper()}",

@@ -1,7 +1,8 @@
 """Analytics screen: the seed's nine stats, the ranked comparison (per algorithm or per run), the
 ring-buffer warning, and plots of the trajectory and the distance error over time.
 
-None of its keys is a teleop letter: clearing asks first, exporting opens a chooser.
+None of its keys is a teleop letter: clearing asks first, exporting opens a chooser. ``f`` opens a
+recording (a ros2 bag or an export) shown instead of the live session, marked as a file, until ``escape``.
 """
 
 from __future__ import annotations
@@ -166,8 +167,35 @@ class RingWarning(Bound[AnalyticsView]):
         parts = ", ".join(
             f"run {r.id} {'all' if r.in_ring == 0 else r.dropped} of {r.stats.sampleCount}" for r in dropped
         )
+        if self.view.source:  # a file: its ring had dropped them when it was written
+            why = "" if self.short else " Rows count every sample recorded; cards and plots the file's."
+            return Text(f"⚠ the file lacks samples of: {parts}.{why}", no_wrap=False)
         why = "" if self.short else " Rows still count every sample; cards and plots show only the ring."
         return Text(f"⚠ ring buffer ({self.view.ring} points) dropped: {parts}.{why}", no_wrap=False)
+
+
+class FileBanner(Bound[AnalyticsView]):
+    """A recording is shown, not the live session: what file, as what it was graded, and how back."""
+
+    DEFAULT_CSS = "FileBanner { height: auto; padding: 0 1; background: $accent 30%; text-style: bold; }"
+    view: reactive[AnalyticsView] = reactive(AnalyticsView)
+
+    def pick(self, frame: Frame) -> AnalyticsView:
+        return frame.analytics
+
+    def watch_view(self, view: AnalyticsView) -> None:
+        self.display = bool(view.source)
+
+    def draw(self) -> Text:
+        v = self.view
+        if not v.source:
+            return Text()
+        runs = f"{len(v.runs)} run{'s' if len(v.runs) != 1 else ''}"
+        text = Text(f"FILE {v.source}: {v.points} samples, {runs}, graded as `arbiter-tui stats` grades "
+                    "it · esc: the live session", no_wrap=False)  # fmt: skip
+        for note in v.notes:
+            text.append(f"\nnote: {note}", style="not bold")
+        return text
 
 
 class EmptyState(Bound[AnalyticsView]):
@@ -217,9 +245,12 @@ class AnalyticsScreen(BaseScreen):
         Binding("s", "cycle_sort", "Sort", show=False),  # in ? help; clicking a header sorts too
         Binding("ctrl+s", "export", "Export"),
         Binding("delete", "clear", "Clear", show=False),  # in ? help and the palette (asks first)
+        Binding("f", "open_file", "File", show=False),  # in ? help, the README and the palette
+        Binding("escape", "live", "Live", tooltip="Back to the live session"),
     ]
 
     def compose_body(self) -> ComposeResult:
+        yield FileBanner(id="file-banner").data_bind(BaseScreen.frame)
         yield StatsCards(id="cards").data_bind(BaseScreen.frame)
         yield EmptyState(id="empty").data_bind(BaseScreen.frame)
         yield RingWarning(id="ring-warning").data_bind(BaseScreen.frame)
@@ -254,6 +285,22 @@ class AnalyticsScreen(BaseScreen):
 
     def action_clear(self) -> None:
         dialogs.ask_clear(self.app, self.console)
+
+    def action_open_file(self) -> None:
+        dialogs.open_recording(self.app)
+
+    def action_live(self) -> None:
+        dialogs.live_again(self.app)
+
+    def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
+        """``escape`` is offered only while a file is shown."""
+        if action == "live":
+            return bool(self.frame.analytics.source)
+        return True
+
+    def watch_frame(self, old: Frame, new: Frame) -> None:
+        if bool(old.analytics.source) != bool(new.analytics.source):
+            self.refresh_bindings()  # the footer offers esc only while a file is shown
 
     def action_export(self) -> None:
         from .export import ExportChooser

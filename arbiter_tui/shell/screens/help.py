@@ -28,12 +28,11 @@ HELP = f"""[b]arbiter-tui[/b] — teleop console, analytics and latency monitor
   Focus loss or a too-small window stops the robot.
   At 160x45 and more this screen is the dashboard.
 
-[b]Analytics[/b]  r record/pause  v per algorithm / per run
-  s sort (or click a header)  ctrl+s export  delete clear (asks)
-  arrows scroll; ranked per mission, overall over missions that
-  every algorithm completed
+[b]Analytics[/b]  r record/pause  v per algorithm / per run  s sort
+  ctrl+s export  delete clear (asks)  f open a recording (esc: live)
+  ranked per mission, overall over missions every algorithm completed
 
-[b]Latency[/b]  polls GET /api/latency at 2 Hz; one-way = receive - stamp
+[b]Latency[/b]  GET /api/latency at 2 Hz; one-way = receive - stamp
 
 [b]Topics[/b]  / filter (esc, enter: back)  s sort (name, rate, bandwidth,
   delay, age)  r reverse (flip)  the header marks the sorted column ▼ ▲
