@@ -13,6 +13,7 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from enum import Enum
 from typing import Any, Protocol, runtime_checkable
 
 from arbiter_core.kinematics import Pose, odometry_jumped, pose_of_odometry
@@ -20,12 +21,25 @@ from arbiter_core.record import LatencyRecord, RecordError
 
 from ..latency.clocksync import LatencyMeter
 
-STARTING = "STARTING"  # the console is up; its link (and the embedded backend) are being started
-CONNECTING = "CONNECTING"
-CONNECTED = "CONNECTED"
-RECONNECTING = "RECONNECTING"
-DISCONNECTED = "DISCONNECTED"
-SIMULATED = "SIMULATED"
+
+class LinkState(str, Enum):
+    """Where a link is (the status line shows its value)."""
+
+    STARTING = "STARTING"  # the console is up; its link (and the embedded backend) are being started
+    CONNECTING = "CONNECTING"
+    CONNECTED = "CONNECTED"
+    RECONNECTING = "RECONNECTING"
+    DISCONNECTED = "DISCONNECTED"
+    SIMULATED = "SIMULATED"  # client-side simulation: no network
+    CLOSED = "CLOSED"  # closed on purpose (the console is leaving)
+
+    def __str__(self) -> str:
+        return self.value
+
+
+STARTING, CONNECTING, CONNECTED = LinkState.STARTING, LinkState.CONNECTING, LinkState.CONNECTED
+RECONNECTING, DISCONNECTED, SIMULATED = LinkState.RECONNECTING, LinkState.DISCONNECTED, LinkState.SIMULATED
+CLOSED = LinkState.CLOSED
 ODOM_SILENCE_S = 2.0  # connected this long without odometry: said on screen
 ODOM_STALE_S = 0.5  # odometry older than this (the link up) is not sampled: the record has a gap instead
 
@@ -111,6 +125,9 @@ class Telemetry:
 
 
 class Link(Protocol):
+    """What every link does: its state, one command out, its telemetry in, closing. What some links do
+    beyond that is a protocol of its own below, checked with ``isinstance`` (never probed by name)."""
+
     telemetry: Telemetry
 
     @property
@@ -119,6 +136,44 @@ class Link(Protocol):
     def send(self, v: float, w: float) -> bool: ...
 
     def close(self) -> None: ...
+
+
+@runtime_checkable
+class Observes(Protocol):
+    """A link that can feed an observer from the robot's own topics (observe mode)."""
+
+    def observe(
+        self, observer: Any, cmd: str, cmd_stamped: bool, plan: str, goal: str, status: str | None = None
+    ) -> Callable[[], None]: ...
+
+
+@runtime_checkable
+class Echoes(Protocol):
+    """A link that can echo any topic (the topics screen)."""
+
+    def echo(
+        self, topic: str, type_name: str, callback: Callable[[dict[str, Any]], None]
+    ) -> Callable[[], None]: ...
+
+
+@runtime_checkable
+class Explains(Protocol):
+    """A link that says why it is down, and why odometry does not come, in words."""
+
+    topic_odom: str
+
+    @property
+    def error(self) -> str | None: ...
+
+    @property
+    def odometry_problem(self) -> str | None: ...
+
+
+@runtime_checkable
+class Stepped(Protocol):
+    """A link whose robot is simulated in this process: stepped on the session's clock (50 Hz)."""
+
+    def step(self) -> None: ...
 
 
 ServiceDone = Callable[[bool, Any], None]  # (answered with a result, its values or the error text)

@@ -16,7 +16,7 @@ from arbiter_core import failures as errors
 
 from ..analytics.observe import Observer
 from . import wsframe
-from .base import CONNECTED, CONNECTING, DISCONNECTED, RECONNECTING, Telemetry
+from .base import CLOSED, CONNECTED, CONNECTING, DISCONNECTED, RECONNECTING, Telemetry
 from .observed import (
     TYPE_GOAL_STATUS_ARRAY,
     TYPE_PATH,
@@ -142,7 +142,7 @@ class RosLink:
 
         def failed(connector: Any, reason: Any) -> None:  # refused or unreachable: no "close" event
             with self._lock:
-                if self._state != "CLOSED":
+                if self._state != CLOSED:
                     self._state = DISCONNECTED
             value = getattr(reason, "value", reason)
             self._set_error(errors.connect_failure(type(value).__name__, str(value)))
@@ -254,7 +254,7 @@ class RosLink:
 
     def _on_close(self, *args: Any) -> None:
         with self._lock:
-            if self._state != "CLOSED":
+            if self._state != CLOSED:
                 self._state = DISCONNECTED
         # whatever comes back may be another robot's life (a backend restarted: its odometry at the
         # origin again): missions and the record's path never cross it
@@ -424,7 +424,7 @@ class RosLink:
 
     def close(self) -> None:
         with self._lock:
-            self._state = "CLOSED"
+            self._state = CLOSED
         try:
             # a link that is down would otherwise go on reconnecting for the life of the process
             self._reactor.callFromThread(self.ros.factory.stopTrying)

@@ -10,7 +10,7 @@ from collections.abc import Callable
 from arbiter_core.topicstats import TopicFigures
 
 from ..latency.topics_table import echo_refusal, echo_text
-from ..link.base import Link
+from ..link.base import Echoes, Link
 
 WAITING = "waiting for a message ..."
 
@@ -38,8 +38,8 @@ class TopicEcho:
         if figures is None:
             return
         name = figures.name
-        echo = getattr(link, "echo", None)
-        refusal = echo_refusal(figures) or (None if echo is not None else "not echoed: no rosbridge link")
+        echoes = isinstance(link, Echoes)
+        refusal = echo_refusal(figures) or (None if echoes else "not echoed: no rosbridge link")
         if refusal is not None:
             self._current = (name, refusal)
             return
@@ -54,4 +54,5 @@ class TopicEcho:
                 if self._current is shown:
                     self._current = shown = (name, text)
 
-        self._cancel = echo(name, figures.type, received)
+        assert isinstance(link, Echoes)  # (refused above otherwise)
+        self._cancel = link.echo(name, figures.type, received)

@@ -37,8 +37,7 @@ from ..control.loop import ControlLoop
 from ..control.stop import StopReport, StopScope, stop_scope
 from ..control.teleop import MOVE_KEYS, SCALE_KEYS, STOP_KEYS, Teleop
 from ..latency.autonomy import AutonomyUnavailable, RobotSideView
-from ..link.base import DISCONNECTED, RECONNECTING, STARTING, Link
-from ..link.sim import SimLink
+from ..link.base import DISCONNECTED, RECONNECTING, STARTING, Link, Observes, Stepped
 from .echo import TopicEcho
 from .remote_stop import RemoteStop
 from .schedule import Jobs, Schedule
@@ -158,13 +157,12 @@ class RobotSession:
             self._observed_life, self._observed_telemetry = life, self.link.telemetry
 
     def _observe(self, link: Link) -> None:
-        observe = getattr(link, "observe", None)
-        if self.observer is None or observe is None:
+        if self.observer is None or not isinstance(link, Observes):
             return
         if self._unobserve is not None:
             self._unobserve()
         c = self.config
-        self._unobserve = observe(
+        self._unobserve = link.observe(
             self.observer, c.cmd_topic, c.cmd_stamped, c.plan_topic, c.goal_topic, c.status_topic
         )
 
@@ -214,7 +212,7 @@ class RobotSession:
 
     def step_link(self) -> None:
         link = self.link
-        if isinstance(link, SimLink):
+        if isinstance(link, Stepped):
             with self.lock:
                 link.step()
 

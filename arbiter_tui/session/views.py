@@ -28,7 +28,7 @@ from ..control.stop import StopScope
 from ..latency.autonomy import RobotSideView
 from ..latency.clocksync import MeterSummary
 from ..latency.tracker_client import LatencyView
-from ..link.base import CONNECTED, DISCONNECTED, RECONNECTING, STARTING, Link
+from ..link.base import CONNECTED, DISCONNECTED, RECONNECTING, STARTING, Explains, Link
 
 # -- the status line: parts by priority, fitted to a width ---------------------------------------------
 SEP = " · "
@@ -328,7 +328,7 @@ def status_view(
         collecting=store.is_collecting,
         points=len(store),
         api=api,
-        error=error or getattr(link, "error", None),
+        error=error or (link.error if isinstance(link, Explains) else None),
         warning=odometry_warning(link, time.monotonic() if now is None else now),
         observing=observing,
         recording=recording,
@@ -339,8 +339,9 @@ def odometry_warning(link: Link, now: float) -> str | None:
     """``no odometry on TOPIC`` while the link is up and odometry has not come for a while, with the
     cause when the server named one (e.g. the topic has another type)."""
     if link.state == CONNECTED and link.telemetry.odometry_missing(now):
-        cause = getattr(link, "odometry_problem", None)
-        return f"no odometry on {getattr(link, 'topic_odom', '/odom')}" + (f": {cause}" if cause else "")
+        explains = isinstance(link, Explains)
+        cause, topic = (link.odometry_problem, link.topic_odom) if explains else (None, "/odom")
+        return f"no odometry on {topic}" + (f": {cause}" if cause else "")
     return None
 
 
