@@ -30,9 +30,32 @@ RECENT = 50  # records kept for the table
 SYNC_EVERY = 20  # polls between reads of both hosts' time sync (/api/health's time_sync, our own)
 
 
+@dataclass(frozen=True, slots=True)
+class TrackerAnswer:
+    """What the tracker last said, by value: each poll hands one to whoever shows it (the frame sampler),
+    so nothing on the screen reads the poller's own state while it changes."""
+
+    reachable: bool | None = None  # None: not polled yet
+    error: str | None = None
+    stats: Summary | None = None
+    stats_error: str | None = None
+    records: tuple[LatencyRecord, ...] = ()  # oldest first
+    deploy_mode: str = "?"
+    window: tuple[float, ...] = ()
+    window_t: tuple[float, ...] = ()  # receive times, epoch s
+    failures: int = 0
+    stale: int = 0
+    rejected: int = 0
+    max_command_age_ms: float | None = None
+    version: int = 0
+    robot_sync: TimeSync | None = None
+    local_sync: TimeSync | None = None
+
+
 @dataclass
 class LatencyView:
-    """What the latency screen shows: the last good answer, or why there is none."""
+    """The poller's running state: the last good answer, or why there is none, and where the next poll
+    starts. Handed on as a :class:`TrackerAnswer` (``answer``)."""
 
     reachable: bool | None = None  # None: not polled yet
     error: str | None = None
@@ -54,6 +77,15 @@ class LatencyView:
     robot_sync: TimeSync | None = None  # the tracker host's clock sync (/api/health); None: not said
     local_sync: TimeSync | None = None  # this console's host
     _last_timestamp: float | None = None  # without rx_seq: the newest record taken in
+
+    def answer(self) -> TrackerAnswer:
+        return TrackerAnswer(
+            reachable=self.reachable, error=self.error, stats=self.stats, stats_error=self.stats_error,
+            records=tuple(self.records), deploy_mode=self.deploy_mode, window=tuple(self.window),
+            window_t=tuple(self.window_t), failures=self.failures, stale=self.stale, rejected=self.rejected,
+            max_command_age_ms=self.max_command_age_ms, version=self.version, robot_sync=self.robot_sync,
+            local_sync=self.local_sync,
+        )  # fmt: skip
 
     def params(self, limit: int) -> dict[str, int]:
         """The query for the next poll."""
@@ -162,7 +194,7 @@ class TrackerClient:
         self._client: httpx.AsyncClient = httpx.AsyncClient(timeout=timeout, headers=headers, verify=verify)
         self.host_clock = HostClock()
 
-    async def poll(self) -> LatencyView:
+    async def poll(self) -> TrackerAnswer:
         import httpx
 
         self.view.polls += 1
@@ -180,7 +212,7 @@ class TrackerClient:
             self.view.fail(f"bad response: {exc}")
         if self.view.reachable and self.view.polls % SYNC_EVERY == 1:
             await self.poll_time_sync()
-        return self.view
+        return self.view.answer()
 
     async def poll_time_sync(self) -> None:
         """Both hosts' clock sync: the tracker's from ``/api/health`` (an older backend says nothing),

@@ -19,7 +19,7 @@ from typing import TypeVar
 
 from ..analytics.linkcurve import RUNNING, LinkSweepView, measured_p95
 from ..latency.topics_client import NO_BACKEND, TopicsState
-from ..latency.tracker_client import LatencyView, TrackerClient
+from ..latency.tracker_client import TrackerAnswer, TrackerClient
 from ..link.base import STARTING
 from .cpu_share import cores_available
 from .link_sweep import SweepPause
@@ -170,6 +170,7 @@ class FrameSampler:
         self._topics: TopicsState | None = None  # the last topics answer, for the next slow frame
         self.robot_side: RobotSideView | None = None  # observe mode: the robot-side controller's last answer
         self.recording: AnalyticsView | None = None  # a file shown instead of the live analytics
+        self._tracker_answer = TrackerAnswer()  # the tracker's last answer, as its poller handed it on
         self._sweep_version = -1  # the store version the measured p95 is from
         # holds the sweep's child while the robot drives, where the console has no core to spare
         self.sweep_pause = sweep_pause if sweep_pause is not None else SweepPause(cores_available)
@@ -269,9 +270,15 @@ class FrameSampler:
             self.frame = Frame(*parts)
         return self.frame  # nothing changed: the same frame, which the shell then does not hand on
 
-    def tracker_view(self) -> LatencyView | None:
+    def latency_polled(self, answer: TrackerAnswer) -> None:
+        """The tracker's poller brought an answer: shown with the next frame that takes it."""
+        self._tracker_answer = answer
+
+    def tracker_view(self) -> TrackerAnswer | None:
         """What the tracker's poller last brought (None: simulated, or no tracker)."""
-        return None if self.settings.mode == SIM or self.tracker is None else self.tracker.view
+        if self.settings.mode == SIM or self.tracker is None:
+            return None
+        return self._tracker_answer
 
     def latency(self) -> LatencySnapshot:
         st = self.settings

@@ -27,7 +27,7 @@ from ..control.loop import ControlLoop
 from ..control.stop import StopScope
 from ..latency.autonomy import RobotSideView
 from ..latency.clocksync import MeterSummary
-from ..latency.tracker_client import LatencyView
+from ..latency.tracker_client import TrackerAnswer
 from ..link.base import CONNECTED, DISCONNECTED, RECONNECTING, STARTING, Explains, Link
 
 # -- the status line: parts by priority, fitted to a width ---------------------------------------------
@@ -306,7 +306,7 @@ def status_view(
     target: str,
     loop: ControlLoop,
     store: AnalyticsStore,
-    tracker: LatencyView | None,
+    tracker: TrackerAnswer | None,
     simulated: bool,
     error: str | None = None,
     now: float | None = None,
@@ -535,7 +535,7 @@ def analytics_view(
 
 
 def latency_snapshot(
-    view: LatencyView | None, link: Link, offset_warn_ms: float, simulated: bool, url: str = ""
+    view: TrackerAnswer | None, link: Link, offset_warn_ms: float, simulated: bool, url: str = ""
 ) -> LatencySnapshot:
     state = link.state
     if simulated or view is None:
@@ -559,8 +559,8 @@ def latency_snapshot(
         stale=view.stale,
         rejected=view.rejected,
         max_command_age_ms=view.max_command_age_ms,
-        window=tuple(view.window),
-        window_t=tuple(view.window_t),
+        window=view.window,
+        window_t=view.window_t,
         records=tuple(reversed(view.records))[:30],
         link_state=state,
         link_down=state in (DISCONNECTED, RECONNECTING),

@@ -188,7 +188,8 @@ class ArbiterApp(RegistryTheme):
         if tracker is None or not s.live:
             return
         period = lambda: s.poll_period if _shown(self).shows(LATENCY) else s.idle_poll_period  # noqa: E731
-        self.run_worker(poll_forever(tracker.poll, period, lambda _: None), group="poll", exclusive=True)
+        latency = poll_forever(tracker.poll, period, self.sampler.latency_polled)  # by value: the sampler's
+        self.run_worker(latency, group="poll", exclusive=True)
         shown = lambda: _shown(self).shows(TOPICS)  # noqa: E731
         topics = poll_forever(TopicsPoller(tracker).poll, TOPICS_PERIOD_S, self.sampler.topics_polled, shown)
         self.run_worker(topics, group="topics", exclusive=True)

@@ -12,7 +12,7 @@ from arbiter_core import envelope
 from arbiter_tui.latency.tracker_client import TrackerClient
 
 from ..support.backend import free_port, start_backend
-from ..support.tui import still_app
+from ..support.tui import still_app, tracker_said
 
 
 async def test_unreachable_then_recovered_then_down_again():
@@ -64,6 +64,7 @@ async def test_stale_and_rejected_commands_are_shown_on_the_latency_screen():
         body = httpx.get(f"{b.api}/api/latency").json()
         app = still_app()
         app.tracker.view.apply(body)
+        tracker_said(app)
         async with app.run_test(size=(100, 30)) as pilot:
             await pilot.press("3")
             await pilot.pause(0.1)

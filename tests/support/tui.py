@@ -124,6 +124,8 @@ def still_app(tmp_path=None, link=None, store=None, tracker_view=True, mode="emb
             )
     clock = FakeClock()
     app = make_app(settings, link, tracker, store=store, clock=clock)
+    if tracker is not None:
+        app.sampler.latency_polled(tracker.view.answer())  # as the poller hands it on
     app.fake_clock = clock
     for _ in range(30):
         app.session.loop.trail.add(0.05 * _, 0.01 * _ * _ / 10)
@@ -171,3 +173,8 @@ def burst(app, *keys: str) -> None:
     thread = threading.Thread(target=deliver)
     thread.start()
     thread.join()
+
+
+def tracker_said(app) -> None:
+    """The tracker view a test changed, handed to the screens as the poller hands its answers on."""
+    app.sampler.latency_polled(app.tracker.view.answer())

@@ -6,7 +6,7 @@ import pytest
 
 from arbiter_tui.link.base import RECONNECTING
 
-from ..support.tui import RecordingLink, seeded_store, show_frame, still_app
+from ..support.tui import RecordingLink, seeded_store, show_frame, still_app, tracker_said
 
 SIZES = [(100, 30), (80, 24)]
 
@@ -22,6 +22,7 @@ def test_screen(snap_compare, size, keys):
 def test_latency_screen_when_tracker_unreachable(snap_compare):
     app = still_app(tracker_view=False)
     app.tracker.view.fail("connection refused")
+    tracker_said(app)
     assert snap_compare(app, terminal_size=(100, 30), press=["3"])
 
 

@@ -15,7 +15,7 @@ from arbiter_tui.shell.plots import ErrorPlot, LatencyHistogram, LatencyPlot
 from arbiter_tui.shell.screens.analytics import CompareTable, EmptyState, RingWarning
 from arbiter_tui.shell.widgets import TrackerCards, TrackerLine
 
-from ..support.tui import show_frame, still_app, until
+from ..support.tui import show_frame, still_app, tracker_said, until
 
 # a skewed window: 563 commands near 0.3 ms and a few slow ones (what the issue saw, 12 bins)
 SKEWED = [0.30 + 0.001 * (i % 20) for i in range(563)] + [0.6, 0.6, 0.6, 0.6, 0.6, 0.6, 0.6, 1.4, 1.4, 2.9]
@@ -45,6 +45,7 @@ def tracker_body(latencies, times=None, p95=9.99, count=996):
 def latency_app(latencies, times=None, **kw):
     app = still_app(tracker_view=False)
     app.tracker.view.apply(tracker_body(latencies, times, **kw))
+    tracker_said(app)
     return app
 
 
