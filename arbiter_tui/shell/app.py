@@ -242,9 +242,8 @@ class ArbiterApp(RegistryTheme):
         shown = _shown(self)
         frame = self.sampler.sample(shown, force)
         for screen in stack:
-            if isinstance(screen, BaseScreen) and (frame is not screen.frame or screen.plots_waiting):
-                screen.plot_draws = None if force else 1  # a tick's frame draws at most one plot
-                screen.plots_waiting = False
+            if isinstance(screen, BaseScreen) and (frame is not screen.frame or screen.plot_budget.waiting):
+                screen.plot_budget.renew(None if force else 1)  # a tick's frame draws at most one plot
                 screen.frame = frame  # (the same frame again: only for the plots that waited)
         if shown.shows("analytics"):
             mission = self.sampler.sweep_wanted()

@@ -29,7 +29,6 @@ from ..session.frames import Frame
 from ..session.views import PLOT_PERIOD_S, AnalyticsView, LatencySnapshot, MapView, thin
 from .canvas_rows import changed_rows_only
 from .messages import GoalPicked
-from .screens.base import BaseScreen
 
 V = TypeVar("V")  # the part of the frame a plot shows
 K = TypeVar("K")  # what it draws of it: equal keys, equal drawings
@@ -82,10 +81,33 @@ class DecadeFormatter(AxisFormatter):
         return [f"{10 ** (round(t) - 1):g}" for t in ticks]
 
 
+class PlotBudget:
+    """The plot redraws one frame allows. A plot redraw is the dearest paint, and several in one frame
+    made it longer than a control period under a Pi-class quota; the others draw in the frames after
+    (bench/pi.py). Each screen has one, handed down to its plots (``data_bind``); the app renews it with
+    every frame it hands on; the plots spend it, and say when one of them waits for the next frame."""
+
+    def __init__(self) -> None:
+        self.left: int | None = None  # redraws left in this frame (None: any number)
+        self.waiting = False  # a plot put off its redraw: the next frame is handed on even if unchanged
+
+    def renew(self, draws: int | None) -> None:
+        self.left, self.waiting = draws, False
+
+    def take(self) -> bool:
+        """One of this frame's redraws, if one is left."""
+        if self.left is None:
+            return True
+        if self.left <= 0:
+            return False
+        self.left -= 1
+        return True
+
+
 class Plot(PlotWidget, Generic[V, K], can_focus=False):
     """A PlotWidget that shows one part of the frame (``pick``), redrawn only when what it draws changed
     (``data_key``, a value that compares equal exactly when the drawing would be the same). Bind it with
-    ``.data_bind(BaseScreen.frame)``."""
+    ``.data_bind(BaseScreen.frame, BaseScreen.plot_budget)``."""
 
     DEFAULT_CSS = """
     Plot { border: round $primary; height: 1fr; width: 1fr; }
@@ -93,6 +115,7 @@ class Plot(PlotWidget, Generic[V, K], can_focus=False):
     # every frame (equal or not): a change that waits for its follow period is drawn at the first frame
     # after it, in the same paint as the widgets that changed with that frame
     frame: reactive[Frame] = reactive(Frame, repaint=False, always_update=True)
+    plot_budget: reactive[PlotBudget] = reactive(PlotBudget, repaint=False)  # the screen's, handed down
     draws = 0  # tests: how often the data was redrawn
 
     def __init__(self, title: str, **kwargs: Any) -> None:
@@ -119,10 +142,10 @@ class Plot(PlotWidget, Generic[V, K], can_focus=False):
         if key == self._key:
             return  # nothing this plot draws changed
         wait = self.follow_period(self._key, key) - (time.monotonic() - self._drawn_at)
-        if wait > 0 or (budgeted and not self._take_draw()):
+        if wait > 0 or (budgeted and not self.plot_budget.take()):
             # drawn at the first frame after its period, or after the plot that drew in this one, with
             # what is newest then
-            self._waiting()
+            self.plot_budget.waiting = True
             return
         self._key = key
         self._drawn_at = time.monotonic()
@@ -134,20 +157,6 @@ class Plot(PlotWidget, Generic[V, K], can_focus=False):
                 # Draw onto the canvases now rather than in the next paint: textual-plot does it in
                 # render(), during a frame, and the canvases it dirties then take a frame of their own.
                 self.render()
-
-    def _waiting(self) -> None:
-        if isinstance(self.screen, BaseScreen):
-            self.screen.plots_waiting = True
-
-    def _take_draw(self) -> bool:
-        """One of the plot redraws this frame allows (the screen's ``plot_draws``), if one is left."""
-        screen = self.screen
-        if not isinstance(screen, BaseScreen) or screen.plot_draws is None:
-            return True
-        if screen.plot_draws <= 0:
-            return False
-        screen.plot_draws -= 1
-        return True
 
     def follow_period(self, old: K | None, new: K) -> float:
         """How long after the last draw a change from ``old`` to ``new`` may wait (0: draw at once)."""

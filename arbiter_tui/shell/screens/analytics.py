@@ -25,7 +25,7 @@ from ...session.views import AnalyticsView
 from .. import dialogs
 from ..plots import ErrorPlot, LinkPlot, TrajectoryPlot
 from ..widgets import Bound, StatsCards
-from .base import BaseScreen
+from .base import PLOTTED, BaseScreen
 
 LINK_PLOT_WIDTH = 120  # the error-vs-latency plot from this width on
 # The full view where every column fits the width the table has (its columns, their widest cell), else
@@ -257,9 +257,9 @@ class AnalyticsScreen(BaseScreen):
         yield CompareTable(id="compare", show_cursor=False, zebra_stripes=True).data_bind(BaseScreen.frame)
         yield RuleLine(id="rule").data_bind(BaseScreen.frame)
         with Horizontal(id="plots"):
-            yield TrajectoryPlot("trajectory (m)", id="traj").data_bind(BaseScreen.frame)
-            yield ErrorPlot("e_d (m) vs time (s)", id="err-plot").data_bind(BaseScreen.frame)
-            yield LinkPlot("avg e_xt (m) vs latency (ms)", id="link-plot").data_bind(BaseScreen.frame)
+            yield TrajectoryPlot("trajectory (m)", id="traj").data_bind(*PLOTTED)
+            yield ErrorPlot("e_d (m) vs time (s)", id="err-plot").data_bind(*PLOTTED)
+            yield LinkPlot("avg e_xt (m) vs latency (ms)", id="link-plot").data_bind(*PLOTTED)
         yield LinkLine(id="link-line").data_bind(BaseScreen.frame)
 
     def _check_size(self, size: Size) -> None:

@@ -22,6 +22,7 @@ from ...session.robot import RobotSession
 from ...session.views import observe_banner
 from ..heap import freeze_heap
 from ..keys import KeyRouter
+from ..plots import PlotBudget
 from ..widgets import StatusLine
 
 
@@ -57,11 +58,8 @@ class BaseScreen(Screen[None]):
     frame: reactive[Frame] = reactive(Frame, repaint=False, always_update=True)
     _console: Console | None = None
     _frozen = False  # its widgets, made on its first showing, are out of the collector's way
-    # plots this frame may still redraw (None: all): a plot redraw is the dearest paint, and several in
-    # one frame made it longer than a control period under a Pi-class quota; the others draw in the
-    # frames after (bench/pi.py)
-    plot_draws: int | None = None
-    plots_waiting = False  # a plot put off its redraw: the next frame is handed on even if unchanged
+    # the plot redraws each frame allows, handed down to its plots (data_bind), renewed by the app
+    plot_budget: reactive[PlotBudget] = reactive(PlotBudget, repaint=False)
 
     @property
     def console(self) -> Console:
@@ -116,3 +114,7 @@ class BaseScreen(Screen[None]):
         if small != session.too_small:
             session.set_too_small(small)
             self.console.refresh_frame()
+
+
+# what every plot binds: the frame it shows and the screen's plot budget it spends
+PLOTTED = (BaseScreen.frame, BaseScreen.plot_budget)

@@ -19,7 +19,7 @@ from ..heap import freeze_heap
 from ..plots import ErrorPlot, LatencyHistogram, LatencyPlot, LiveMap, TrajectoryPlot
 from ..widgets import FIT, KEY_HELP, ClientLine, RobotPanel, StatsCards, TrackerCards, TrackerLine
 from .analytics import CompareTable, RuleLine
-from .base import BaseScreen
+from .base import PLOTTED, BaseScreen
 from .topics import TopicsPane
 
 DASHBOARD_WIDTH, DASHBOARD_HEIGHT = 160, 45
@@ -45,7 +45,7 @@ class ControlScreen(BaseScreen):
             with Vertical(id="panel"):
                 yield RobotPanel(id="robot").data_bind(BaseScreen.frame)
                 yield Static(KEY_HELP, id="keys")  # painted once: the legend never changes
-            yield LiveMap("map (m)", id="map").data_bind(BaseScreen.frame)
+            yield LiveMap("map (m)", id="map").data_bind(*PLOTTED)
 
     @staticmethod
     def dashboard_panes() -> tuple[TopicsPane, Horizontal]:
@@ -61,8 +61,8 @@ class ControlScreen(BaseScreen):
             table,
             RuleLine(id="dash-rule").data_bind(frame),
             Horizontal(
-                ErrorPlot("e_d (m) vs time (s)", id="dash-err").data_bind(frame),
-                TrajectoryPlot("trajectory (m)", id="dash-traj").data_bind(frame),
+                ErrorPlot("e_d (m) vs time (s)", id="dash-err").data_bind(*PLOTTED),
+                TrajectoryPlot("trajectory (m)", id="dash-traj").data_bind(*PLOTTED),
                 id="dash-compare-plots",
             ),
             id="dash-compare",
@@ -72,8 +72,8 @@ class ControlScreen(BaseScreen):
             TrackerCards(id="dash-lat-cards").data_bind(frame),
             ClientLine(id="dash-lat-client", classes=FIT).data_bind(frame),
             Horizontal(
-                LatencyPlot("one-way (ms) vs time (s)", id="dash-lat-plot").data_bind(frame),
-                LatencyHistogram("one-way (ms) histogram", id="dash-lat-hist").data_bind(frame),
+                LatencyPlot("one-way (ms) vs time (s)", id="dash-lat-plot").data_bind(*PLOTTED),
+                LatencyHistogram("one-way (ms) histogram", id="dash-lat-hist").data_bind(*PLOTTED),
                 id="dash-lat-plots",
             ),
             id="dash-latency",

@@ -12,7 +12,7 @@ from ...session.frames import Frame
 from ...session.views import LatencySnapshot
 from ..plots import LatencyHistogram, LatencyPlot
 from ..widgets import FIT, Bound, ClientLine, TrackerCards, TrackerLine, fmt_ms
-from .base import BaseScreen
+from .base import PLOTTED, BaseScreen
 
 
 class RecordsList(Bound[LatencySnapshot]):
@@ -46,6 +46,6 @@ class LatencyScreen(BaseScreen):
         yield TrackerCards(id="lat-cards").data_bind(BaseScreen.frame)
         yield ClientLine(id="lat-client", classes=FIT).data_bind(BaseScreen.frame)
         with Horizontal(id="lat-plots"):
-            yield LatencyPlot("one-way (ms) vs time (s)", id="lat-plot").data_bind(BaseScreen.frame)
-            yield LatencyHistogram("one-way (ms) histogram", id="lat-hist").data_bind(BaseScreen.frame)
+            yield LatencyPlot("one-way (ms) vs time (s)", id="lat-plot").data_bind(*PLOTTED)
+            yield LatencyHistogram("one-way (ms) histogram", id="lat-hist").data_bind(*PLOTTED)
         yield RecordsList(id="lat-records").data_bind(BaseScreen.frame)

@@ -295,7 +295,7 @@ class TopicsScreen(BaseScreen):
         with Horizontal(id="topics-side"):
             yield TopicDetail(id="topics-detail").data_bind(TopicsScreen.state, TopicsScreen.selected)
             yield RatePlot("rate (Hz) vs time (s)", id="topics-rate").data_bind(
-                BaseScreen.frame, TopicsScreen.selected
+                BaseScreen.frame, BaseScreen.plot_budget, TopicsScreen.selected
             )
 
     def watch_frame(self, frame: Frame) -> None:
