@@ -40,10 +40,7 @@ import asyncio
 import contextlib
 import inspect
 import itertools
-import json
 import logging
-import re
-import socket
 import time
 from collections import deque
 from collections.abc import Callable
@@ -55,10 +52,9 @@ from aiohttp import WSMsgType, web
 from arbiter_core import auth
 from arbiter_core.msgtypes import MessageError, normalize_type
 
-from . import cborenc, jsonframe, pacing, pngtext
-from .bus import Bus
-from .pacing import PACED_BYTES, Pacer
-from .provided import (
+from .. import cborenc, jsonframe, pacing, pngtext
+from ..bus import Bus
+from ..provided import (
     FINAL_STATUSES,
     PROVIDER_TIMEOUT_S,
     STATUS_ABORTED,
@@ -67,26 +63,20 @@ from .provided import (
     ProvidedAction,
     ProvidedService,
 )
-from .topicwatch import TopicFilter
+from ..topicwatch import TopicFilter
+from . import frames, wire
+from .client import CLIENT_QUEUE, LEVELS, Client
+from .exposure import Exposure
+from .frames import DECODER, MAX_FRAME_BYTES, TRANSPORT_MAX_FRAME, BadFrame, dumps
+from .outbox import TOPIC_QUEUE, Fragments, Payload
+from .wire import WS_PING_S
 
 log = logging.getLogger(__name__)
 
-MAX_FRAME_BYTES = 1024 * 1024  # answered with a status error above this
-TRANSPORT_MAX_FRAME = 16 * 1024 * 1024  # aiohttp closes the socket (1009) above this
-CLIENT_QUEUE = 1000  # a client's replies (status, service_response) waiting to be sent
-TOPIC_QUEUE = 1000  # frames of one topic waiting for one client, when the subscription gives no queue_length
-TOPIC_QUEUE_BYTES = 8 * 1024 * 1024  # ...and at most this many bytes of them (at least the newest frame)
-TURN_BYTES = 64 * 1024  # what one topic may send in its turn before the next topic's turn
-WS_PING_S = 5.0  # ping a client silent this long (0/None: never), and again as often while it stays silent
-DEAD_AFTER = 4  # ...and drop it once nothing has come from it for this many ping intervals
-LEVELS = ("info", "warning", "error", "none")
-TOPIC_NAME = re.compile(r"(?:/[A-Za-z_][A-Za-z0-9_]*)+", re.ASCII)  # a fully qualified ROS 2 name
-INTERFACE_TYPE = re.compile(r"([A-Za-z][A-Za-z0-9_]*)/(?:(srv|action)/)?([A-Za-z][A-Za-z0-9_]*)", re.ASCII)
 MAX_THROTTLE_MS = 3_600_000
 MAX_QUEUE_LENGTH = 1_000_000
 SERVICE_TIMEOUT_S = 10.0  # a call_service to a ROS service without a "timeout" field
 MAX_SERVICE_TIMEOUT_S = 600.0
-MAX_CALLS = 256  # service calls and goals one client may have under way at once
 MIN_FRAGMENT = 64  # the smallest fragment_size taken (smaller would be a frame per few characters)
 COMPRESSIONS = (
     "none",
@@ -95,19 +85,7 @@ COMPRESSIONS = (
     "cbor-raw",
 )  # weakest first (ROSBRIDGE_PROTOCOL.md: cbor-raw beats cbor beats png beats none)
 
-
-class BadFrame(ValueError):
-    pass
-
-
-def _reject_constant(token: str) -> Any:
-    raise BadFrame(f"non-finite number {token} is not allowed")
-
-
-_DECODER = json.JSONDecoder(parse_constant=_reject_constant)  # made once: json.loads(kw) makes one per call
-
-
-_dumps = jsonframe.compact
+_dumps = dumps
 
 
 @dataclass
@@ -149,223 +127,6 @@ class _Sub:
         return self.queue_length or TOPIC_QUEUE
 
 
-Payload = str | bytes  # a text (JSON) or binary (CBOR) WebSocket frame
-
-
-class Fragments:
-    """One message going out as rosbridge ``fragment`` frames (``fragment_size``), one frame at a time,
-    so other topics' frames go between them. The parts are shared by every client that gets them."""
-
-    __slots__ = ("next", "parts", "remaining")
-
-    def __init__(self, parts: list[str]) -> None:
-        self.parts = parts
-        self.next = 0
-        self.remaining = sum(len(p) for p in parts)
-
-    def __len__(self) -> int:
-        return self.remaining
-
-
-class Outbox:
-    """The messages of one topic waiting for one client: bounded by count and bytes, oldest dropped
-    (never the newest, nor a message whose first fragments are out already)."""
-
-    def __init__(self, topic: str, limit: int = TOPIC_QUEUE, max_bytes: int = TOPIC_QUEUE_BYTES) -> None:
-        self.topic = topic
-        self.limit = limit
-        self.max_bytes = max_bytes
-        self.frames: deque[Payload | Fragments] = deque()
-        self.bytes = 0
-        self.dropped = 0
-        self.sent = 0
-        self.in_ring = False  # in its client's round-robin of topics with something to send
-
-    def put(self, frame: Payload | Fragments) -> int:
-        """Queue ``frame``; returns how many older messages were dropped to make room."""
-        self.frames.append(frame)
-        self.bytes += len(frame)
-        dropped = 0
-        while True:
-            head = self.frames[0]
-            start = 1 if isinstance(head, Fragments) and head.next > 0 else 0  # under way: it stays
-            waiting = len(self.frames) - start
-            if waiting <= 1 or (waiting <= self.limit and self.bytes <= self.max_bytes):
-                break
-            victim = self.frames[start]
-            del self.frames[start]
-            self.bytes -= len(victim)
-            dropped += 1
-        self.dropped += dropped
-        return dropped
-
-    def take(self) -> Payload:
-        """The next frame to write: a whole message, or the next fragment of one."""
-        head = self.frames[0]
-        if isinstance(head, Fragments):
-            part = head.parts[head.next]
-            head.next += 1
-            head.remaining -= len(part)
-            self.bytes -= len(part)
-            if head.next == len(head.parts):
-                self.frames.popleft()
-                self.sent += 1
-            return part
-        self.frames.popleft()
-        self.bytes -= len(head)
-        self.sent += 1
-        return head
-
-    def clear(self) -> None:
-        self.frames.clear()
-        self.bytes = 0
-
-
-def _next_size(item: Payload | Fragments) -> int:
-    return len(item.parts[item.next]) if isinstance(item, Fragments) else len(item)
-
-
-class Client:
-    _ids = itertools.count(1)
-
-    def __init__(
-        self,
-        ws: web.WebSocketResponse,
-        queue_size: int,
-        remote: str | None = None,
-        paced_wait: float | None = pacing.WAIT_S,
-    ) -> None:
-        self.id = next(self._ids)
-        self.ws = ws
-        self.remote = remote
-        self.out: deque[Payload] = deque(maxlen=queue_size)  # replies: sent before any topic's frames
-        self.boxes: dict[str, Outbox] = {}
-        self.ring: deque[Outbox] = deque()  # the outboxes with something to send, in turn
-        self.wakeup = asyncio.Event()
-        self.replies_dropped = 0
-        self.dropped_by_topic: dict[str, int] = {}  # kept after an unsubscribe, for the final log line
-        self.advertised: dict[str, str] = {}
-        self.subs: dict[str, _Sub] = {}
-        self.level = "error"
-        self.closed = False
-        self.authenticated = True
-        self.kick: tuple[int, str] | None = None  # close with (code, reason) once the queue is sent
-        self.calls: set[asyncio.Task[None]] = set()  # service calls and goals under way
-        self.goals: dict[Any, Callable[[], None]] = {}  # the goals it sent, by its id -> cancel
-        self.last_rx = 0.0  # loop time of the last frame (pong included) received from the client
-        self.pacer = Pacer(paced_wait)  # its big frames, paced below the rate it reads at once it lags
-
-    @property
-    def dropped(self) -> int:
-        return self.replies_dropped + sum(self.dropped_by_topic.values())
-
-    def send(self, frame: Payload) -> None:
-        """A reply (status, service_response): ahead of every topic's frames."""
-        if self.closed:
-            return
-        if len(self.out) == self.out.maxlen:
-            self.replies_dropped += 1
-        self.out.append(frame)
-        self.wakeup.set()
-
-    def outbox(self, topic: str, limit: int = TOPIC_QUEUE) -> Outbox:
-        box = self.boxes.get(topic)
-        if box is None:
-            box = self.boxes[topic] = Outbox(topic, limit)
-        else:
-            box.limit = limit
-        return box
-
-    def drop_outbox(self, topic: str) -> None:
-        box = self.boxes.pop(topic, None)
-        if box is not None:
-            box.clear()
-            if box.in_ring:
-                self.ring.remove(box)
-                box.in_ring = False
-
-    def enqueue(self, topic: str, frame: Payload | Fragments) -> None:
-        """A message of ``topic``: into that topic's outbox, its oldest frame dropped when full."""
-        if self.closed:
-            return
-        box = self.boxes.get(topic) or self.outbox(topic)
-        if len(frame) >= PACED_BYTES:  # only big frames count towards the pace (no clock read otherwise)
-            self.pacer.offered(len(frame), time.monotonic())
-        dropped = box.put(frame)
-        if dropped:
-            before = self.dropped_by_topic.get(topic, 0)
-            self.dropped_by_topic[topic] = before + dropped
-            if before == 0:
-                log.info(
-                    "client %d reads %s slower than it comes: dropping its oldest frames (queue of %d)",
-                    self.id,
-                    topic,
-                    box.limit,
-                )
-        if not box.in_ring:
-            box.in_ring = True
-            self.ring.append(box)
-        self.wakeup.set()
-
-    def next_turn(self, now: float | None = None) -> list[Payload]:
-        """What to write next: the oldest reply, or the next topic's turn (up to ``TURN_BYTES``). With
-        ``now`` (loop time), a topic whose next frame is big waits its turn until the client's pacer
-        allows one (``pacing``); [] then when only such topics have something to send."""
-        if self.out:
-            return [self.out.popleft()]
-        if not self.ring:
-            return []
-        box = self.ring.popleft()
-        if now is not None and now < self.pacer.next_at():
-            for _ in range(len(self.ring) + 1):
-                if _next_size(box.frames[0]) < PACED_BYTES:
-                    break
-                self.ring.append(box)
-                box = self.ring.popleft()
-            else:
-                self.ring.appendleft(box)  # every topic waits for the pacer; the order is unchanged
-                return []
-        frames: list[Payload] = []
-        size = 0
-        while box.frames and (not frames or size + _next_size(box.frames[0]) <= TURN_BYTES):
-            frame = box.take()
-            frames.append(frame)
-            size += len(frame)
-        if box.frames:
-            self.ring.append(box)
-        else:
-            box.in_ring = False
-        return frames
-
-    def stats(self) -> dict[str, Any]:
-        return {
-            "id": self.id,
-            "remote": self.remote,
-            "replies_dropped": self.replies_dropped,
-            # the rate it was measured reading at while it lagged (its big frames paced below it); null:
-            # it never lagged
-            "read_bytes_per_s": None if self.pacer.rate is None else round(self.pacer.rate),
-            "paced": self.pacer.paced,  # its big frames are sent below that rate (it cannot keep up)
-            "topics": {
-                topic: {
-                    "queued": len(box.frames),
-                    "queue_length": box.limit,
-                    "sent": box.sent,
-                    "dropped": self.dropped_by_topic.get(topic, 0),
-                }
-                for topic, box in self.boxes.items()
-            },
-        }
-
-    def status(self, level: str, msg: str, req_id: Any = None) -> None:
-        if self.level == "none" or LEVELS.index(level) < LEVELS.index(self.level):
-            return
-        frame: dict[str, Any] = {"op": "status", "level": level, "msg": msg}
-        if req_id is not None:
-            frame["id"] = req_id
-        self.send(_dumps(frame))
-
-
 class RosbridgeEndpoint:
     def __init__(
         self,
@@ -393,9 +154,7 @@ class RosbridgeEndpoint:
         self._encoded: dict[tuple[str, str], tuple[Any, Payload]] = {}
         self._fragment_ids = itertools.count(1)
         # what a client may reach (rosbridge_server's topics_glob / services_glob); None: everything
-        self.expose_topics = expose_topics
-        self.expose_services = expose_services
-        self.expose_actions = expose_actions  # --actions-glob: goals sent and actions advertised
+        self.exposure = Exposure(expose_topics, expose_services, expose_actions)
         self.services: dict[str, Callable[[Any], dict[str, Any]]] = {
             "/rosapi/topics": self._svc_topics,
             "/rosapi/topic_type": self._svc_topic_type,
@@ -448,17 +207,17 @@ class RosbridgeEndpoint:
         client.authenticated = authenticated
         self.clients.add(client)
         loop = asyncio.get_running_loop()
-        writer = loop.create_task(self._writer(client))
+        writer = loop.create_task(wire.writer(client))
         client.last_rx = loop.time()
         liveness = None
         if self.heartbeat is not None and request.transport is not None:
-            liveness = loop.create_task(self._liveness(client, request.transport, self.heartbeat))
+            liveness = loop.create_task(wire.liveness(client, request.transport, self.heartbeat))
         deadline = None
         if not authenticated:
             deadline = loop.call_later(auth.AUTH_DEADLINE_S, self._auth_timeout, client)
         log.info("client %d connected from %s", client.id, request.remote)
         sock = request.transport.get_extra_info("socket") if request.transport is not None else None
-        limit_unsent(sock)
+        wire.limit_unsent(sock)
         try:
             async for msg in ws:
                 client.last_rx = loop.time()
@@ -486,7 +245,7 @@ class RosbridgeEndpoint:
                     break
                 # After the frame reached the tracker, not before: on loopback the ACK this sends is
                 # processed inline, ~45 µs a command would otherwise wait (bench/latency.py, issue 16).
-                quick_ack(sock)
+                wire.quick_ack(sock)
         finally:
             if deadline is not None:
                 deadline.cancel()
@@ -504,66 +263,6 @@ class RosbridgeEndpoint:
             )
         return ws
 
-    async def _writer(self, client: Client) -> None:
-        ws = client.ws
-        try:
-            clock = time.monotonic  # not loop.time(): uvloop's is per iteration, to the millisecond
-            paced_until: float | None = None
-            while True:
-                if paced_until is None:
-                    await client.wakeup.wait()
-                else:  # only big frames wait, for the pacer: until then, or until something else comes
-                    with contextlib.suppress(asyncio.TimeoutError):
-                        await asyncio.wait_for(client.wakeup.wait(), max(0.0, paced_until - clock()))
-                client.wakeup.clear()
-                while frames := client.next_turn(clock()):
-                    for frame in frames:
-                        # each awaits the socket's drain past aiohttp's writer limit: a client gets
-                        # frames as fast as it reads them, and the other clients never wait for it
-                        started = clock()
-                        if isinstance(frame, str):
-                            await ws.send_str(frame)
-                        else:
-                            await ws.send_bytes(frame)
-                        client.pacer.wrote(len(frame), started, clock())
-                paced_until = client.pacer.next_at() if client.ring else None
-                if client.kick is not None:
-                    code, reason = client.kick
-                    await ws.close(code=code, message=reason.encode("utf-8")[:120])
-                    return
-        except (ConnectionError, RuntimeError, asyncio.CancelledError):
-            pass  # the socket went away (ConnectionError: lost while waiting for it to drain)
-        except Exception:
-            log.exception("writer for client %d failed", client.id)
-
-    async def _liveness(self, client: Client, transport: asyncio.BaseTransport, interval: float) -> None:
-        """Ping ``client`` while it is silent; cut the connection once it has been silent too long."""
-        loop = asyncio.get_running_loop()
-        pings: set[asyncio.Task[None]] = set()
-        try:
-            while not client.closed:
-                idle = loop.time() - client.last_rx
-                if idle >= interval * DEAD_AFTER:
-                    log.info("client %d: nothing received for %.1f s; dropping it", client.id, idle)
-                    transport.abort()  # no close handshake: the link is presumed dead
-                    return
-                if idle >= interval:
-                    # a task: the ping may wait for the socket to drain; this loop must not
-                    ping = loop.create_task(self._ping(client.ws))
-                    pings.add(ping)
-                    ping.add_done_callback(pings.discard)
-                await asyncio.sleep(
-                    min(interval, interval * DEAD_AFTER - idle) if idle >= interval else interval - idle
-                )
-        finally:
-            for ping in pings:
-                ping.cancel()
-
-    @staticmethod
-    async def _ping(ws: web.WebSocketResponse) -> None:
-        with contextlib.suppress(ConnectionResetError, RuntimeError):
-            await ws.ping()
-
     def _refuse(self, client: Client, reason: str) -> None:
         """Answer with an error, then close (1008, policy violation) once the answer is sent."""
         self.refused += 1
@@ -578,7 +277,7 @@ class RosbridgeEndpoint:
     def _authenticate(self, client: Client, text: str) -> None:
         """The first frame of a client that brought no token in its handshake must be ``auth``."""
         try:
-            frame = _DECODER.decode(text) if len(text) <= 4096 else None
+            frame = DECODER.decode(text) if len(text) <= 4096 else None
         except (ValueError, RecursionError):
             frame = None
         self._authenticate_frame(client, frame)
@@ -652,7 +351,7 @@ class RosbridgeEndpoint:
             self._error(client, f"frame of {len(text)} bytes exceeds the {self.max_frame}-byte limit")
             return
         try:
-            frame = _DECODER.decode(text)
+            frame = DECODER.decode(text)
         except BadFrame as exc:
             self._error(client, f"invalid JSON: {exc}")
             return
@@ -699,80 +398,22 @@ class RosbridgeEndpoint:
             log.exception("op %s failed", op)
             self._error(client, f"{op}: internal error: {type(exc).__name__}", req_id)
 
-    @staticmethod
-    def _field(frame: dict[str, Any], name: str, kind: type | tuple[type, ...], required: bool = True) -> Any:
-        if name not in frame:
-            if required:
-                raise BadFrame(f"missing field {name!r}")
-            return None
-        value = frame[name]
-        if isinstance(value, bool) and bool not in (kind if isinstance(kind, tuple) else (kind,)):
-            raise BadFrame(f"field {name!r} has the wrong type (bool)")
-        if not isinstance(value, kind):
-            raise BadFrame(f"field {name!r} has the wrong type ({type(value).__name__})")
-        return value
-
-    @staticmethod
-    def _topic(frame: dict[str, Any], key: str = "topic") -> str:
-        """A topic, service or action name (``key``), fully qualified (a leading / added)."""
-        topic = RosbridgeEndpoint._field(frame, key, str)
-        if not topic or len(topic) > 256:
-            raise BadFrame(f"{key} must be a non-empty string of at most 256 characters")
-        topic = topic if topic.startswith("/") else "/" + topic
-        if not TOPIC_NAME.fullmatch(topic):
-            shown = json.dumps(topic[:60])
-            raise BadFrame(
-                f"invalid {key} name {shown}: tokens of letters, digits and _ separated by /, "
-                "none starting with a digit"
-            )
-        return topic
-
-    def _interface_type(self, frame: dict[str, Any], key: str, kind: str) -> str:
-        """A service (``kind`` srv) or action type, as ``pkg/<kind>/Name``: installed here in ROS mode;
-        in the embedded transport any well-formed name (values then pass through unchecked)."""
-        given = self._field(frame, key, str)
-        m = INTERFACE_TYPE.fullmatch(given)
-        if m is None or m.group(2) not in (None, kind):
-            raise BadFrame(f"invalid {kind} type name {given[:80]!r}: pkg/{kind}/Name or pkg/Name")
-        if self.interfaces is not None:
-            check = self.interfaces.service_type if kind == "srv" else self.interfaces.action_type
-            return str(check(given))
-        return f"{m.group(1)}/{kind}/{m.group(3)}"
-
-    def topic_exposed(self, topic: str) -> bool:
-        return self.expose_topics is None or self.expose_topics.wants(topic)
-
-    def service_exposed(self, service: str) -> bool:
-        return self.expose_services is None or self.expose_services.wants(service)
-
-    def _exposed_action(self, frame: dict[str, Any]) -> str:
-        action = self._topic(frame, "action")
-        if self.expose_actions is not None and not self.expose_actions.wants(action):
-            raise BadFrame(f"action {action} is not exposed by this server (--actions-glob)")
-        return action
-
-    def _exposed_topic(self, frame: dict[str, Any]) -> str:
-        topic = self._topic(frame)
-        if not self.topic_exposed(topic):
-            raise BadFrame(f"topic {topic} is not exposed by this server (--topics-glob)")
-        return topic
-
     def _advertise(self, client: Client, frame: dict[str, Any]) -> None:
-        topic = self._exposed_topic(frame)
-        type_name = self._field(frame, "type", str)
-        latch = self._field(frame, "latch", bool, required=False) is True  # rosbridge's field
+        topic = self.exposure.topic(frame)
+        type_name = frames.field(frame, "type", str)
+        latch = frames.field(frame, "latch", bool, required=False) is True  # rosbridge's field
         if topic in client.advertised:
             client.advertised[topic] = self.bus.declare(topic, type_name)
         else:
             client.advertised[topic] = self.bus.advertise(topic, type_name, latch=latch)
 
     def _unadvertise(self, client: Client, frame: dict[str, Any]) -> None:
-        topic = self._topic(frame)
+        topic = frames.name(frame)
         if client.advertised.pop(topic, None) is not None:
             self.bus.unadvertise(topic)
 
     def _publish(self, client: Client, frame: dict[str, Any]) -> None:
-        topic = self._exposed_topic(frame)
+        topic = self.exposure.topic(frame)
         msg = frame.get("msg", {})
         type_name = client.advertised.get(topic) or self.bus.type_of(topic)
         if type_name is None:
@@ -780,19 +421,19 @@ class RosbridgeEndpoint:
         self.bus.publish(topic, msg, type_name)
 
     def _subscribe(self, client: Client, frame: dict[str, Any]) -> None:
-        topic = self._exposed_topic(frame)
-        type_name = self._field(frame, "type", str, required=False)
-        throttle = self._field(frame, "throttle_rate", int, required=False) or 0
-        queue_length = self._field(frame, "queue_length", int, required=False) or 0
+        topic = self.exposure.topic(frame)
+        type_name = frames.field(frame, "type", str, required=False)
+        throttle = frames.field(frame, "throttle_rate", int, required=False) or 0
+        queue_length = frames.field(frame, "queue_length", int, required=False) or 0
         if not 0 <= throttle <= MAX_THROTTLE_MS:
             raise BadFrame(f"throttle_rate must be 0..{MAX_THROTTLE_MS} ms")
         if not 0 <= queue_length <= MAX_QUEUE_LENGTH:
             raise BadFrame(f"queue_length must be 0..{MAX_QUEUE_LENGTH}")
         queue_length = min(queue_length, self.client_queue)
-        compression = self._field(frame, "compression", str, required=False) or "none"
+        compression = frames.field(frame, "compression", str, required=False) or "none"
         if compression not in COMPRESSIONS:
             raise BadFrame(f"compression must be one of {', '.join(COMPRESSIONS)}, got {compression[:20]!r}")
-        fragment_size = self._field(frame, "fragment_size", int, required=False) or 0
+        fragment_size = frames.field(frame, "fragment_size", int, required=False) or 0
         if fragment_size and not MIN_FRAGMENT <= fragment_size <= TRANSPORT_MAX_FRAME:
             raise BadFrame(f"fragment_size must be {MIN_FRAGMENT}..{TRANSPORT_MAX_FRAME} characters")
         if compression == "cbor-raw" and not hasattr(self.bus, "cdr"):
@@ -818,7 +459,7 @@ class RosbridgeEndpoint:
         client.outbox(topic, sub.outbox_limit)
 
     def _unsubscribe(self, client: Client, frame: dict[str, Any]) -> None:
-        topic = self._topic(frame)
+        topic = frames.name(frame)
         sub = client.subs.get(topic)
         if sub is None:
             return
@@ -935,13 +576,13 @@ class RosbridgeEndpoint:
             sub.timer = asyncio.get_running_loop().call_later(sub.throttle_s, self._flush, client, sub)
 
     def _call_service(self, client: Client, frame: dict[str, Any]) -> None:
-        self._room_for_call(client)
-        service = self._field(frame, "service", str)
+        client.room_for_call()
+        service = frames.field(frame, "service", str)
         req_id = frame.get("id")
         reply: dict[str, Any] = {"op": "service_response", "service": service}
         if req_id is not None:
             reply["id"] = req_id
-        if not service.startswith("/rosapi/") and not self.service_exposed(service):
+        if not service.startswith("/rosapi/") and not self.exposure.service_ok(service):
             reply.update(
                 result=False, values=f"Service {service} is not exposed by this server (--services-glob)"
             )
@@ -958,13 +599,13 @@ class RosbridgeEndpoint:
                     reply.update(result=False, values=f"{service}: {exc}")
                     client.send(_dumps(reply))
                     return
-            self._track(client, self._call_provided(client, provided, args, timeout, reply))
+            client.track(self._call_provided(client, provided, args, timeout, reply))
             return
         handler = self.services.get(service)
         remote = getattr(self.bus, "call_service", None)
         if handler is None and remote is not None:  # ROS mode: any service on the graph
             timeout = self._timeout(frame, SERVICE_TIMEOUT_S)
-            self._track(client, self._call_remote(client, remote, service, frame.get("args"), timeout, reply))
+            client.track(self._call_remote(client, remote, service, frame.get("args"), timeout, reply))
             return
         if handler is None:
             reply.update(result=False, values=f"Service {service} does not exist")
@@ -976,8 +617,7 @@ class RosbridgeEndpoint:
                 reply.update(result=False, values=f"{service}: {exc}")
             else:
                 if inspect.isawaitable(values):  # rosapi that asks the graph (parameters)
-                    self._track(
-                        client,
+                    client.track(
                         self._call_remote(client, lambda _s, _a: values, service, None, timeout, reply),
                     )
                     return
@@ -985,19 +625,11 @@ class RosbridgeEndpoint:
         client.send(_dumps(reply))
 
     def _timeout(self, frame: dict[str, Any], default: float) -> float:
-        timeout = self._field(frame, "timeout", (int, float), required=False)
+        timeout = frames.field(frame, "timeout", (int, float), required=False)
         timeout = default if timeout is None else float(timeout)
         if not 0 < timeout <= MAX_SERVICE_TIMEOUT_S:
             raise BadFrame(f"timeout must be more than 0 and at most {MAX_SERVICE_TIMEOUT_S:g} s")
         return timeout
-
-    @staticmethod
-    def _track(client: Client, work: Any) -> asyncio.Task[None]:
-        """Run a call or goal for ``client`` without holding its other frames; cancelled if it leaves."""
-        task = asyncio.get_running_loop().create_task(work)
-        client.calls.add(task)
-        task.add_done_callback(client.calls.discard)
-        return task
 
     async def _call_provided(
         self, client: Client, provided: ProvidedService, args: Any, timeout: float, reply: dict[str, Any]
@@ -1037,12 +669,12 @@ class RosbridgeEndpoint:
 
     # -- services and actions clients provide (advertise_service, advertise_action) -------------------
     def _advertise_service(self, client: Client, frame: dict[str, Any]) -> None:
-        name = self._topic(frame, "service")
+        name = frames.name(frame, "service")
         if name.startswith("/rosapi/") or name in self.services:
             raise BadFrame(f"service {name} is the server's own")
-        if not self.service_exposed(name):
+        if not self.exposure.service_ok(name):
             raise BadFrame(f"service {name} is not exposed by this server (--services-glob)")
-        type_name = self._interface_type(frame, "type", "srv")
+        type_name = frames.interface_type(frame, "type", "srv", self.interfaces)
         svc = ProvidedService(name, type_name, client)
         if self.interfaces is not None:  # on the graph first: if that fails, the old provider stays
             svc.withdraw = self.interfaces.advertise_service(name, type_name, svc.call)
@@ -1068,7 +700,7 @@ class RosbridgeEndpoint:
             svc.withdraw = None
 
     def _provided_by(self, client: Client, frame: dict[str, Any], kind: str) -> Any:
-        name = self._topic(frame, kind)
+        name = frames.name(frame, kind)
         table: dict[str, Any] = self.provided_services if kind == "service" else self.provided_actions
         entry = table.get(name)
         if entry is None or entry.provider is not client:
@@ -1082,8 +714,8 @@ class RosbridgeEndpoint:
 
     def _service_response(self, client: Client, frame: dict[str, Any]) -> None:
         svc: ProvidedService = self._provided_by(client, frame, "service")
-        req_id = self._field(frame, "id", str)
-        result = self._field(frame, "result", bool)
+        req_id = frames.field(frame, "id", str)
+        result = frames.field(frame, "result", bool)
         values = frame.get("values", {})
         if result:
             if not isinstance(values, dict):
@@ -1098,8 +730,8 @@ class RosbridgeEndpoint:
             raise BadFrame(f"no call to {svc.name} with id {req_id[:80]!r} is waiting for an answer")
 
     def _advertise_action(self, client: Client, frame: dict[str, Any]) -> None:
-        name = self._exposed_action(frame)
-        type_name = self._interface_type(frame, "type", "action")
+        name = self.exposure.action(frame)
+        type_name = frames.interface_type(frame, "type", "action", self.interfaces)
         act = ProvidedAction(name, type_name, client, type_given=frame["type"])
         if self.interfaces is not None:
             act.withdraw = self.interfaces.advertise_action(name, type_name, act.start, act.cancel)
@@ -1125,8 +757,8 @@ class RosbridgeEndpoint:
 
     def _action_feedback(self, client: Client, frame: dict[str, Any]) -> None:
         act: ProvidedAction = self._provided_by(client, frame, "action")
-        goal_id = self._field(frame, "id", str)
-        values = self._field(frame, "values", dict)
+        goal_id = frames.field(frame, "id", str)
+        values = frames.field(frame, "values", dict)
         if self.interfaces is not None:
             values = self.interfaces.values(act.type_name, "Feedback", values)
         if not act.feedback(goal_id, values):
@@ -1134,9 +766,9 @@ class RosbridgeEndpoint:
 
     def _action_result(self, client: Client, frame: dict[str, Any]) -> None:
         act: ProvidedAction = self._provided_by(client, frame, "action")
-        goal_id = self._field(frame, "id", str)
-        result = self._field(frame, "result", bool)
-        status = self._field(frame, "status", int, required=result)
+        goal_id = frames.field(frame, "id", str)
+        result = frames.field(frame, "result", bool)
+        status = frames.field(frame, "status", int, required=result)
         values = frame.get("values", {})
         if result:
             if status not in FINAL_STATUSES:
@@ -1158,23 +790,18 @@ class RosbridgeEndpoint:
             raise BadFrame(f"no goal of {act.name} with id {goal_id[:80]!r} is running")
 
     # -- goals clients send (send_action_goal, cancel_action_goal) -------------------------------------
-    @staticmethod
-    def _room_for_call(client: Client) -> None:
-        if len(client.calls) >= MAX_CALLS:
-            raise BadFrame(f"{MAX_CALLS} calls and goals are under way for this client already")
-
     def _send_action_goal(self, client: Client, frame: dict[str, Any]) -> None:
-        self._room_for_call(client)
-        action = self._exposed_action(frame)
+        client.room_for_call()
+        action = self.exposure.action(frame)
         req_id = frame.get("id")
         if req_id is not None and not isinstance(req_id, (str, int)):
             raise BadFrame("field 'id' must be a string or an integer")
-        feedback = self._field(frame, "feedback", bool, required=False) is True
+        feedback = frames.field(frame, "feedback", bool, required=False) is True
         if req_id is not None and req_id in client.goals:
             raise BadFrame(f"a goal with id {req_id!r} is running already: give each goal its own id")
         args = frame.get("args", {})
         provided = self.provided_actions.get(action)
-        type_name = self._interface_type(frame, "action_type", "action")
+        type_name = frames.interface_type(frame, "action_type", "action", self.interfaces)
         if provided is None and self.interfaces is None:
             self._goal_ended(client, action, req_id, STATUS_UNKNOWN, f"Action {action} does not exist", False)
             return
@@ -1189,13 +816,12 @@ class RosbridgeEndpoint:
             goal = provided.start(args, on_feedback)
             if req_id is not None:
                 client.goals[req_id] = lambda: provided.cancel(goal)
-            self._track(client, self._await_provided_goal(client, action, req_id, goal.result, ended))
+            client.track(self._await_provided_goal(client, action, req_id, goal.result, ended))
             return
         ros_goal = self.interfaces.new_goal()
         if req_id is not None:
             client.goals[req_id] = ros_goal.cancel
-        self._track(
-            client,
+        client.track(
             self._await_ros_goal(client, action, type_name, req_id, args, on_feedback, ros_goal, ended),
         )
 
@@ -1253,7 +879,7 @@ class RosbridgeEndpoint:
             self._goal_ended(client, action, req_id, status, values, True)
 
     def _cancel_action_goal(self, client: Client, frame: dict[str, Any]) -> None:
-        self._topic(frame, "action")
+        frames.name(frame, "action")
         if "id" not in frame:
             raise BadFrame("missing field 'id' (the id of the goal to cancel)")
         req_id = frame["id"]
@@ -1263,14 +889,14 @@ class RosbridgeEndpoint:
         cancel()
 
     def _set_level(self, client: Client, frame: dict[str, Any]) -> None:
-        level = self._field(frame, "level", str)
+        level = frames.field(frame, "level", str)
         if level not in LEVELS:
             raise BadFrame(f"level must be one of {', '.join(LEVELS)}")
         client.level = level
 
     # -- rosapi --------------------------------------------------------------------------------
     def _svc_topics(self, args: Any) -> dict[str, Any]:
-        topics = [(t, ty) for t, ty in self.bus.topics() if self.topic_exposed(t)]
+        topics = [(t, ty) for t, ty in self.bus.topics() if self.exposure.topic_ok(t)]
         return {"topics": [t for t, _ in topics], "types": [ty for _, ty in topics]}
 
     def _svc_topic_type(self, args: Any) -> dict[str, Any]:
@@ -1281,40 +907,14 @@ class RosbridgeEndpoint:
         )
         if not isinstance(topic, str):
             raise BadFrame("args.topic must be a string")
-        return {"type": (self.bus.type_of(topic) or "") if self.topic_exposed(topic) else ""}
+        return {"type": (self.bus.type_of(topic) or "") if self.exposure.topic_ok(topic) else ""}
 
     def _svc_topics_for_type(self, args: Any) -> dict[str, Any]:
         t = args.get("type") if isinstance(args, dict) else None
         if not isinstance(t, str):
             raise BadFrame("args.type must be a string")
         want = normalize_type(t)
-        return {"topics": [t for t, ty in self.bus.topics() if ty == want and self.topic_exposed(t)]}
-
-
-def quick_ack(sock: socket.socket | None) -> None:
-    """ACK what a client sent at once (Linux TCP_QUICKACK, which the kernel clears again, hence once
-    per frame). A client with Nagle's algorithm on (a plain roslibpy script) holds its next small
-    frame until the previous one is ACKed; with delayed ACKs here that stalled it ~40 ms at a time."""
-    if sock is None or QUICKACK is None:
-        return
-    with contextlib.suppress(OSError):
-        sock.setsockopt(socket.IPPROTO_TCP, QUICKACK, 1)
-
-
-QUICKACK = getattr(socket, "TCP_QUICKACK", None)
-NOTSENT_LOWAT = getattr(socket, "TCP_NOTSENT_LOWAT", None)
-UNSENT_BYTES = 64 * 1024
-
-
-def limit_unsent(sock: socket.socket | None) -> None:
-    """Keep at most ``UNSENT_BYTES`` not yet sent in the kernel's send buffer (TCP_NOTSENT_LOWAT, Linux
-    and macOS): the rest of a big frame waits in the transport, where aiohttp's drain sees it, so what a
-    slow client has not read is in its per-topic queues (dropped oldest first), not megabytes of socket
-    buffer that a small message would wait behind."""
-    if sock is None or NOTSENT_LOWAT is None:
-        return
-    with contextlib.suppress(OSError):
-        sock.setsockopt(socket.IPPROTO_TCP, NOTSENT_LOWAT, UNSENT_BYTES)
+        return {"topics": [t for t, ty in self.bus.topics() if ty == want and self.exposure.topic_ok(t)]}
 
 
 def make_app(endpoint: RosbridgeEndpoint) -> web.Application:
