@@ -39,12 +39,8 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import inspect
-import itertools
 import logging
-import time
-from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass, field
 from typing import Any
 
 from aiohttp import WSMsgType, web
@@ -52,7 +48,7 @@ from aiohttp import WSMsgType, web
 from arbiter_core import auth
 from arbiter_core.msgtypes import MessageError, normalize_type
 
-from .. import cborenc, jsonframe, pacing, pngtext
+from .. import cborenc, pacing
 from ..bus import Bus
 from ..provided import (
     FINAL_STATUSES,
@@ -66,65 +62,17 @@ from ..provided import (
 from ..topicwatch import TopicFilter
 from . import frames, wire
 from .client import CLIENT_QUEUE, LEVELS, Client
+from .encoding import Encoder
 from .exposure import Exposure
 from .frames import DECODER, MAX_FRAME_BYTES, TRANSPORT_MAX_FRAME, BadFrame, dumps
-from .outbox import TOPIC_QUEUE, Fragments, Payload
+from .topics import TopicRoom
 from .wire import WS_PING_S
 
 log = logging.getLogger(__name__)
 
-MAX_THROTTLE_MS = 3_600_000
-MAX_QUEUE_LENGTH = 1_000_000
 SERVICE_TIMEOUT_S = 10.0  # a call_service to a ROS service without a "timeout" field
 MAX_SERVICE_TIMEOUT_S = 600.0
-MIN_FRAGMENT = 64  # the smallest fragment_size taken (smaller would be a frame per few characters)
-COMPRESSIONS = (
-    "none",
-    "png",
-    "cbor",
-    "cbor-raw",
-)  # weakest first (ROSBRIDGE_PROTOCOL.md: cbor-raw beats cbor beats png beats none)
-
 _dumps = dumps
-
-
-@dataclass
-class _Sub:
-    """One client's subscription to one topic (requests with several ids are merged, as rosbridge does)."""
-
-    topic: str
-    # id -> (throttle_ms, queue_length, compression, fragment_size or 0)
-    requests: dict[Any, tuple[int, int, str, int]] = field(default_factory=dict)
-    type_name: str | None = None
-    unsubscribe: Callable[[], None] | None = None
-    last_sent: float = -1e18
-    pending: deque[Payload | Fragments] = field(default_factory=deque)
-    timer: asyncio.TimerHandle | None = None
-
-    @property
-    def throttle_s(self) -> float:
-        return min(r[0] for r in self.requests.values()) / 1000.0
-
-    @property
-    def queue_length(self) -> int:
-        return min(r[1] for r in self.requests.values())
-
-    @property
-    def compression(self) -> str:
-        """The strongest of the requests' (``COMPRESSIONS``' order), for all of them, as rosbridge."""
-        return max((r[2] for r in self.requests.values()), key=COMPRESSIONS.index)
-
-    @property
-    def fragment_size(self) -> int:
-        """The smallest of the requests' (0: none); JSON frames longer than it go out in fragments."""
-        sizes = [r[3] for r in self.requests.values() if r[3]]
-        return min(sizes) if sizes else 0
-
-    @property
-    def outbox_limit(self) -> int:
-        """The client's outgoing queue for the topic: ``queue_length`` frames (1: only the latest);
-        without one, ``TOPIC_QUEUE``."""
-        return self.queue_length or TOPIC_QUEUE
 
 
 class RosbridgeEndpoint:
@@ -150,11 +98,9 @@ class RosbridgeEndpoint:
         self.client_queue = client_queue
         self.clients: set[Client] = set()
         self.errors = 0
-        # (topic, encoding) -> (the last message, its frame)
-        self._encoded: dict[tuple[str, str], tuple[Any, Payload]] = {}
-        self._fragment_ids = itertools.count(1)
         # what a client may reach (rosbridge_server's topics_glob / services_glob); None: everything
         self.exposure = Exposure(expose_topics, expose_services, expose_actions)
+        self.topic_room = TopicRoom(bus, self.exposure, Encoder(bus), self.clients, client_queue)
         self.services: dict[str, Callable[[Any], dict[str, Any]]] = {
             "/rosapi/topics": self._svc_topics,
             "/rosapi/topic_type": self._svc_topic_type,
@@ -168,11 +114,11 @@ class RosbridgeEndpoint:
         # ROS mode: rclpy servers for those, an action client for goals (ros/interfaces.py)
         self.interfaces: Any = getattr(bus, "interfaces", None)
         self._ops: dict[str, Callable[[Client, dict[str, Any]], None]] = {
-            "advertise": self._advertise,
-            "unadvertise": self._unadvertise,
-            "publish": self._publish,
-            "subscribe": self._subscribe,
-            "unsubscribe": self._unsubscribe,
+            "advertise": self.topic_room.advertise,
+            "unadvertise": self.topic_room.unadvertise,
+            "publish": self.topic_room.publish,
+            "subscribe": self.topic_room.subscribe,
+            "unsubscribe": self.topic_room.unsubscribe,
             "call_service": self._call_service,
             "advertise_service": self._advertise_service,
             "unadvertise_service": self._unadvertise_service,
@@ -304,20 +250,7 @@ class RosbridgeEndpoint:
             self._retire_service(svc, f"Service {svc.name}: its provider disconnected")
         for act in [a for a in self.provided_actions.values() if a.provider is client]:
             self._retire_action(act, f"Action {act.name}: its provider disconnected")
-        for sub in client.subs.values():
-            if sub.unsubscribe:
-                sub.unsubscribe()
-            if sub.timer:
-                sub.timer.cancel()
-        topics = list(client.subs)
-        client.subs.clear()
-        for topic in list(client.boxes):
-            client.drop_outbox(topic)
-        for topic in topics:
-            self._forget_frames(topic)
-        for topic in client.advertised:
-            self.bus.unadvertise(topic)
-        client.advertised.clear()
+        self.topic_room.leave(client)
         self.clients.discard(client)
 
     def stats(self) -> dict[str, Any]:
@@ -397,183 +330,6 @@ class RosbridgeEndpoint:
         except Exception as exc:  # never let one frame take the connection down
             log.exception("op %s failed", op)
             self._error(client, f"{op}: internal error: {type(exc).__name__}", req_id)
-
-    def _advertise(self, client: Client, frame: dict[str, Any]) -> None:
-        topic = self.exposure.topic(frame)
-        type_name = frames.field(frame, "type", str)
-        latch = frames.field(frame, "latch", bool, required=False) is True  # rosbridge's field
-        if topic in client.advertised:
-            client.advertised[topic] = self.bus.declare(topic, type_name)
-        else:
-            client.advertised[topic] = self.bus.advertise(topic, type_name, latch=latch)
-
-    def _unadvertise(self, client: Client, frame: dict[str, Any]) -> None:
-        topic = frames.name(frame)
-        if client.advertised.pop(topic, None) is not None:
-            self.bus.unadvertise(topic)
-
-    def _publish(self, client: Client, frame: dict[str, Any]) -> None:
-        topic = self.exposure.topic(frame)
-        msg = frame.get("msg", {})
-        type_name = client.advertised.get(topic) or self.bus.type_of(topic)
-        if type_name is None:
-            raise BadFrame(f"cannot infer the type of {topic}: advertise it first")
-        self.bus.publish(topic, msg, type_name)
-
-    def _subscribe(self, client: Client, frame: dict[str, Any]) -> None:
-        topic = self.exposure.topic(frame)
-        type_name = frames.field(frame, "type", str, required=False)
-        throttle = frames.field(frame, "throttle_rate", int, required=False) or 0
-        queue_length = frames.field(frame, "queue_length", int, required=False) or 0
-        if not 0 <= throttle <= MAX_THROTTLE_MS:
-            raise BadFrame(f"throttle_rate must be 0..{MAX_THROTTLE_MS} ms")
-        if not 0 <= queue_length <= MAX_QUEUE_LENGTH:
-            raise BadFrame(f"queue_length must be 0..{MAX_QUEUE_LENGTH}")
-        queue_length = min(queue_length, self.client_queue)
-        compression = frames.field(frame, "compression", str, required=False) or "none"
-        if compression not in COMPRESSIONS:
-            raise BadFrame(f"compression must be one of {', '.join(COMPRESSIONS)}, got {compression[:20]!r}")
-        fragment_size = frames.field(frame, "fragment_size", int, required=False) or 0
-        if fragment_size and not MIN_FRAGMENT <= fragment_size <= TRANSPORT_MAX_FRAME:
-            raise BadFrame(f"fragment_size must be {MIN_FRAGMENT}..{TRANSPORT_MAX_FRAME} characters")
-        if compression == "cbor-raw" and not hasattr(self.bus, "cdr"):
-            raise BadFrame(
-                "compression cbor-raw needs a transport that serialises messages (--transport ros)"
-            )
-        if type_name is not None:
-            self.bus.declare(topic, type_name)
-        elif self.bus.type_of(topic) is None:
-            raise BadFrame(f"cannot subscribe to {topic}: type unknown; give 'type'")
-        sub = client.subs.get(topic)
-        if sub is None:
-            sub = _Sub(topic)
-            client.subs[topic] = sub
-            sub.unsubscribe = self.bus.subscribe(topic, lambda m, c=client, s=sub: self._deliver(c, s, m))
-        sub.requests[frame.get("id", f"_anon{len(sub.requests)}")] = (
-            throttle,
-            queue_length,
-            compression,
-            fragment_size,
-        )
-        sub.type_name = self.bus.type_of(topic)
-        client.outbox(topic, sub.outbox_limit)
-
-    def _unsubscribe(self, client: Client, frame: dict[str, Any]) -> None:
-        topic = frames.name(frame)
-        sub = client.subs.get(topic)
-        if sub is None:
-            return
-        req_id = frame.get("id")
-        if req_id is not None and req_id in sub.requests:
-            del sub.requests[req_id]
-        elif req_id is None or isinstance(req_id, (dict, list)):
-            sub.requests.clear()
-        if not sub.requests:
-            if sub.unsubscribe:
-                sub.unsubscribe()
-            if sub.timer:
-                sub.timer.cancel()
-            del client.subs[topic]
-            client.drop_outbox(topic)
-            self._forget_frames(topic)
-        else:
-            client.outbox(topic, sub.outbox_limit)
-
-    def _encode(self, sub: _Sub, msg: dict[str, Any]) -> Payload:
-        """The ``publish`` frame of ``msg`` in the subscription's encoding, made once per message and
-        encoding for all the clients that get it: JSON text, a ``png`` frame holding that text as an image
-        (``pngtext``), or a binary CBOR frame (``cborenc``)."""
-        key = (sub.topic, sub.compression)
-        cached = self._encoded.get(key)
-        if cached is not None and cached[0] is msg:
-            return cached[1]
-        frame: Payload
-        if key[1] in ("none", "png"):  # ROS mode: the JSON form is made on first use (ros/bus.py)
-            json_form = getattr(self.bus, "json_form", None)
-            if json_form is None:  # the embedded bus: no ROS converter, so no base64 to splice
-                text = _dumps({"op": "publish", "topic": sub.topic, "msg": msg})
-            else:  # a camera's base64 spliced in, not scanned for escapes
-                text = jsonframe.dumps({"op": "publish", "topic": sub.topic, "msg": json_form(msg)})
-        if key[1] == "none":
-            frame = text
-        elif key[1] == "png":
-            frame = _dumps({"op": "png", "data": pngtext.encode(text)})
-        elif key[1] == "cbor":
-            convert = getattr(self.bus, "cbor_values", None) or cborenc.values_of
-            frame = cborenc.encode({"op": "publish", "topic": sub.topic, "msg": convert(sub.type_name, msg)})
-        else:  # cbor-raw: the CDR bytes and the time received (subscribe checked the bus has ``cdr``)
-            raw, received_ns = self.bus.cdr(sub.type_name, msg)  # type: ignore[attr-defined]
-            secs, nsecs = divmod(received_ns, 1_000_000_000)
-            frame = cborenc.encode(
-                {"op": "publish", "topic": sub.topic, "msg": {"secs": secs, "nsecs": nsecs, "bytes": raw}}
-            )
-        self._encoded[key] = (msg, frame)
-        return frame
-
-    def _forget_frames(self, topic: str) -> None:
-        """No client subscribes to ``topic`` any more: its last frames (a camera's: megabytes) go."""
-        if not any(topic in c.subs for c in self.clients if not c.closed):
-            for key in [k for k in self._encoded if k[0] == topic]:
-                del self._encoded[key]
-
-    def _fragments(self, sub: _Sub, msg: dict[str, Any], frame: str) -> Fragments:
-        """``frame`` as rosbridge ``fragment`` frames of ``fragment_size`` characters of its text, under
-        an id of its own (made once per message and size for all the clients that get it)."""
-        size = sub.fragment_size
-        key = (sub.topic, f"fragments:{size}")
-        cached = self._encoded.get(key)
-        if cached is not None and cached[0] is msg:
-            return Fragments(cached[1])  # type: ignore[arg-type]
-        frag_id = f"{sub.topic}#{next(self._fragment_ids)}"
-        total = -(-len(frame) // size)
-        parts = [
-            _dumps(
-                {
-                    "op": "fragment",
-                    "id": frag_id,
-                    "data": frame[i * size : (i + 1) * size],
-                    "num": i,
-                    "total": total,
-                }
-            )
-            for i in range(total)
-        ]
-        self._encoded[key] = (msg, parts)  # type: ignore[assignment]
-        return Fragments(parts)
-
-    def _deliver(self, client: Client, sub: _Sub, msg: dict[str, Any]) -> None:
-        if client.subs.get(sub.topic) is not sub:
-            return  # unsubscribed while the bus was fanning this message out: no outbox to refill
-        frame: Payload | Fragments = self._encode(sub, msg)
-        if sub.fragment_size and isinstance(frame, str) and len(frame) > sub.fragment_size:
-            frame = self._fragments(sub, msg, frame)
-        throttle = sub.throttle_s
-        if throttle <= 0:
-            client.enqueue(sub.topic, frame)
-            return
-        now = time.monotonic()
-        if now - sub.last_sent >= throttle and not sub.pending:
-            sub.last_sent = now
-            client.enqueue(sub.topic, frame)
-            return
-        qlen = sub.queue_length
-        if qlen <= 0:
-            return
-        sub.pending.append(frame)
-        while len(sub.pending) > qlen:
-            sub.pending.popleft()
-        if sub.timer is None:
-            delay = max(0.0, sub.last_sent + throttle - now)
-            sub.timer = asyncio.get_running_loop().call_later(delay, self._flush, client, sub)
-
-    def _flush(self, client: Client, sub: _Sub) -> None:
-        sub.timer = None
-        if client.closed or not sub.pending:
-            return
-        sub.last_sent = time.monotonic()
-        client.enqueue(sub.topic, sub.pending.popleft())
-        if sub.pending:
-            sub.timer = asyncio.get_running_loop().call_later(sub.throttle_s, self._flush, client, sub)
 
     def _call_service(self, client: Client, frame: dict[str, Any]) -> None:
         client.room_for_call()
