@@ -38,7 +38,6 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import inspect
 import logging
 from collections.abc import Callable
 from typing import Any
@@ -50,28 +49,19 @@ from arbiter_core.msgtypes import MessageError, normalize_type
 
 from .. import cborenc, pacing
 from ..bus import Bus
-from ..provided import (
-    FINAL_STATUSES,
-    PROVIDER_TIMEOUT_S,
-    STATUS_ABORTED,
-    STATUS_UNKNOWN,
-    CallFailed,
-    ProvidedAction,
-    ProvidedService,
-)
 from ..topicwatch import TopicFilter
 from . import frames, wire
+from .actions import ActionRoom
 from .client import CLIENT_QUEUE, LEVELS, Client
 from .encoding import Encoder
 from .exposure import Exposure
 from .frames import DECODER, MAX_FRAME_BYTES, TRANSPORT_MAX_FRAME, BadFrame, dumps
+from .services import ServiceRoom
 from .topics import TopicRoom
 from .wire import WS_PING_S
 
 log = logging.getLogger(__name__)
 
-SERVICE_TIMEOUT_S = 10.0  # a call_service to a ROS service without a "timeout" field
-MAX_SERVICE_TIMEOUT_S = 600.0
 _dumps = dumps
 
 
@@ -108,27 +98,29 @@ class RosbridgeEndpoint:
         }
         if services:
             self.services.update(services)
-        # what clients provide (advertise_service, advertise_action), by name; one provider per name
-        self.provided_services: dict[str, ProvidedService] = {}
-        self.provided_actions: dict[str, ProvidedAction] = {}
-        # ROS mode: rclpy servers for those, an action client for goals (ros/interfaces.py)
+        # ROS mode: rclpy servers for what clients provide, an action client for goals (ros/interfaces.py)
         self.interfaces: Any = getattr(bus, "interfaces", None)
+        self.service_room = ServiceRoom(bus, self.interfaces, self.exposure, self.services)
+        self.action_room = ActionRoom(self.interfaces, self.exposure)
+        # what clients provide (advertise_service, advertise_action), by name; one provider per name
+        self.provided_services = self.service_room.provided
+        self.provided_actions = self.action_room.provided
         self._ops: dict[str, Callable[[Client, dict[str, Any]], None]] = {
             "advertise": self.topic_room.advertise,
             "unadvertise": self.topic_room.unadvertise,
             "publish": self.topic_room.publish,
             "subscribe": self.topic_room.subscribe,
             "unsubscribe": self.topic_room.unsubscribe,
-            "call_service": self._call_service,
-            "advertise_service": self._advertise_service,
-            "unadvertise_service": self._unadvertise_service,
-            "service_response": self._service_response,
-            "send_action_goal": self._send_action_goal,
-            "cancel_action_goal": self._cancel_action_goal,
-            "advertise_action": self._advertise_action,
-            "unadvertise_action": self._unadvertise_action,
-            "action_feedback": self._action_feedback,
-            "action_result": self._action_result,
+            "call_service": self.service_room.call_service,
+            "advertise_service": self.service_room.advertise_service,
+            "unadvertise_service": self.service_room.provided.unadvertise,
+            "service_response": self.service_room.service_response,
+            "send_action_goal": self.action_room.send_action_goal,
+            "cancel_action_goal": self.action_room.cancel_action_goal,
+            "advertise_action": self.action_room.advertise_action,
+            "unadvertise_action": self.action_room.provided.unadvertise,
+            "action_feedback": self.action_room.action_feedback,
+            "action_result": self.action_room.action_result,
             "set_level": self._set_level,
             "auth": lambda client, frame: None,  # authenticated already, or no token required
         }
@@ -241,15 +233,11 @@ class RosbridgeEndpoint:
 
     def _drop_client(self, client: Client) -> None:
         client.closed = True
-        for cancel_goal in list(client.goals.values()):
-            cancel_goal()  # a goal does not go on for a client that is gone
-        client.goals.clear()
+        self.action_room.cancel_goals(client)
         for call in list(client.calls):
             call.cancel()
-        for svc in [s for s in self.provided_services.values() if s.provider is client]:
-            self._retire_service(svc, f"Service {svc.name}: its provider disconnected")
-        for act in [a for a in self.provided_actions.values() if a.provider is client]:
-            self._retire_action(act, f"Action {act.name}: its provider disconnected")
+        self.service_room.provided.leave(client)
+        self.action_room.provided.leave(client)
         self.topic_room.leave(client)
         self.clients.discard(client)
 
@@ -330,319 +318,6 @@ class RosbridgeEndpoint:
         except Exception as exc:  # never let one frame take the connection down
             log.exception("op %s failed", op)
             self._error(client, f"{op}: internal error: {type(exc).__name__}", req_id)
-
-    def _call_service(self, client: Client, frame: dict[str, Any]) -> None:
-        client.room_for_call()
-        service = frames.field(frame, "service", str)
-        req_id = frame.get("id")
-        reply: dict[str, Any] = {"op": "service_response", "service": service}
-        if req_id is not None:
-            reply["id"] = req_id
-        if not service.startswith("/rosapi/") and not self.exposure.service_ok(service):
-            reply.update(
-                result=False, values=f"Service {service} is not exposed by this server (--services-glob)"
-            )
-            client.send(_dumps(reply))
-            return
-        provided = self.provided_services.get(service)
-        if provided is not None:  # a WebSocket client provides it: straight to that client
-            timeout = self._timeout(frame, PROVIDER_TIMEOUT_S)
-            args = frame.get("args", {})
-            if self.interfaces is not None:
-                try:
-                    args = self.interfaces.values(provided.type_name, "Request", args, path="args")
-                except MessageError as exc:
-                    reply.update(result=False, values=f"{service}: {exc}")
-                    client.send(_dumps(reply))
-                    return
-            client.track(self._call_provided(client, provided, args, timeout, reply))
-            return
-        handler = self.services.get(service)
-        remote = getattr(self.bus, "call_service", None)
-        if handler is None and remote is not None:  # ROS mode: any service on the graph
-            timeout = self._timeout(frame, SERVICE_TIMEOUT_S)
-            client.track(self._call_remote(client, remote, service, frame.get("args"), timeout, reply))
-            return
-        if handler is None:
-            reply.update(result=False, values=f"Service {service} does not exist")
-        else:
-            timeout = self._timeout(frame, SERVICE_TIMEOUT_S)
-            try:
-                values = handler(frame.get("args"))
-            except (BadFrame, MessageError, ValueError) as exc:
-                reply.update(result=False, values=f"{service}: {exc}")
-            else:
-                if inspect.isawaitable(values):  # rosapi that asks the graph (parameters)
-                    client.track(
-                        self._call_remote(client, lambda _s, _a: values, service, None, timeout, reply),
-                    )
-                    return
-                reply.update(result=True, values=values)
-        client.send(_dumps(reply))
-
-    def _timeout(self, frame: dict[str, Any], default: float) -> float:
-        timeout = frames.field(frame, "timeout", (int, float), required=False)
-        timeout = default if timeout is None else float(timeout)
-        if not 0 < timeout <= MAX_SERVICE_TIMEOUT_S:
-            raise BadFrame(f"timeout must be more than 0 and at most {MAX_SERVICE_TIMEOUT_S:g} s")
-        return timeout
-
-    async def _call_provided(
-        self, client: Client, provided: ProvidedService, args: Any, timeout: float, reply: dict[str, Any]
-    ) -> None:
-        try:
-            ok, values = await provided.call(args, timeout)
-        except CallFailed as exc:
-            ok, values = False, str(exc)
-        reply.update(result=ok, values=values)
-        client.send(_dumps(reply))
-
-    async def _call_remote(
-        self,
-        client: Client,
-        remote: Callable[[str, Any], Any],
-        service: str,
-        args: Any,
-        timeout: float,
-        reply: dict[str, Any],
-    ) -> None:
-        """A call to a ROS service; the answer, or ``result: false`` with why, within ``timeout``. The
-        client's other frames are not held meanwhile (the stock server blocks them by default)."""
-        try:
-            values = await asyncio.wait_for(remote(service, args), timeout)
-        except (TimeoutError, asyncio.TimeoutError):  # distinct before Python 3.11 (a Pi with Humble)
-            reply.update(result=False, values=f"{service}: no response within {timeout:g} s")
-        except (BadFrame, MessageError, ValueError) as exc:
-            reply.update(
-                result=False, values=str(exc) if str(exc).startswith("Service") else f"{service}: {exc}"
-            )
-        except Exception as exc:
-            log.exception("call to %s failed", service)
-            reply.update(result=False, values=f"{service}: {type(exc).__name__}")
-        else:
-            reply.update(result=True, values=values)
-        client.send(_dumps(reply))
-
-    # -- services and actions clients provide (advertise_service, advertise_action) -------------------
-    def _advertise_service(self, client: Client, frame: dict[str, Any]) -> None:
-        name = frames.name(frame, "service")
-        if name.startswith("/rosapi/") or name in self.services:
-            raise BadFrame(f"service {name} is the server's own")
-        if not self.exposure.service_ok(name):
-            raise BadFrame(f"service {name} is not exposed by this server (--services-glob)")
-        type_name = frames.interface_type(frame, "type", "srv", self.interfaces)
-        svc = ProvidedService(name, type_name, client)
-        if self.interfaces is not None:  # on the graph first: if that fails, the old provider stays
-            svc.withdraw = self.interfaces.advertise_service(name, type_name, svc.call)
-        old = self.provided_services.get(name)
-        self.provided_services[name] = svc
-        if old is not None:
-            self._replaced(client, frame, "service", name, old.provider.id)
-            self._retire_service(old, f"Service {name} was advertised again by another provider")
-        log.info("client %d provides service %s (%s)", client.id, name, type_name)
-
-    def _replaced(self, client: Client, frame: dict[str, Any], kind: str, name: str, old_id: int) -> None:
-        """A second advertisement replaces the first, as rosbridge_server does, with a warning."""
-        msg = f"duplicate {kind} advertised: {name} was provided by client {old_id}; replaced"
-        log.warning("client %d: %s", client.id, msg)
-        client.status("warning", msg, frame.get("id"))
-
-    def _retire_service(self, svc: ProvidedService, reason: str) -> None:
-        if self.provided_services.get(svc.name) is svc:
-            del self.provided_services[svc.name]
-        svc.fail_all(reason)
-        if svc.withdraw is not None:
-            svc.withdraw()
-            svc.withdraw = None
-
-    def _provided_by(self, client: Client, frame: dict[str, Any], kind: str) -> Any:
-        name = frames.name(frame, kind)
-        table: dict[str, Any] = self.provided_services if kind == "service" else self.provided_actions
-        entry = table.get(name)
-        if entry is None or entry.provider is not client:
-            raise BadFrame(f"{kind} {name} is not advertised by this client")
-        return entry
-
-    def _unadvertise_service(self, client: Client, frame: dict[str, Any]) -> None:
-        svc = self._provided_by(client, frame, "service")
-        self._retire_service(svc, f"Service {svc.name} was unadvertised")
-        log.info("client %d no longer provides service %s", client.id, svc.name)
-
-    def _service_response(self, client: Client, frame: dict[str, Any]) -> None:
-        svc: ProvidedService = self._provided_by(client, frame, "service")
-        req_id = frames.field(frame, "id", str)
-        result = frames.field(frame, "result", bool)
-        values = frame.get("values", {})
-        if result:
-            if not isinstance(values, dict):
-                raise BadFrame("values must be an object when result is true")
-            if self.interfaces is not None:
-                try:
-                    values = self.interfaces.values(svc.type_name, "Response", values)
-                except MessageError as exc:  # the caller learns it now, not at its timeout
-                    svc.answer(req_id, False, f"{svc.name}: its provider's response does not fit: {exc}")
-                    raise
-        if not svc.answer(req_id, result, values):
-            raise BadFrame(f"no call to {svc.name} with id {req_id[:80]!r} is waiting for an answer")
-
-    def _advertise_action(self, client: Client, frame: dict[str, Any]) -> None:
-        name = self.exposure.action(frame)
-        type_name = frames.interface_type(frame, "type", "action", self.interfaces)
-        act = ProvidedAction(name, type_name, client, type_given=frame["type"])
-        if self.interfaces is not None:
-            act.withdraw = self.interfaces.advertise_action(name, type_name, act.start, act.cancel)
-        old = self.provided_actions.get(name)
-        self.provided_actions[name] = act
-        if old is not None:
-            self._replaced(client, frame, "action", name, old.provider.id)
-            self._retire_action(old, f"Action {name} was advertised again by another provider")
-        log.info("client %d provides action %s (%s)", client.id, name, type_name)
-
-    def _retire_action(self, act: ProvidedAction, reason: str) -> None:
-        if self.provided_actions.get(act.name) is act:
-            del self.provided_actions[act.name]
-        act.fail_all(reason)
-        if act.withdraw is not None:
-            act.withdraw()
-            act.withdraw = None
-
-    def _unadvertise_action(self, client: Client, frame: dict[str, Any]) -> None:
-        act = self._provided_by(client, frame, "action")
-        self._retire_action(act, f"Action {act.name} was unadvertised")
-        log.info("client %d no longer provides action %s", client.id, act.name)
-
-    def _action_feedback(self, client: Client, frame: dict[str, Any]) -> None:
-        act: ProvidedAction = self._provided_by(client, frame, "action")
-        goal_id = frames.field(frame, "id", str)
-        values = frames.field(frame, "values", dict)
-        if self.interfaces is not None:
-            values = self.interfaces.values(act.type_name, "Feedback", values)
-        if not act.feedback(goal_id, values):
-            raise BadFrame(f"no goal of {act.name} with id {goal_id[:80]!r} is running")
-
-    def _action_result(self, client: Client, frame: dict[str, Any]) -> None:
-        act: ProvidedAction = self._provided_by(client, frame, "action")
-        goal_id = frames.field(frame, "id", str)
-        result = frames.field(frame, "result", bool)
-        status = frames.field(frame, "status", int, required=result)
-        values = frame.get("values", {})
-        if result:
-            if status not in FINAL_STATUSES:
-                raise BadFrame(f"status must be a final GoalStatus (4, 5 or 6), got {status}")
-            if not isinstance(values, dict):
-                raise BadFrame("values must be an object when result is true")
-            if self.interfaces is not None:
-                try:
-                    values = self.interfaces.values(act.type_name, "Result", values)
-                except MessageError as exc:  # the goal ends now, aborted, not never
-                    why = f"{act.name}: its provider's result does not fit"
-                    act.finish(goal_id, STATUS_ABORTED, why, False)
-                    raise BadFrame(f"values: {exc}") from None
-        elif status is None:
-            status = STATUS_ABORTED
-        elif status not in FINAL_STATUSES:
-            raise BadFrame(f"status must be a final GoalStatus (4, 5 or 6), got {status}")
-        if not act.finish(goal_id, status, values, result):
-            raise BadFrame(f"no goal of {act.name} with id {goal_id[:80]!r} is running")
-
-    # -- goals clients send (send_action_goal, cancel_action_goal) -------------------------------------
-    def _send_action_goal(self, client: Client, frame: dict[str, Any]) -> None:
-        client.room_for_call()
-        action = self.exposure.action(frame)
-        req_id = frame.get("id")
-        if req_id is not None and not isinstance(req_id, (str, int)):
-            raise BadFrame("field 'id' must be a string or an integer")
-        feedback = frames.field(frame, "feedback", bool, required=False) is True
-        if req_id is not None and req_id in client.goals:
-            raise BadFrame(f"a goal with id {req_id!r} is running already: give each goal its own id")
-        args = frame.get("args", {})
-        provided = self.provided_actions.get(action)
-        type_name = frames.interface_type(frame, "action_type", "action", self.interfaces)
-        if provided is None and self.interfaces is None:
-            self._goal_ended(client, action, req_id, STATUS_UNKNOWN, f"Action {action} does not exist", False)
-            return
-        if self.interfaces is not None:
-            args = self.interfaces.values(type_name, "Goal", args, path="args")  # MessageError: status
-        ended: list[bool] = []  # the result went out: later feedback is not sent (ROS carries feedback
-        # and result on different channels, so the last feedback can arrive after the result)
-        on_feedback = None
-        if feedback:
-            on_feedback = lambda values: ended or self._goal_feedback(client, action, req_id, values)  # noqa: E731
-        if provided is not None:
-            goal = provided.start(args, on_feedback)
-            if req_id is not None:
-                client.goals[req_id] = lambda: provided.cancel(goal)
-            client.track(self._await_provided_goal(client, action, req_id, goal.result, ended))
-            return
-        ros_goal = self.interfaces.new_goal()
-        if req_id is not None:
-            client.goals[req_id] = ros_goal.cancel
-        client.track(
-            self._await_ros_goal(client, action, type_name, req_id, args, on_feedback, ros_goal, ended),
-        )
-
-    def _goal_feedback(self, client: Client, action: str, req_id: Any, values: Any) -> None:
-        frame: dict[str, Any] = {"op": "action_feedback", "action": action, "values": values}
-        if req_id is not None:
-            frame["id"] = req_id
-        client.send(_dumps(frame))
-
-    def _goal_ended(
-        self, client: Client, action: str, req_id: Any, status: int, values: Any, result: bool
-    ) -> None:
-        if req_id is not None:
-            client.goals.pop(req_id, None)
-        frame: dict[str, Any] = {"op": "action_result", "action": action, "values": values}
-        frame.update(status=status, result=result)
-        if req_id is not None:
-            frame["id"] = req_id
-        client.send(_dumps(frame))
-
-    async def _await_provided_goal(
-        self,
-        client: Client,
-        action: str,
-        req_id: Any,
-        result: asyncio.Future[tuple[int, Any, bool]],
-        ended: list[bool],
-    ) -> None:
-        status, values, ok = await result
-        ended.append(True)
-        self._goal_ended(client, action, req_id, status, values, ok)
-
-    async def _await_ros_goal(
-        self,
-        client: Client,
-        action: str,
-        type_name: str,
-        req_id: Any,
-        args: Any,
-        on_feedback: Callable[[Any], None] | None,
-        goal: Any,
-        ended: list[bool],
-    ) -> None:
-        try:
-            try:
-                status, values = await self.interfaces.send_goal(action, type_name, args, on_feedback, goal)
-            finally:
-                ended.append(True)
-        except MessageError as exc:
-            self._goal_ended(client, action, req_id, STATUS_UNKNOWN, str(exc), False)
-        except Exception as exc:
-            log.exception("goal to %s failed", action)
-            self._goal_ended(client, action, req_id, STATUS_UNKNOWN, f"{action}: {type(exc).__name__}", False)
-        else:
-            self._goal_ended(client, action, req_id, status, values, True)
-
-    def _cancel_action_goal(self, client: Client, frame: dict[str, Any]) -> None:
-        frames.name(frame, "action")
-        if "id" not in frame:
-            raise BadFrame("missing field 'id' (the id of the goal to cancel)")
-        req_id = frame["id"]
-        cancel = client.goals.get(req_id) if isinstance(req_id, (str, int)) else None
-        if cancel is None:
-            raise BadFrame(f"no goal with id {str(req_id)[:80]!r} is running for this client")
-        cancel()
 
     def _set_level(self, client: Client, frame: dict[str, Any]) -> None:
         level = frames.field(frame, "level", str)
