@@ -50,13 +50,14 @@ from arbiter_core.msgtypes import MessageError, normalize_type
 from .. import cborenc, pacing
 from ..bus import Bus
 from ..topicwatch import TopicFilter
-from . import frames, wire
+from . import ops, wire
 from .actions import ActionRoom
-from .client import CLIENT_QUEUE, LEVELS, Client
+from .client import CLIENT_QUEUE, Client
 from .encoding import Encoder
 from .exposure import Exposure
 from .frames import DECODER, MAX_FRAME_BYTES, TRANSPORT_MAX_FRAME, BadFrame, dumps
 from .services import ServiceRoom
+from .session import SessionRoom
 from .topics import TopicRoom
 from .wire import WS_PING_S
 
@@ -82,8 +83,6 @@ class RosbridgeEndpoint:
         self.bus = bus
         self.paced_wait = paced_wait  # seconds a slow client's big frame may hold a small one (pacing)
         self.heartbeat = heartbeat or None  # seconds between pings to a silent client; None: no pings
-        self.token = token
-        self.refused = 0  # connections refused for a missing or wrong token
         self.max_frame = max_frame
         self.client_queue = client_queue
         self.clients: set[Client] = set()
@@ -105,38 +104,14 @@ class RosbridgeEndpoint:
         # what clients provide (advertise_service, advertise_action), by name; one provider per name
         self.provided_services = self.service_room.provided
         self.provided_actions = self.action_room.provided
-        self._ops: dict[str, Callable[[Client, dict[str, Any]], None]] = {
-            "advertise": self.topic_room.advertise,
-            "unadvertise": self.topic_room.unadvertise,
-            "publish": self.topic_room.publish,
-            "subscribe": self.topic_room.subscribe,
-            "unsubscribe": self.topic_room.unsubscribe,
-            "call_service": self.service_room.call_service,
-            "advertise_service": self.service_room.advertise_service,
-            "unadvertise_service": self.service_room.provided.unadvertise,
-            "service_response": self.service_room.service_response,
-            "send_action_goal": self.action_room.send_action_goal,
-            "cancel_action_goal": self.action_room.cancel_action_goal,
-            "advertise_action": self.action_room.advertise_action,
-            "unadvertise_action": self.action_room.provided.unadvertise,
-            "action_feedback": self.action_room.action_feedback,
-            "action_result": self.action_room.action_result,
-            "set_level": self._set_level,
-            "auth": lambda client, frame: None,  # authenticated already, or no token required
-        }
+        self.session = SessionRoom(token, self._error)
+        self._ops = ops.table(self.topic_room, self.service_room, self.action_room, self.session)
 
     # -- connection lifecycle ------------------------------------------------------------
     async def handle(self, request: web.Request) -> web.StreamResponse:
-        authenticated = self.token is None
-        if not authenticated:
-            assert self.token is not None
-            given = request.query.get("token") or auth.bearer(request.headers.get("Authorization"))
-            if given is not None:
-                if not auth.token_matches(given, self.token):
-                    self.refused += 1
-                    log.warning("refused a WebSocket client from %s: wrong token", request.remote)
-                    return web.json_response({"error": "wrong token", "status": 401}, status=401)
-                authenticated = True
+        authenticated = self.session.handshake(request)
+        if authenticated is None:
+            return web.json_response({"error": "wrong token", "status": 401}, status=401)
         # pings are answered and sent here (_liveness), not by aiohttp: its heartbeat allows a pong half
         # the interval, which drops a client that stops reading for a second behind a camera stream
         ws = web.WebSocketResponse(max_msg_size=TRANSPORT_MAX_FRAME, autoping=False)
@@ -152,7 +127,7 @@ class RosbridgeEndpoint:
             liveness = loop.create_task(wire.liveness(client, request.transport, self.heartbeat))
         deadline = None
         if not authenticated:
-            deadline = loop.call_later(auth.AUTH_DEADLINE_S, self._auth_timeout, client)
+            deadline = loop.call_later(auth.AUTH_DEADLINE_S, self.session.deadline, client)
         log.info("client %d connected from %s", client.id, request.remote)
         sock = request.transport.get_extra_info("socket") if request.transport is not None else None
         wire.limit_unsent(sock)
@@ -201,36 +176,6 @@ class RosbridgeEndpoint:
             )
         return ws
 
-    def _refuse(self, client: Client, reason: str) -> None:
-        """Answer with an error, then close (1008, policy violation) once the answer is sent."""
-        self.refused += 1
-        self._error(client, reason)
-        client.kick = (1008, reason)
-        client.wakeup.set()
-
-    def _auth_timeout(self, client: Client) -> None:
-        if not client.authenticated and client.kick is None and not client.closed:
-            self._refuse(client, f"authentication required within {auth.AUTH_DEADLINE_S:.0f} s")
-
-    def _authenticate(self, client: Client, text: str) -> None:
-        """The first frame of a client that brought no token in its handshake must be ``auth``."""
-        try:
-            frame = DECODER.decode(text) if len(text) <= 4096 else None
-        except (ValueError, RecursionError):
-            frame = None
-        self._authenticate_frame(client, frame)
-
-    def _authenticate_frame(self, client: Client, frame: Any) -> None:
-        if not isinstance(frame, dict) or frame.get("op") != "auth":
-            self._refuse(client, 'authentication required: send {"op": "auth", "mac": TOKEN} first')
-            return
-        assert self.token is not None
-        given = frame.get("mac", frame.get("token"))
-        if not auth.token_matches(given, self.token):
-            self._refuse(client, "authentication failed: wrong token")
-            return
-        client.authenticated = True
-
     def _drop_client(self, client: Client) -> None:
         client.closed = True
         self.action_room.cancel_goals(client)
@@ -266,7 +211,7 @@ class RosbridgeEndpoint:
 
     def handle_frame(self, client: Client, text: str) -> None:
         if not client.authenticated:
-            self._authenticate(client, text)
+            self.session.authenticate_text(client, text)
             return
         if len(text) > self.max_frame:
             self._error(client, f"frame of {len(text)} bytes exceeds the {self.max_frame}-byte limit")
@@ -295,7 +240,7 @@ class RosbridgeEndpoint:
             self._error(client, str(exc), exc.req_id)
             return
         if not client.authenticated:
-            self._authenticate_frame(client, frame)
+            self.session.authenticate(client, frame)
             return
         self._dispatch(client, frame)
 
@@ -318,12 +263,6 @@ class RosbridgeEndpoint:
         except Exception as exc:  # never let one frame take the connection down
             log.exception("op %s failed", op)
             self._error(client, f"{op}: internal error: {type(exc).__name__}", req_id)
-
-    def _set_level(self, client: Client, frame: dict[str, Any]) -> None:
-        level = frames.field(frame, "level", str)
-        if level not in LEVELS:
-            raise BadFrame(f"level must be one of {', '.join(LEVELS)}")
-        client.level = level
 
     # -- rosapi --------------------------------------------------------------------------------
     def _svc_topics(self, args: Any) -> dict[str, Any]:
