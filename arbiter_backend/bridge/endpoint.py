@@ -39,15 +39,14 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
-from collections.abc import Callable
 from typing import Any
 
 from aiohttp import WSMsgType, web
 
 from arbiter_core import auth
-from arbiter_core.msgtypes import MessageError, normalize_type
+from arbiter_core.msgtypes import MessageError
 
-from .. import cborenc, pacing
+from .. import cborenc, pacing, rosapi
 from ..bus import Bus
 from ..topicwatch import TopicFilter
 from . import ops, wire
@@ -72,7 +71,7 @@ class RosbridgeEndpoint:
         bus: Bus,
         max_frame: int = MAX_FRAME_BYTES,
         client_queue: int = CLIENT_QUEUE,
-        services: dict[str, Callable[[Any], dict[str, Any]]] | None = None,
+        services: dict[str, rosapi.Handler] | None = None,
         expose_topics: TopicFilter | None = None,
         expose_services: TopicFilter | None = None,
         expose_actions: TopicFilter | None = None,
@@ -90,11 +89,8 @@ class RosbridgeEndpoint:
         # what a client may reach (rosbridge_server's topics_glob / services_glob); None: everything
         self.exposure = Exposure(expose_topics, expose_services, expose_actions)
         self.topic_room = TopicRoom(bus, self.exposure, Encoder(bus), self.clients, client_queue)
-        self.services: dict[str, Callable[[Any], dict[str, Any]]] = {
-            "/rosapi/topics": self._svc_topics,
-            "/rosapi/topic_type": self._svc_topic_type,
-            "/rosapi/topics_for_type": self._svc_topics_for_type,
-        }
+        # the endpoint's own services (rosapi), by name
+        self.services = rosapi.bus_handlers(bus, self.exposure.topic_ok)
         if services:
             self.services.update(services)
         # ROS mode: rclpy servers for what clients provide, an action client for goals (ros/interfaces.py)
@@ -263,28 +259,6 @@ class RosbridgeEndpoint:
         except Exception as exc:  # never let one frame take the connection down
             log.exception("op %s failed", op)
             self._error(client, f"{op}: internal error: {type(exc).__name__}", req_id)
-
-    # -- rosapi --------------------------------------------------------------------------------
-    def _svc_topics(self, args: Any) -> dict[str, Any]:
-        topics = [(t, ty) for t, ty in self.bus.topics() if self.exposure.topic_ok(t)]
-        return {"topics": [t for t, _ in topics], "types": [ty for _, ty in topics]}
-
-    def _svc_topic_type(self, args: Any) -> dict[str, Any]:
-        topic = (
-            args.get("topic")
-            if isinstance(args, dict)
-            else (args[0] if isinstance(args, list) and args else None)
-        )
-        if not isinstance(topic, str):
-            raise BadFrame("args.topic must be a string")
-        return {"type": (self.bus.type_of(topic) or "") if self.exposure.topic_ok(topic) else ""}
-
-    def _svc_topics_for_type(self, args: Any) -> dict[str, Any]:
-        t = args.get("type") if isinstance(args, dict) else None
-        if not isinstance(t, str):
-            raise BadFrame("args.type must be a string")
-        want = normalize_type(t)
-        return {"topics": [t for t, ty in self.bus.topics() if ty == want and self.exposure.topic_ok(t)]}
 
 
 def make_app(endpoint: RosbridgeEndpoint) -> web.Application:

@@ -21,6 +21,7 @@ from arbiter_core.msgtypes import MessageError
 
 from ..bus import Bus
 from ..provided import PROVIDER_TIMEOUT_S, CallFailed, ProvidedService
+from ..rosapi import Handler
 from . import frames
 from .client import Client
 from .exposure import Exposure
@@ -31,8 +32,6 @@ log = logging.getLogger(__name__)
 
 SERVICE_TIMEOUT_S = 10.0  # a call_service to a ROS service without a "timeout" field
 MAX_SERVICE_TIMEOUT_S = 600.0
-
-Handler = Callable[[Any], Any]  # rosapi: args -> the response's fields, or an awaitable of them
 
 
 def timeout(frame: Frame, default: float) -> float:
