@@ -32,7 +32,7 @@ from __future__ import annotations
 import asyncio
 import json
 import time
-from collections.abc import Awaitable, Callable
+from collections.abc import Callable
 from typing import Any, Protocol
 
 from arbiter_core.msgtypes import normalize_type
@@ -41,7 +41,6 @@ from arbiter_core.topics import stamp as ros_stamp
 from .bus import Bus
 
 Handler = Callable[[Any], Any]  # the response's fields, or an awaitable of them
-Call = Callable[[str, Any], Awaitable[dict[str, Any]]]  # a ROS service call (RosBus.call_service)
 PARAM_TIMEOUT_S = 2.0  # one node's parameter service, for get_param_names (a node that hangs is skipped)
 
 # rcl_interfaces/msg/ParameterType -> the ParameterValue field holding it
@@ -59,7 +58,7 @@ PARAM_FIELDS = {
 
 
 class Graph(Protocol):
-    """What a transport with a ROS graph can tell (``ros.bus.RosBus``)."""
+    """What a transport with a ROS graph can tell (``ros.graph.RosGraph``, the ROS bus's ``graph``)."""
 
     def node_names(self) -> list[str]: ...  # fully qualified: /ns/name
 

@@ -1,37 +1,13 @@
-"""A rosbridge v2 WebSocket endpoint on the in-process topic bus (aiohttp).
+"""The rosbridge endpoint's connections: a client's frames in, through the dispatch table
+(``ops.py``) to the room that handles them, its writer and liveness tasks (``wire.py``), and its state
+dropped when the socket closes (its subscriptions, advertisements, provided services and actions,
+calls and goals).
 
-Ops: advertise, unadvertise, publish, subscribe (throttle_rate, queue_length, compression
-png/cbor/cbor-raw, fragment_size), unsubscribe, call_service, set_level, auth, and services and actions
-both ways: advertise_service / service_response / unadvertise_service, advertise_action /
-action_feedback / action_result / unadvertise_action (a client provides; ``provided.py``), and
-send_action_goal / cancel_action_goal. ``call_service`` reaches, in this order: a service another
-client provides; the endpoint's rosapi (/rosapi/topics, topic_type, topics_for_type, and the parameter
-services, in memory on the embedded bus; in ROS mode ``rosapi.py`` from the live graph); in ROS mode any
-service on the graph (``RosBus.call_service``). In ROS mode a provided service or action is also an
-rclpy server on the graph, and a goal reaches any action server there (``ros/interfaces.py``). Calls
-and goals run beside the client's other frames, never holding them, and always end: a call within its
-``timeout`` (default 10 s), a goal when its server or provider ends it, cancels it, or goes away.
-Unlike the real ROS 2 server, every bad frame is answered with a ``status`` frame naming the problem
-(and the request's ``id``), and the connection stays open.
-
-Liveness (``--ws-ping``): a client that has sent nothing for ``WS_PING_S`` is pinged (again
-every ``WS_PING_S`` while it stays silent), and dropped when nothing at all, pong or frame, has
-come from it for ``DEAD_AFTER`` pings' time (20 s by default), which frees its subscriptions and
-advertisements. A client busy elsewhere that does not read its socket for 10 s is kept: its pong
-waits behind the frames queued for it, and it answers once it reads again (the stock server does
-not ping at all). The console finds a dead link on its side with its own pings (1 s, 2 s timeout).
-
-Outgoing frames wait in one bounded queue per (client, topic) (``Outbox``), plus one for the
-client's replies (status, service_response), which go first. Each client's writer task takes
-the topics with something to send in turn (round-robin; a turn sends up to ``TURN_BYTES``, at
-least one message), and awaits aiohttp's drain after each write, so a client takes frames as
-fast as its socket drains and no faster. A big topic (camera frames) therefore never starves a
-small one: a small message waits for at most the one big frame being written. A full queue
-drops its oldest frame (counted per topic, logged, and in ``/api/health``); a slow client loses
-old frames of the topic that overflows, never another topic's messages or their order, and never
-blocks the bus or the other clients. A client that lags has its big frames paced below the rate it
-reads at (``pacing``), so the buffers a small message waits behind stay nearly empty. Per-client state
-is dropped when the socket closes.
+Unlike the stock ROS 2 server, every bad frame is answered with a ``status`` frame naming the problem
+(and the request's ``id``), and the connection stays open; an op that fails unexpectedly is logged and
+answered the same way. A frame over ``--max-frame`` (1 MiB) gets a status error; over 16 MiB aiohttp
+closes with 1009. A binary frame whose first byte is a CBOR map's is a CBOR request, turned into the
+JSON form first (``cborenc.decode``).
 """
 
 from __future__ import annotations
@@ -54,7 +30,7 @@ from .actions import ActionRoom
 from .client import CLIENT_QUEUE, Client
 from .encoding import Encoder
 from .exposure import Exposure
-from .frames import DECODER, MAX_FRAME_BYTES, TRANSPORT_MAX_FRAME, BadFrame, dumps
+from .frames import DECODER, MAX_FRAME_BYTES, TRANSPORT_MAX_FRAME, BadFrame
 from .services import ServiceRoom
 from .session import SessionRoom
 from .topics import TopicRoom
@@ -62,10 +38,12 @@ from .wire import WS_PING_S
 
 log = logging.getLogger(__name__)
 
-_dumps = dumps
-
 
 class RosbridgeEndpoint:
+    """The connections: each client's frames in (JSON or CBOR, authenticated first where a token is
+    required) through the dispatch table to its room, its writer and liveness tasks, its state dropped
+    when the socket closes."""
+
     def __init__(
         self,
         bus: Bus,
@@ -87,21 +65,22 @@ class RosbridgeEndpoint:
         self.clients: set[Client] = set()
         self.errors = 0
         # what a client may reach (rosbridge_server's topics_glob / services_glob); None: everything
-        self.exposure = Exposure(expose_topics, expose_services, expose_actions)
-        self.topic_room = TopicRoom(bus, self.exposure, Encoder(bus), self.clients, client_queue)
+        exposure = Exposure(expose_topics, expose_services, expose_actions)
         # the endpoint's own services (rosapi), by name
-        self.services = rosapi.bus_handlers(bus, self.exposure.topic_ok)
-        if services:
-            self.services.update(services)
-        # ROS mode: rclpy servers for what clients provide, an action client for goals (ros/interfaces.py)
-        self.interfaces: Any = getattr(bus, "interfaces", None)
-        self.service_room = ServiceRoom(bus, self.interfaces, self.exposure, self.services)
-        self.action_room = ActionRoom(self.interfaces, self.exposure)
+        self.services = rosapi.bus_handlers(bus, exposure.topic_ok)
+        self.services.update(services or {})
+        # ROS mode: the rest of the graph (rosapi, any service), and rclpy servers for what clients
+        # provide and an action client for the goals they send (ros/graph.py, ros/interfaces.py)
+        graph: rosapi.Graph | None = getattr(bus, "graph", None)
+        interfaces: Any = getattr(bus, "interfaces", None)
+        self.topic_room = TopicRoom(bus, exposure, Encoder(bus), self.clients, client_queue)
+        self.service_room = ServiceRoom(graph, interfaces, exposure, self.services)
+        self.action_room = ActionRoom(interfaces, exposure)
+        self.session = SessionRoom(token, self._error)
+        self._ops = ops.table(self.topic_room, self.service_room, self.action_room, self.session)
         # what clients provide (advertise_service, advertise_action), by name; one provider per name
         self.provided_services = self.service_room.provided
         self.provided_actions = self.action_room.provided
-        self.session = SessionRoom(token, self._error)
-        self._ops = ops.table(self.topic_room, self.service_room, self.action_room, self.session)
 
     # -- connection lifecycle ------------------------------------------------------------
     async def handle(self, request: web.Request) -> web.StreamResponse:

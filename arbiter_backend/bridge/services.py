@@ -3,7 +3,7 @@
 
 ``call_service`` reaches, in this order: a service another client provides (a ``call_service`` frame
 to it, ``service_request:<service>:<n>``, answered by its ``service_response``); the endpoint's rosapi
-(``rosapi.py``); in ROS mode any service on the graph (``RosBus.call_service``). A call runs beside
+(``rosapi.py``); in ROS mode any service on the graph (``RosGraph.call_service``). A call runs beside
 the client's other frames, never holding them, and always ends within its ``timeout`` (default 10 s):
 the answer, or ``result: false`` with why. In ROS mode a provided service is also an rclpy service on
 the graph (``ros/interfaces.py``), and values are checked against the type's Request and Response.
@@ -19,7 +19,7 @@ from typing import Any
 
 from arbiter_core.msgtypes import MessageError
 
-from ..bus import Bus
+from .. import rosapi
 from ..provided import PROVIDER_TIMEOUT_S, CallFailed, ProvidedService
 from ..rosapi import Handler
 from . import frames
@@ -44,11 +44,13 @@ def timeout(frame: Frame, default: float) -> float:
 
 
 class ServiceRoom:
-    def __init__(self, bus: Bus, interfaces: Any, exposure: Exposure, rosapi: dict[str, Handler]) -> None:
-        self.bus = bus
+    def __init__(
+        self, graph: rosapi.Graph | None, interfaces: Any, exposure: Exposure, own: dict[str, Handler]
+    ) -> None:
+        self.graph = graph  # ROS mode: any service on it is reached; None on the embedded bus
         self.interfaces = interfaces  # ROS mode: ros.interfaces.RosInterfaces; None on the embedded bus
         self.exposure = exposure
-        self.rosapi = rosapi  # the endpoint's own services, by name
+        self.own = own  # the endpoint's own services (rosapi), by name
         self.provided: Providers[ProvidedService] = Providers("service")
 
     # -- calls ---------------------------------------------------------------------------------------
@@ -78,10 +80,10 @@ class ServiceRoom:
                     return
             client.track(self._call_provided(client, provided, args, seconds, reply))
             return
-        handler = self.rosapi.get(service)
-        remote = getattr(self.bus, "call_service", None)
-        if handler is None and remote is not None:  # ROS mode: any service on the graph
+        handler = self.own.get(service)
+        if handler is None and self.graph is not None:  # ROS mode: any service on the graph
             seconds = timeout(frame, SERVICE_TIMEOUT_S)
+            remote = self.graph.call_service
             client.track(self._call_remote(client, remote, service, frame.get("args"), seconds, reply))
             return
         if handler is None:
@@ -140,7 +142,7 @@ class ServiceRoom:
     # -- services clients provide --------------------------------------------------------------------
     def advertise_service(self, client: Client, frame: Frame) -> None:
         name = frames.name(frame, "service")
-        if name.startswith("/rosapi/") or name in self.rosapi:
+        if name.startswith("/rosapi/") or name in self.own:
             raise BadFrame(f"service {name} is the server's own")
         if not self.exposure.service_ok(name):
             raise BadFrame(f"service {name} is not exposed by this server (--services-glob)")
