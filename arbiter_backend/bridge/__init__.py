@@ -1,7 +1,21 @@
-"""The rosbridge v2 WebSocket endpoint (aiohttp) on either transport's topic bus.
+"""The rosbridge v2 WebSocket endpoint (aiohttp), on either transport's bus, in rooms:
 
-``RosbridgeEndpoint`` (``endpoint.py``) takes the connections; each op a client sends goes through one
-dispatch table to the room that handles it.
+- ``endpoint.py``: ``RosbridgeEndpoint``, the connections: frames in (JSON or CBOR), out through
+  each client's writer, a client's state dropped when it goes.
+- ``ops.py``: the dispatch table, every op a client may send and the room that handles it.
+- ``topics.py``: advertise, unadvertise, publish, subscribe, unsubscribe (and throttling).
+- ``services.py``: call_service, advertise_service, service_response, unadvertise_service.
+- ``actions.py``: send_action_goal, cancel_action_goal, advertise_action, action_feedback,
+  action_result, unadvertise_action.
+- ``session.py``: auth, set_level.
+- ``providers.py``: one provider per service or action name (advertise, replace, retire), for both.
+- ``encoding.py``: a subscription's frames as JSON, png, cbor, cbor-raw, and in fragments.
+- ``exposure.py``: what a client may reach (--topics-glob, --services-glob, --actions-glob).
+- ``wire.py``: the socket: the writer task, liveness pings, TCP options.
+- ``client.py``, ``outbox.py``: a client's state and its queues; ``frames.py``: field checks.
+
+rosapi is the services ``call_service`` reaches (``arbiter_backend/rosapi.py``); pacing a slow client's
+big frames is ``arbiter_backend/pacing.py``; what clients provide is ``arbiter_backend/provided.py``.
 """
 
 from .client import CLIENT_QUEUE, LEVELS, MAX_CALLS, Client

@@ -1,5 +1,17 @@
-"""One WebSocket client's state: replies sent first, one outbox per topic taken in turn, the status
-level it asked for, its calls and goals under way, and the pacer of its big frames."""
+"""One WebSocket client's state: its replies, one outbox per topic, the status level it asked for, its
+calls and goals under way, and the pacer of its big frames.
+
+Outgoing frames wait in one bounded queue per (client, topic) (``Outbox``), plus one for the client's
+replies (status, service_response), which go first. The client's writer task (``wire.writer``) takes
+the topics with something to send in turn (round-robin; a turn sends up to ``TURN_BYTES``, at least
+one message), and awaits aiohttp's drain after each write, so a client takes frames as fast as its
+socket drains and no faster. A big topic (camera frames) therefore never starves a small one: a small
+message waits for at most the one big frame being written. A full queue drops its oldest frame
+(counted per topic, logged, and in ``/api/health``); a slow client loses old frames of the topic that
+overflows, never another topic's messages or their order, and never blocks the bus or the other
+clients. A client that lags has its big frames paced below the rate it reads at (``pacing``), so the
+buffers a small message waits behind stay nearly empty.
+"""
 
 from __future__ import annotations
 

@@ -87,7 +87,7 @@ class RosbridgeEndpoint:
         authenticated = self.session.handshake(request)
         if authenticated is None:
             return web.json_response({"error": "wrong token", "status": 401}, status=401)
-        # pings are answered and sent here (_liveness), not by aiohttp: its heartbeat allows a pong half
+        # pings are answered and sent here (wire.liveness), not by aiohttp: its heartbeat allows a pong half
         # the interval, which drops a client that stops reading for a second behind a camera stream
         ws = web.WebSocketResponse(max_msg_size=TRANSPORT_MAX_FRAME, autoping=False)
         await ws.prepare(request)

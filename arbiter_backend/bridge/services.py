@@ -21,7 +21,6 @@ from arbiter_core.msgtypes import MessageError
 
 from .. import rosapi
 from ..provided import PROVIDER_TIMEOUT_S, CallFailed, ProvidedService
-from ..rosapi import Handler
 from . import frames
 from .client import Client
 from .exposure import Exposure
@@ -45,7 +44,7 @@ def timeout(frame: Frame, default: float) -> float:
 
 class ServiceRoom:
     def __init__(
-        self, graph: rosapi.Graph | None, interfaces: Any, exposure: Exposure, own: dict[str, Handler]
+        self, graph: rosapi.Graph | None, interfaces: Any, exposure: Exposure, own: dict[str, rosapi.Handler]
     ) -> None:
         self.graph = graph  # ROS mode: any service on it is reached; None on the embedded bus
         self.interfaces = interfaces  # ROS mode: ros.interfaces.RosInterfaces; None on the embedded bus

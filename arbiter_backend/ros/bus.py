@@ -431,7 +431,7 @@ class RosBus:
         return to_ros(message_class(type_name), msg)  # one handed over in-process (deliver_local)
 
     def json_form(self, msg: dict[str, Any]) -> dict[str, Any]:
-        """The endpoint serialises through this (``bridge._encode``): module ``json_form``."""
+        """The endpoint serialises through this (``bridge.encoding``): module ``json_form``."""
         return json_form(msg)
 
     def cbor_values(self, type_name: str | None, msg: dict[str, Any]) -> dict[str, Any]:
