@@ -53,7 +53,7 @@ PROBE = 1.25
 WAIT_S = 0.05  # how long a paced client's big frame may hold the messages behind it (--paced-wait-ms) ...
 OVER_WAIT_SHARE = 0.025  # ... except this share of the time
 # still buffered when a write returns: the transport's low-water mark (16 KiB), the kernel's unsent
-# bytes (bridge.UNSENT_BYTES, 64 KiB) and a client's receive buffer (Linux: 256 KiB for 128 KiB asked)
+# bytes (bridge.wire.UNSENT_BYTES, 64 KiB) and a client's receive buffer (Linux: 256 KiB for 128 KiB asked)
 BUFFERED = 384 * 1024
 
 

@@ -1,25 +1,30 @@
-"""rosapi services answered from the live ROS graph (``--transport ros``): what roslibjs dashboards and
-Foxglove-style tools call to list nodes, who publishes and subscribes a topic, and the services.
+"""rosapi: the services ``call_service`` reaches under ``/rosapi/``, what roslibjs dashboards and
+Foxglove-style tools call to list topics, nodes, who publishes and subscribes a topic, the services,
+and the parameters. One table per source, all in this module:
 
-Each handler takes rosbridge ``args`` (an object keyed by the rosapi request's fields, or a list in
-their order) and returns the rosapi response's fields, as rosbridge_suite's rosapi node does:
-``/rosapi/nodes`` → ``nodes``; ``/rosapi/node_details`` → ``subscribing``, ``publishing``,
-``services``; ``/rosapi/publishers`` and ``/rosapi/subscribers`` → ``publishers``/``subscribers``
-(node names); ``/rosapi/services`` → ``services``; ``/rosapi/service_type`` → ``type``;
-``/rosapi/services_for_type`` → ``services``; ``/rosapi/get_time`` → ``time`` (``sec``, ``nanosec``);
-``/rosapi/topics_and_raw_types`` → ``topics``, ``types``, ``typedefs_full_text`` (each type's ``.msg``
-text with its dependencies', as ``gendeps --cat`` gives it, for ``cbor-raw`` clients).
-The embedded transport has no ROS graph: these are not offered there (a call is "does not exist").
+- ``bus_handlers`` (both transports, from the endpoint's bus): ``/rosapi/topics`` → ``topics``,
+  ``types``; ``/rosapi/topic_type`` → ``type``; ``/rosapi/topics_for_type`` → ``topics``.
+- ``handlers`` (``--transport ros``, from the live ROS graph), as rosbridge_suite's rosapi node
+  answers: ``/rosapi/nodes`` → ``nodes``; ``/rosapi/node_details`` → ``subscribing``, ``publishing``,
+  ``services``; ``/rosapi/publishers`` and ``/rosapi/subscribers`` → ``publishers``/``subscribers``
+  (node names); ``/rosapi/services`` → ``services``; ``/rosapi/service_type`` → ``type``;
+  ``/rosapi/services_for_type`` → ``services``; ``/rosapi/get_time`` → ``time`` (``sec``,
+  ``nanosec``); ``/rosapi/topics_and_raw_types`` → ``topics``, ``types``, ``typedefs_full_text``
+  (each type's ``.msg`` text with its dependencies', as ``gendeps --cat`` gives it, for ``cbor-raw``
+  clients). The embedded transport has no ROS graph: these are not offered there ("does not exist").
+- ``param_handlers``, one table over either store of parameters, as roslibjs and roslibpy's ``Param``
+  call them (rosapi's ROS 2 names, ``<node>:<param>``): ``/rosapi/get_param`` (``name``,
+  ``default_value``: JSON text) → ``value`` (JSON text; the default when the node or parameter does not
+  exist), ``/rosapi/set_param`` (``name``, ``value``: JSON text), ``/rosapi/has_param`` → ``exists``,
+  ``/rosapi/delete_param``, ``/rosapi/get_param_names`` → ``names`` (every node's, ``<node>:<param>``).
+  In ROS mode (``GraphParams``) they call the node's own parameter services (``get_parameters``,
+  ``set_parameters``, ``list_parameters``); a set or delete the node refuses is ``result: false`` with
+  its reason (rosapi says nothing). On the embedded transport there are no nodes: the same services
+  keep plain names in a store in memory, for the backend's lifetime (``ParamStore``). ``--params-glob``
+  bounds both by parameter name (outside it: result false, not there, not listed).
 
-Parameters, as roslibjs and roslibpy's ``Param`` call them (rosapi's ROS 2 names, ``<node>:<param>``):
-``/rosapi/get_param`` (``name``, ``default_value``: JSON text) → ``value`` (JSON text; the default when
-the node or parameter does not exist), ``/rosapi/set_param`` (``name``, ``value``: JSON text),
-``/rosapi/has_param`` → ``exists``, ``/rosapi/delete_param``, ``/rosapi/get_param_names`` → ``names``
-(every node's, ``<node>:<param>``). In ROS mode they call the node's own parameter services
-(``get_parameters``, ``set_parameters``, ``list_parameters``); a set or delete the node refuses is
-``result: false`` with its reason (rosapi says nothing). On the embedded transport there are no nodes:
-the same services keep plain names in a store in memory, for the backend's lifetime (``ParamStore``).
-``--params-glob`` bounds both by parameter name (outside it: result false, not there, not listed).
+Each handler takes rosbridge ``args`` (an object keyed by the request's fields, or a list in their
+order) and returns the response's fields, or an awaitable of them; ValueError says why not.
 """
 
 from __future__ import annotations
@@ -27,13 +32,15 @@ from __future__ import annotations
 import asyncio
 import json
 import time
-from collections.abc import Awaitable, Callable
+from collections.abc import Callable
 from typing import Any, Protocol
 
+from arbiter_core.msgtypes import normalize_type
 from arbiter_core.topics import stamp as ros_stamp
 
+from .bus import Bus
+
 Handler = Callable[[Any], Any]  # the response's fields, or an awaitable of them
-Call = Callable[[str, Any], Awaitable[dict[str, Any]]]  # a ROS service call (RosBus.call_service)
 PARAM_TIMEOUT_S = 2.0  # one node's parameter service, for get_param_names (a node that hangs is skipped)
 
 # rcl_interfaces/msg/ParameterType -> the ParameterValue field holding it
@@ -51,7 +58,7 @@ PARAM_FIELDS = {
 
 
 class Graph(Protocol):
-    """What a transport with a ROS graph can tell (``ros.bus.RosBus``)."""
+    """What a transport with a ROS graph can tell (``ros.graph.RosGraph``, the ROS bus's ``graph``)."""
 
     def node_names(self) -> list[str]: ...  # fully qualified: /ns/name
 
@@ -132,115 +139,164 @@ def _exposed(param_ok: Callable[[str], bool], param: str) -> str:
     return param
 
 
+def bus_handlers(bus: Bus, topic_ok: Callable[[str], bool] = lambda name: True) -> dict[str, Handler]:
+    """``/rosapi/topics``, ``topic_type`` and ``topics_for_type`` from the endpoint's bus (either
+    transport); nothing outside ``topic_ok`` (--topics-glob) appears."""
+
+    def topics(args: Any) -> dict[str, Any]:
+        listed = [(t, ty) for t, ty in bus.topics() if topic_ok(t)]
+        return {"topics": [t for t, _ in listed], "types": [ty for _, ty in listed]}
+
+    def topic_type(args: Any) -> dict[str, Any]:
+        topic = (
+            args.get("topic")
+            if isinstance(args, dict)
+            else (args[0] if isinstance(args, list) and args else None)
+        )
+        if not isinstance(topic, str):
+            raise ValueError("args.topic must be a string")
+        return {"type": (bus.type_of(topic) or "") if topic_ok(topic) else ""}
+
+    def topics_for_type(args: Any) -> dict[str, Any]:
+        t = args.get("type") if isinstance(args, dict) else None
+        if not isinstance(t, str):
+            raise ValueError("args.type must be a string")
+        want = normalize_type(t)
+        return {"topics": [t for t, ty in bus.topics() if ty == want and topic_ok(t)]}
+
+    return {
+        "/rosapi/topics": topics,
+        "/rosapi/topic_type": topic_type,
+        "/rosapi/topics_for_type": topics_for_type,
+    }
+
+
+def param_handlers(params: Params) -> dict[str, Handler]:
+    """The parameter services, as rosapi names them, over either store; the arguments are read here,
+    the store answers (at once in memory, an awaitable on the graph)."""
+    return {
+        "/rosapi/get_param": lambda args: params.get(_arg(args, "name"), _json_arg(args, "default_value", 1)),
+        "/rosapi/set_param": lambda args: params.set(_arg(args, "name"), _json_arg(args, "value", 1)),
+        "/rosapi/has_param": lambda args: params.has(_arg(args, "name")),
+        "/rosapi/delete_param": lambda args: params.delete(_arg(args, "name")),
+        "/rosapi/get_param_names": lambda args: params.names(),
+    }
+
+
+class Params(Protocol):
+    """Where the parameters are: each answer is the rosapi response's fields (or an awaitable of them);
+    ValueError says why not. ``default``, ``value``: JSON values (None: none given)."""
+
+    def get(self, name: str, default: Any) -> Any: ...
+
+    def set(self, name: str, value: Any) -> Any: ...
+
+    def has(self, name: str) -> Any: ...
+
+    def delete(self, name: str) -> Any: ...
+
+    def names(self) -> Any: ...
+
+
 class ParamStore:
-    """The parameter services on the embedded transport: plain names, values kept in memory."""
+    """The parameters on the embedded transport: plain names, values kept in memory."""
 
     def __init__(self) -> None:
         self.values: dict[str, Any] = {}
+        self.param_ok: Callable[[str], bool] = lambda name: True
 
     def handlers(self, param_ok: Callable[[str], bool] = lambda name: True) -> dict[str, Handler]:
         """``param_ok``: the server's --params-glob (outside it: result false; not listed, not there)."""
+        self.param_ok = param_ok
+        return param_handlers(self)
 
-        def get_param(args: Any) -> dict[str, Any]:
-            name = _exposed(param_ok, _arg(args, "name"))
-            default = _json_arg(args, "default_value", 1)
-            return {"value": json.dumps(self.values.get(name, "" if default is None else default))}
+    def get(self, name: str, default: Any) -> dict[str, Any]:
+        name = _exposed(self.param_ok, name)
+        return {"value": json.dumps(self.values.get(name, "" if default is None else default))}
 
-        def set_param(args: Any) -> dict[str, Any]:
-            name, value = _exposed(param_ok, _arg(args, "name")), _json_arg(args, "value", 1)
-            parameter_value(value)  # the kinds a ROS parameter can hold, as on the graph
-            self.values[name] = value
-            return {}
+    def set(self, name: str, value: Any) -> dict[str, Any]:
+        name = _exposed(self.param_ok, name)
+        parameter_value(value)  # the kinds a ROS parameter can hold, as on the graph
+        self.values[name] = value
+        return {}
 
-        def has_param(args: Any) -> dict[str, Any]:
-            name = _arg(args, "name")
-            return {"exists": param_ok(name) and name in self.values}
+    def has(self, name: str) -> dict[str, Any]:
+        return {"exists": self.param_ok(name) and name in self.values}
 
-        def delete_param(args: Any) -> dict[str, Any]:
-            self.values.pop(_exposed(param_ok, _arg(args, "name")), None)
-            return {}
+    def delete(self, name: str) -> dict[str, Any]:
+        self.values.pop(_exposed(self.param_ok, name), None)
+        return {}
 
-        def get_param_names(args: Any) -> dict[str, Any]:
-            return {"names": sorted(n for n in self.values if param_ok(n))}
-
-        return {
-            "/rosapi/get_param": get_param,
-            "/rosapi/set_param": set_param,
-            "/rosapi/has_param": has_param,
-            "/rosapi/delete_param": delete_param,
-            "/rosapi/get_param_names": get_param_names,
-        }
+    def names(self) -> dict[str, Any]:
+        return {"names": sorted(n for n in self.values if self.param_ok(n))}
 
 
-def param_handlers(
-    graph: Graph,
-    service_ok: Callable[[str], bool] = lambda name: True,
-    param_ok: Callable[[str], bool] = lambda name: True,
-) -> dict[str, Handler]:
-    """The parameter services over the nodes' own parameter services (ROS mode); a node whose
-    parameter services are outside --services-glob is as if it had none; a parameter whose name (the
-    part after ``<node>:``, as rosapi matches params_glob) is outside --params-glob is not reachable."""
+class GraphParams:
+    """The parameters of the nodes on the graph, through their own parameter services (ROS mode); a
+    node whose parameter services are outside --services-glob is as if it had none; a parameter whose
+    name (the part after ``<node>:``, as rosapi matches params_glob) is outside --params-glob is not
+    reachable."""
 
-    async def call(node: str, service: str, args: dict[str, Any]) -> dict[str, Any]:
+    def __init__(
+        self,
+        graph: Graph,
+        service_ok: Callable[[str], bool] = lambda name: True,
+        param_ok: Callable[[str], bool] = lambda name: True,
+    ) -> None:
+        self.graph = graph
+        self.service_ok = service_ok
+        self.param_ok = param_ok
+
+    async def get(self, name: str, default: Any) -> dict[str, Any]:
+        found, value = await self._fetch(name)
+        return {"value": json.dumps(value if found else ("" if default is None else default))}
+
+    async def set(self, name: str, value: Any) -> dict[str, Any]:
+        return await self._change(name, parameter_value(value))
+
+    async def has(self, name: str) -> dict[str, Any]:
+        if not self.param_ok(node_and_param(name)[1]):
+            return {"exists": False}
+        return {"exists": (await self._fetch(name))[0]}
+
+    async def delete(self, name: str) -> dict[str, Any]:
+        return await self._change(name, {"type": 0})
+
+    async def names(self) -> dict[str, Any]:
+        found = await asyncio.gather(*(self._names_of(node) for node in sorted(set(self.graph.node_names()))))
+        return {"names": [name for names in found for name in names]}
+
+    async def _call(self, node: str, service: str, args: dict[str, Any]) -> dict[str, Any]:
         name = f"{node}/{service}"
-        if not service_ok(name):
+        if not self.service_ok(name):
             raise ValueError(f"service {name} is not exposed by this server (--services-glob)")
-        return await graph.call_service(name, args)
+        return await self.graph.call_service(name, args)
 
-    async def fetch(name: str) -> tuple[bool, Any]:
+    async def _fetch(self, name: str) -> tuple[bool, Any]:
         node, param = node_and_param(name)
-        _exposed(param_ok, param)
+        _exposed(self.param_ok, param)
         try:
-            got = await call(node, "get_parameters", {"names": [param]})
+            got = await self._call(node, "get_parameters", {"names": [param]})
         except (ValueError, TimeoutError, asyncio.TimeoutError):
             return False, None  # no such node (rosapi: the default)
         values = got.get("values") or [{}]
         return parameter_json(values[0])
 
-    async def change(name: str, value: dict[str, Any]) -> dict[str, Any]:
+    async def _change(self, name: str, value: dict[str, Any]) -> dict[str, Any]:
         node, param = node_and_param(name)
-        _exposed(param_ok, param)
-        got = await call(node, "set_parameters", {"parameters": [{"name": param, "value": value}]})
+        _exposed(self.param_ok, param)
+        got = await self._call(node, "set_parameters", {"parameters": [{"name": param, "value": value}]})
         result = (got.get("results") or [{}])[0]
         if not result.get("successful", False):
             raise ValueError(f"{node} refused: {result.get('reason') or 'no reason given'}")
         return {}
 
-    async def get_param(args: Any) -> dict[str, Any]:
-        default = _json_arg(args, "default_value", 1)
-        found, value = await fetch(_arg(args, "name"))
-        return {"value": json.dumps(value if found else ("" if default is None else default))}
-
-    async def set_param(args: Any) -> dict[str, Any]:
-        return await change(_arg(args, "name"), parameter_value(_json_arg(args, "value", 1)))
-
-    async def has_param(args: Any) -> dict[str, Any]:
-        name = _arg(args, "name")
-        if not param_ok(node_and_param(name)[1]):
-            return {"exists": False}
-        return {"exists": (await fetch(name))[0]}
-
-    async def delete_param(args: Any) -> dict[str, Any]:
-        return await change(_arg(args, "name"), {"type": 0})
-
-    async def names_of(node: str) -> list[str]:
+    async def _names_of(self, node: str) -> list[str]:
         try:
-            got = await asyncio.wait_for(call(node, "list_parameters", {}), PARAM_TIMEOUT_S)
+            got = await asyncio.wait_for(self._call(node, "list_parameters", {}), PARAM_TIMEOUT_S)
         except (ValueError, TimeoutError, asyncio.TimeoutError):
             return []  # a node without parameter services (or not answering)
-        return [f"{node}:{p}" for p in got.get("result", {}).get("names", []) if param_ok(p)]
-
-    async def get_param_names(args: Any) -> dict[str, Any]:
-        found = await asyncio.gather(*(names_of(node) for node in sorted(set(graph.node_names()))))
-        return {"names": [name for names in found for name in names]}
-
-    return {
-        "/rosapi/get_param": get_param,
-        "/rosapi/set_param": set_param,
-        "/rosapi/has_param": has_param,
-        "/rosapi/delete_param": delete_param,
-        "/rosapi/get_param_names": get_param_names,
-    }
+        return [f"{node}:{p}" for p in got.get("result", {}).get("names", []) if self.param_ok(p)]
 
 
 def handlers(
@@ -318,5 +374,5 @@ def handlers(
         "/rosapi/services_for_type": services_for_type,
         "/rosapi/get_time": get_time,
         "/rosapi/topics_and_raw_types": topics_and_raw_types,
-        **param_handlers(graph, service_ok, param_ok),
+        **param_handlers(GraphParams(graph, service_ok, param_ok)),
     }

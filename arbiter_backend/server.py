@@ -78,9 +78,10 @@ class BackendConfig:
         param_ok = params.wants if params else lambda name: True
         # no graph on the embedded transport: its parameters live in a store in memory
         rosapi_services = rosapi.ParamStore().handlers(param_ok)
-        if hasattr(bus, "node_names"):  # rosapi from the live graph where there is one (ROS mode)
+        graph = getattr(bus, "graph", None)
+        if graph is not None:  # rosapi from the live graph where there is one (ROS mode)
             rosapi_services = rosapi.handlers(
-                bus,  # type: ignore[arg-type]
+                graph,
                 topic_ok=topics.wants if topics else lambda name: True,
                 service_ok=services.wants if services else lambda name: True,
                 param_ok=param_ok,

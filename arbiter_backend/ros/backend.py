@@ -17,7 +17,7 @@ import threading
 import rclpy
 from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.context import Context
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 
 from .. import bridge
@@ -27,6 +27,7 @@ from .autonomy import AutonomyNode
 from .bus import RosBus
 from .interfaces import RosInterfaces
 from .nodes import SimulatorNode, TrackerNode
+from .spin import spin_in_thread
 
 log = logging.getLogger(__name__)
 
@@ -83,14 +84,6 @@ class RosBackend(Servers):
             self.executor.add_node(node)
         self._thread: threading.Thread | None = None
 
-    def _spin(self) -> None:
-        try:
-            self.executor.spin()
-        except ExternalShutdownException:
-            pass
-        except Exception:
-            log.exception("rclpy executor stopped")
-
     async def start(self) -> None:
         if self.bridge_node is not None:
             self.bus = RosBus(self.bridge_node, asyncio.get_running_loop())
@@ -110,8 +103,7 @@ class RosBackend(Servers):
             self.bridge_node.declare_parameter(
                 "actual_port", self.bridge_port, ParameterDescriptor(read_only=True)
             )
-        self._thread = threading.Thread(target=self._spin, name="rclpy-executor", daemon=True)
-        self._thread.start()
+        self._thread = spin_in_thread(self.executor, "rclpy-executor", "rclpy executor")
         self.topics.start()
 
     async def stop(self) -> None:

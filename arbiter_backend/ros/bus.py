@@ -38,8 +38,8 @@ from arbiter_core.msgtypes import MessageError, normalize_type
 from arbiter_core.topics import QOS_DEPTH, is_command
 
 from ..bus import Callback, TypeClash
-from .convert import message_class, service_class, to_cbor, to_json, to_ros, typedef_text
-from .futures import on_loop
+from .convert import message_class, to_cbor, to_json, to_ros
+from .graph import RosGraph
 from .local import HandledLocally
 
 log = logging.getLogger(__name__)
@@ -222,11 +222,6 @@ def json_form(msg: dict[str, Any]) -> dict[str, Any]:
     return msg.filled() if isinstance(msg, RosMessage) else msg
 
 
-def _full(name: str, namespace: str) -> str:
-    """``/ns/name`` (``/name`` in the root namespace), as rosapi names nodes."""
-    return f"{namespace.rstrip('/')}/{name}"
-
-
 class RosBus:
     def __init__(self, node: Node, loop: asyncio.AbstractEventLoop) -> None:
         self.node = node
@@ -238,15 +233,14 @@ class RosBus:
         # texts handed over in-process (deliver_local), so that their DDS copy is not fanned out twice
         self._local: dict[str, HandledLocally] = {}
         self.local_delivered = 0
-        self.local_handlers: dict[str, Callable[[str], None]] = {}
+        self.local_handlers: dict[str, Callable[[str], None]] = {}  # topic -> a node's in-process handler
         self.interfaces: Any = None  # RosInterfaces: services and actions across the bridge (backend.py)
         # the topic monitor's share of the relay's readers (see ``relayed``): each message the relay takes
         # on a volatile reader, as (topic, CDR bytes, receive time in ns); executor thread
         self.tap: Callable[[str, bytes, int], None] | None = None
         self._undecodable: set[str] = set()  # topics whose bytes did not fit their type (told once)
-        self._clients: dict[
-            str, tuple[type, Any]
-        ] = {}  # service -> (its type's class, the rclpy client)  # topic -> a node's in-process handler
+        # the rest of the graph, for rosapi and call_service (rosapi.Graph)
+        self.graph = RosGraph(node, loop, self.topics)
 
     # -- types ------------------------------------------------------------------------------
     def _graph(self) -> dict[str, list[str]]:
@@ -271,33 +265,6 @@ class RosBus:
             return have
         types = self._graph().get(topic)
         return types[0] if types else None
-
-    # -- the graph, for rosapi (arbiter_backend.rosapi.Graph) ------------------------------------------
-    def node_names(self) -> list[str]:
-        return [_full(name, ns) for name, ns in self.node.get_node_names_and_namespaces()]
-
-    def topic_endpoints(self, topic: str) -> tuple[list[str], list[str]]:
-        pubs = [_full(i.node_name, i.node_namespace) for i in self.node.get_publishers_info_by_topic(topic)]
-        subs = [
-            _full(i.node_name, i.node_namespace) for i in self.node.get_subscriptions_info_by_topic(topic)
-        ]
-        return pubs, subs
-
-    def node_endpoints(self, node: str) -> tuple[list[str], list[str], list[str]]:
-        ns, _, name = node.rpartition("/")
-        ns = ns or "/"
-        return (
-            [t for t, _ in self.node.get_subscriber_names_and_types_by_node(name, ns)],
-            [t for t, _ in self.node.get_publisher_names_and_types_by_node(name, ns)],
-            [s for s, _ in self.node.get_service_names_and_types_by_node(name, ns)],
-        )
-
-    def service_names_and_types(self) -> list[tuple[str, list[str]]]:
-        return [(name, list(types)) for name, types in self.node.get_service_names_and_types()]
-
-    @staticmethod
-    def typedef_text(type_name: str) -> str:
-        return typedef_text(type_name)
 
     def topics(self) -> list[tuple[str, str]]:
         merged = {name: types[0] for name, types in self._graph().items() if types}
@@ -464,7 +431,7 @@ class RosBus:
         return to_ros(message_class(type_name), msg)  # one handed over in-process (deliver_local)
 
     def json_form(self, msg: dict[str, Any]) -> dict[str, Any]:
-        """The endpoint serialises through this (``bridge._encode``): module ``json_form``."""
+        """The endpoint serialises through this (``bridge.encoding``): module ``json_form``."""
         return json_form(msg)
 
     def cbor_values(self, type_name: str | None, msg: dict[str, Any]) -> dict[str, Any]:
@@ -477,41 +444,6 @@ class RosBus:
         if raw is None:  # one handed over in-process (deliver_local)
             raw = serialize_message(self._ros_of(type_name, msg))
         return raw, getattr(msg, "received_ns", time.time_ns())
-
-    # -- services ------------------------------------------------------------------------------
-    async def call_service(self, service: str, args: Any) -> dict[str, Any]:  # asyncio loop
-        """Call ``service`` (any on the graph; its type from the graph) with rosbridge ``args`` (an object
-        keyed by field, or a list in field order; anything else: the default request); the response in
-        JSON form. MessageError when there is no such service or the args do not fit. The caller
-        bounds the wait; a cancelled call is withdrawn from the client."""
-        types = dict(self.node.get_service_names_and_types()).get(service)
-        if not types:
-            raise MessageError(f"Service {service} does not exist")
-        srv = service_class(types[0])
-        if isinstance(args, list):
-            args = dict(zip(srv.Request.get_fields_and_field_types(), args, strict=False))
-        request = to_ros(srv.Request, args if isinstance(args, dict) else {}, path="args")
-        cached = self._clients.get(service)
-        if cached is None or cached[0] is not srv:
-            if cached is not None:
-                self.node.destroy_client(cached[1])
-            cached = self._clients[service] = (srv, self.node.create_client(srv, service))
-        client = cached[1]
-        for _ in range(20):  # up to 1 s for the server side to be matched, as rosbridge waits
-            if client.service_is_ready():
-                break
-            await asyncio.sleep(0.05)
-        else:
-            raise MessageError(f"Service {service} is not available")
-        future = client.call_async(request)
-        answer = on_loop(self.loop, future)
-        try:
-            response = await answer
-        except asyncio.CancelledError:
-            with contextlib.suppress(Exception):
-                client.remove_pending_request(future)
-            raise
-        return to_json(response)
 
     def relayed(self) -> dict[str, tuple[str, bool]]:
         """The topics the relay reads with a volatile reader, as (type, best effort): the topic monitor
@@ -612,8 +544,6 @@ class RosBus:
                 self.node.destroy_subscription(sub.retiring)
         for pub in self._pubs.values():
             self.node.destroy_publisher(pub.publisher)
-        for _, client in self._clients.values():
-            self.node.destroy_client(client)
-        self._clients.clear()
+        self.graph.close()
         self._subs.clear()
         self._pubs.clear()

@@ -35,7 +35,7 @@ from typing import Any
 from rclpy.action import ActionClient, ActionServer, CancelResponse
 from rclpy.callback_groups import ReentrantCallbackGroup
 from rclpy.context import Context
-from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
+from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 
 from arbiter_core.msgtypes import MessageError
@@ -50,6 +50,7 @@ from ..provided import (
 )
 from .convert import action_class, interface_name, service_class, to_json, to_ros
 from .futures import on_loop
+from .spin import spin_in_thread
 
 log = logging.getLogger(__name__)
 
@@ -138,16 +139,7 @@ class RosInterfaces:
         self.group = ReentrantCallbackGroup()
         self._action_clients: dict[str, tuple[type, ActionClient]] = {}
         self._closed = False
-        self._thread = threading.Thread(target=self._spin, name="rclpy-provider", daemon=True)
-        self._thread.start()
-
-    def _spin(self) -> None:
-        try:
-            self.executor.spin()
-        except ExternalShutdownException:
-            pass
-        except Exception:
-            log.exception("the provider executor stopped")
+        self._thread = spin_in_thread(self.executor, "rclpy-provider", "the provider executor")
 
     # -- types and values -------------------------------------------------------------------
     @staticmethod

@@ -1,0 +1,39 @@
+"""What a client may reach: rosbridge_server's ``topics_glob`` / ``services_glob``, and our
+``--actions-glob`` (goals sent and actions advertised). None: everything."""
+
+from __future__ import annotations
+
+from ..topicwatch import TopicFilter
+from .frames import BadFrame, Frame, name
+
+
+class Exposure:
+    def __init__(
+        self,
+        topics: TopicFilter | None = None,
+        services: TopicFilter | None = None,
+        actions: TopicFilter | None = None,
+    ) -> None:
+        self.topics = topics
+        self.services = services
+        self.actions = actions
+
+    def topic_ok(self, topic: str) -> bool:
+        return self.topics is None or self.topics.wants(topic)
+
+    def service_ok(self, service: str) -> bool:
+        return self.services is None or self.services.wants(service)
+
+    def topic(self, frame: Frame) -> str:
+        """The frame's ``topic``, checked against ``--topics-glob``."""
+        topic = name(frame)
+        if not self.topic_ok(topic):
+            raise BadFrame(f"topic {topic} is not exposed by this server (--topics-glob)")
+        return topic
+
+    def action(self, frame: Frame) -> str:
+        """The frame's ``action``, checked against ``--actions-glob``."""
+        action = name(frame, "action")
+        if self.actions is not None and not self.actions.wants(action):
+            raise BadFrame(f"action {action} is not exposed by this server (--actions-glob)")
+        return action
