@@ -59,13 +59,13 @@ async def test_the_poller_takes_each_record_once_by_since():
         await publish(b.bridge_port, range(12))
         assert wait_for(lambda: total_seen(b.api) == 12)
         view = await client.poll()  # first poll: the newest `limit` records
-        assert [r.seq for r in view.records] == [7, 8, 9, 10, 11] and view.last_rx_seq == 12
+        assert [r.seq for r in view.records] == [7, 8, 9, 10, 11] and client.view.last_rx_seq == 12
         assert client.view.params(5) == {"since": 12, "limit": 120}
         await publish(b.bridge_port, range(12, 20))
         assert wait_for(lambda: total_seen(b.api) == 20)
         view = await client.poll()
         assert [r.seq for r in view.records] == list(range(7, 20))  # nothing twice, nothing missed
-        assert len(view.window) == 13 and view.last_rx_seq == 20
+        assert len(view.window) == 13 and client.view.last_rx_seq == 20
         version = view.version
         view = await client.poll()  # nothing new: nothing added, nothing redrawn
         assert len(view.window) == 13 and view.version == version
@@ -130,7 +130,7 @@ async def test_a_tracker_without_rx_seq_is_polled_by_limit():
     try:
         add(6)
         view = await client.poll()
-        assert list(view.window) == [3.0, 4.0, 5.0, 6.0] and not view.pages_by_rx_seq
+        assert list(view.window) == [3.0, 4.0, 5.0, 6.0] and not client.view.pages_by_rx_seq
         # its stats block has only a count: said, and the records are taken all the same
         assert view.reachable and view.stats is None and "stats.mean_ms" in (view.stats_error or "")
         add(2)
