@@ -27,8 +27,8 @@ from ..analytics.runs import MANUAL
 from ..analytics.styles import GOAL, ROBOT_ARROWS, WAYPOINT, style_of
 from ..session.frames import Frame
 from ..session.views import PLOT_PERIOD_S, AnalyticsView, LatencySnapshot, MapView, thin
-from .canvas_rows import changed_rows_only
 from .messages import GoalPicked
+from .perf.canvas_rows import changed_rows_only
 
 V = TypeVar("V")  # the part of the frame a plot shows
 K = TypeVar("K")  # what it draws of it: equal keys, equal drawings

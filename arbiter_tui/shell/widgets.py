@@ -24,7 +24,7 @@ from ..control.teleop import legend_compact
 from ..latency.clocksync import OffsetEstimate
 from ..session.frames import Frame
 from ..session.views import AnalyticsView, LatencySnapshot, RobotView, StatusView, fit_fields
-from . import give_way
+from .perf import give_way
 
 LINK_DOWN = (  # two lines of the 36 columns inside the panel: the rows below stay in view
     "LINK DOWN: nothing is sent.\nThe robot stops on its own timeout.\n"

@@ -20,8 +20,8 @@ from arbiter_core import topics
 from ...session.frames import Frame
 from ...session.robot import RobotSession
 from ...session.views import observe_banner
-from ..heap import freeze_heap
 from ..keys import KeyRouter
+from ..perf.heap import freeze_heap
 from ..plots import PlotBudget
 from ..widgets import StatusLine
 

@@ -15,7 +15,7 @@ from arbiter_core.controllers import ALGORITHMS
 
 from ...control.teleop import key_name
 from .. import dialogs
-from ..heap import freeze_heap
+from ..perf.heap import freeze_heap
 from ..plots import ErrorPlot, LatencyHistogram, LatencyPlot, LiveMap, TrajectoryPlot
 from ..widgets import FIT, KEY_HELP, ClientLine, RobotPanel, StatsCards, TrackerCards, TrackerLine
 from .analytics import CompareTable, RuleLine

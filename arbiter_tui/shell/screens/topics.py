@@ -302,7 +302,7 @@ class TopicsScreen(BaseScreen):
         self.state = frame.topics
 
     def on_mount(self) -> None:
-        super().on_mount()
+        # (BaseScreen's on_mount runs too: Textual calls the handler of every class in the MRO)
         self.watch(self.query_one(TopicsList), "selected", self._select, init=True)
 
     def _select(self, name: str | None) -> None:
@@ -319,7 +319,7 @@ class TopicsScreen(BaseScreen):
         self._echo(None)  # nobody looks at it: unsubscribe
 
     def on_screen_resume(self) -> None:
-        super().on_screen_resume()
+        # (BaseScreen's runs too, once: no super() call, which ran it twice and forced two frames)
         self.console.keys.set_direct(False)  # this screen's keys are typed: no teleop here
         self._echo(self.selected)
 
