@@ -40,6 +40,7 @@ from ..session.pollers import poll_forever
 from ..session.robot import MissionFinished, RobotSession, StopDone
 from ..session.settings import Settings
 from . import lifecycle, palette, perf, robot_side
+from .dialogs import Dialogs
 from .keys import STOP_BINDINGS, KeyRouter, direct_keys
 from .messages import (
     BackendFailed,
@@ -119,6 +120,7 @@ class ArbiterApp(RegistryTheme):
         self.sampler = FrameSampler(self.session, settings, tracker=tracker)
         self.frame_clock: FrameClock | None = None  # live only: frames after control ticks
         self.keys = KeyRouter(self.session.key, lambda: self.session.stop_all("stop key"))
+        self.dialogs = Dialogs(self, self)
         self._shown_state: tuple[object, ...] = ()
         self._theme_loaded = False
 

@@ -6,7 +6,7 @@ import pytest
 
 from arbiter_core.topicstats import NOT_INSTALLED, TopicFigures
 from arbiter_tui.latency.topics_client import TopicsState
-from arbiter_tui.shell.screens.topics import RatePlot, TopicDetail, TopicsList
+from arbiter_tui.shell.widgets.topics import RatePlot, TopicDetail, TopicsList
 
 from ..support.tui import burst, still_app, until
 
