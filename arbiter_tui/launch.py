@@ -235,7 +235,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def parse(argv: list[str]) -> tuple[argparse.Namespace, config.Loaded, set[str]] | int:
     """Defaults, then the config file, then the command line; an int is an exit status."""
-    from textual.theme import BUILTIN_THEMES
+    from .shell import themes  # (Textual's theme names: imported from the shell, not from Textual here)
 
     parser = build_parser()
     early = argparse.ArgumentParser(add_help=False)
@@ -243,7 +243,7 @@ def parse(argv: list[str]) -> tuple[argparse.Namespace, config.Loaded, set[str]]
     known, _ = early.parse_known_args(argv)
     path = known.config or config.default_path()
     try:
-        loaded = config.load(path, parser, list(BUILTIN_THEMES))
+        loaded = config.load(path, parser, themes.names())
         if known.config is not None and not loaded.exists:
             raise config.ConfigError(f"config {path}: no such file")
     except config.ConfigError as exc:

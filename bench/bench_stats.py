@@ -163,7 +163,7 @@ def bench_screen(n: int, repeat: int) -> dict[str, float]:
     from arbiter_tui.session import views
     from arbiter_tui.session.settings import Settings
     from arbiter_tui.shell.app import make_app
-    from arbiter_tui.shell.plots import Plot
+    from arbiter_tui.shell.widgets.plots import Plot
 
     store = AnalyticsStore(max_data_points=n)
     store.start_collection()

@@ -39,8 +39,8 @@ from ..session.link_sweep import sweep_curve
 from ..session.pollers import poll_forever
 from ..session.robot import MissionFinished, RobotSession, StopDone
 from ..session.settings import Settings
-from . import canvas_rows, give_way, lifecycle, palette, robot_side, strips
-from .heap import freeze_heap
+from . import lifecycle, palette, perf, robot_side
+from .dialogs import Dialogs
 from .keys import STOP_BINDINGS, KeyRouter, direct_keys
 from .messages import (
     BackendFailed,
@@ -53,16 +53,15 @@ from .messages import (
     RunFinished,
     StopReported,
 )
+from .perf import give_way
+from .perf.heap import freeze_heap
+from .perf.theme import RegistryTheme
 from .screens.analytics import AnalyticsScreen
 from .screens.base import BaseScreen
 from .screens.control import ControlScreen
 from .screens.help import HelpScreen
 from .screens.latency import LatencyScreen
 from .screens.topics import TopicsScreen
-from .theme import RegistryTheme
-
-strips.install()  # Textual's strips freed by reference counting, not by full garbage collections
-canvas_rows.install()  # a plot's unchanged rows keep their strips
 
 log = logging.getLogger(__name__)
 NOTICE_AFTER_STOP_S = 0.1  # a run's end is told once its stop command has reached the robot
@@ -121,6 +120,7 @@ class ArbiterApp(RegistryTheme):
         self.sampler = FrameSampler(self.session, settings, tracker=tracker)
         self.frame_clock: FrameClock | None = None  # live only: frames after control ticks
         self.keys = KeyRouter(self.session.key, lambda: self.session.stop_all("stop key"))
+        self.dialogs = Dialogs(self, self)
         self._shown_state: tuple[object, ...] = ()
         self._theme_loaded = False
 
@@ -408,7 +408,9 @@ def make_app(
     connector: lifecycle.Connector | None = None,
 ) -> ArbiterApp:
     """Build the app for the CLI and for tests alike: with a link injected, or a ``connector`` that
-    makes one in a worker once the first frame is on screen."""
+    makes one in a worker once the first frame is on screen. The Textual patches (``perf``) are
+    installed here, at start-up, where this install's releases were checked for them."""
+    perf.install()
     return ArbiterApp(
         settings, link or PendingLink(), tracker=tracker, store=store, clock=clock, connector=connector
     )

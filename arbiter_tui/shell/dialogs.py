@@ -1,69 +1,101 @@
-"""What the console asks the user, and what it tells them about exports: the goal prompt, the clear
-confirmation, and an export's notices. Called by the screens' keys and by the palette alike."""
+"""What the console asks the user, and what it tells them about exports and recordings: the goal prompt,
+the clear confirmation, the export chooser and an export's notices, opening a recording. The console
+owns one :class:`Dialogs` (``console.dialogs``); the screens' keys and the palette call it, and no
+screen imports a dialog."""
 
 from __future__ import annotations
 
+from functools import partial
 from pathlib import Path
 
 from textual.app import App
 
+from arbiter_core.controllers import goal_driver
+
+from ..analytics.exports import ExportFormatError
+from ..session.recording import open_recording
 from ..session.robot import ExportResult
-from .messages import GoalPicked
+from .messages import GoalPicked, RecordingFailed, RecordingOpened
 from .screens.base import Console
+from .screens.confirm import ConfirmClear
+from .screens.export import ExportChooser
+from .screens.goal import GoalPrompt
+from .screens.open_file import OpenRecording
 
 
-def ask_goal(app: App[object], console: Console) -> None:
-    """``t``: type a go-to-goal target; the app drives there (``GoalPicked``)."""
-    from arbiter_core.controllers import goal_driver
+class Dialogs:
+    def __init__(self, app: App[object], console: Console) -> None:
+        self.app = app
+        self.console = console
 
-    from .screens.goal import GoalPrompt
+    def ask_goal(self) -> None:
+        """``t``: type a go-to-goal target; the app drives there (``GoalPicked``)."""
+        session = self.console.session
+        pose = session.link.telemetry.snapshot()[0]
 
-    session = console.session
-    pose = session.link.telemetry.snapshot()[0]
+        def chosen(goal: tuple[float, float] | None) -> None:
+            if goal is not None:
+                self.app.post_message(GoalPicked(*goal))
 
-    def chosen(goal: tuple[float, float] | None) -> None:
-        if goal is not None:
-            app.post_message(GoalPicked(*goal))
+        self.app.push_screen(GoalPrompt((pose.x, pose.y), goal_driver(session.loop.algorithm)), chosen)
 
-    app.push_screen(GoalPrompt((pose.x, pose.y), goal_driver(session.loop.algorithm)), chosen)
+    def ask_clear(self) -> None:
+        """Clearing the collected samples asks first (nothing else in the console destroys data)."""
 
+        def done(confirmed: bool | None) -> None:
+            if confirmed:
+                self.app.notify(f"cleared {self.console.session.clear()} samples", timeout=3)
+                self.console.refresh_frame(force=True)
 
-def ask_clear(app: App[object], console: Console) -> None:
-    """Clearing the collected samples asks first (nothing else in the console destroys data)."""
-    from .screens.confirm import ConfirmClear
+        self.app.push_screen(ConfirmClear(len(self.console.session.store)), done)
 
-    def done(confirmed: bool | None) -> None:
-        if confirmed:
-            app.notify(f"cleared {console.session.clear()} samples", timeout=3)
-            console.refresh_frame(force=True)
+    def ask_export(self) -> None:
+        """The export chooser, then the export."""
 
-    app.push_screen(ConfirmClear(len(console.session.store)), done)
+        def chosen(formats: tuple[str, ...] | None) -> None:
+            if formats:
+                self.export(*formats)
 
+        self.app.push_screen(ExportChooser(len(self.console.session.store)), chosen)
 
-def export(app: App[object], console: Console, *formats: str) -> list[ExportResult]:
-    """Write the collected data in each format, all under one file stem, and say what became of it: the
-    whole path written, nothing to write, or the failure (the collected data is kept)."""
-    results = console.session.export(*formats)
-    for r in results:
-        if r.path is not None:
-            where = Path(r.path).resolve()  # the whole path: no guessing where
-            app.notify(f"wrote {where} ({r.points} points)", timeout=4, markup=False)  # a path is no markup
-        elif r.nothing:
-            app.notify(r.error or "", severity="warning", timeout=6)
-        else:
-            text = f"EXPORT FAILED ({r.fmt}): {r.error} — collected data kept"
-            app.notify(text, severity="error", timeout=8, markup=False)
-    return results
+    def export(self, *formats: str) -> list[ExportResult]:
+        """Write the collected data in each format, all under one file stem, and say what became of it:
+        the whole path written, nothing to write, or the failure (the collected data is kept)."""
+        results = self.console.session.export(*formats)
+        for r in results:
+            if r.path is not None:
+                where = Path(r.path).resolve()  # the whole path: no guessing where
+                self.app.notify(f"wrote {where} ({r.points} points)", timeout=4, markup=False)
+            elif r.nothing:
+                self.app.notify(r.error or "", severity="warning", timeout=6)
+            else:
+                text = f"EXPORT FAILED ({r.fmt}): {r.error} — collected data kept"
+                self.app.notify(text, severity="error", timeout=8, markup=False)
+        return results
 
+    def open_recording(self) -> None:
+        """A recording on the analytics screen: the path asked for, the file read and graded on a
+        worker's thread (a long bag takes seconds); ``RecordingOpened`` or ``RecordingFailed`` then."""
 
-def open_recording(app: App[object]) -> None:
-    """Open a recording on the analytics screen (``recording.py``)."""
-    from . import recording
+        def chosen(path: Path | None) -> None:
+            if path is not None:
+                self.app.notify(f"reading {path}…", timeout=3, markup=False)
+                load = partial(self._load, path)
+                self.app.run_worker(load, thread=True, group="recording", exclusive=True, exit_on_error=False)
 
-    recording.ask(app)
+        self.app.push_screen(OpenRecording(), chosen)
 
+    def _load(self, path: Path) -> None:
+        try:
+            view = open_recording(path)
+        except (ExportFormatError, OSError, ValueError) as exc:
+            self.app.post_message(RecordingFailed(str(path), str(exc) or type(exc).__name__))
+            return
+        except MemoryError:
+            self.app.post_message(RecordingFailed(str(path), "out of memory reading it"))
+            return
+        self.app.post_message(RecordingOpened(view))
 
-def live_again(app: App[object]) -> None:
-    from . import recording
-
-    recording.close(app)
+    def live_session(self) -> None:
+        """The live session again, in place of a recording."""
+        self.app.post_message(RecordingOpened(None))

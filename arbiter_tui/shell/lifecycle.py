@@ -19,8 +19,8 @@ from ..link.base import Link
 from ..session.cpu_share import SPARE_CORES, cores_available
 from ..session.frames import FrameClock, FrameSampler
 from ..session.robot import DEFAULT_CONTROL_HZ
-from . import give_way
 from .messages import BackendFailed, BackendStarted, FrameDue
+from .perf import give_way
 
 log = logging.getLogger(__name__)
 

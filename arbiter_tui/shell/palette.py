@@ -10,7 +10,6 @@ from textual.app import App, SystemCommand
 from arbiter_core.controllers import ALGORITHMS, MISSIONS
 
 from ..analytics.files import FORMATS
-from . import dialogs
 from .screens.base import Console
 
 SCREENS = ("control", "analytics", "latency", "topics")
@@ -52,23 +51,23 @@ def commands(app: App[object], console: Console, switch: Callable[[str], None]) 
         "Restart the mission", "From its first waypoint (G)", lambda: console.go(restart=True)
     )
     yield SystemCommand(
-        "Set a goal x y…", "Type a go-to-goal target in metres (t)", lambda: dialogs.ask_goal(app, console)
+        "Set a goal x y…", "Type a go-to-goal target in metres (t)", console.dialogs.ask_goal
     )
     yield SystemCommand(
         "Start/pause collection", "Toggle analytics collection", then_show(session.toggle_collection)
     )
-    yield SystemCommand("Clear collected data", "Asks first", lambda: dialogs.ask_clear(app, console))
+    yield SystemCommand("Clear collected data", "Asks first", console.dialogs.ask_clear)
     yield SystemCommand(
         "Open a recording…", "A ros2 bag or an export, graded as `stats` grades it (f on screen 2)",
-        lambda: dialogs.open_recording(app),
+        console.dialogs.open_recording,
     )  # fmt: skip
     yield SystemCommand(
         "Back to the live session", "Leave the recording shown on screen 2 (escape there)",
-        lambda: dialogs.live_again(app),
+        console.dialogs.live_session,
     )  # fmt: skip
     for fmt in FORMATS:
         yield SystemCommand(
             f"Export {fmt.upper()}",
             f"Write the collected data as {fmt}",
-            lambda f=fmt: dialogs.export(app, console, f),
+            lambda f=fmt: console.dialogs.export(f),
         )

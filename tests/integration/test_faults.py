@@ -13,7 +13,7 @@ from arbiter_tui.link.base import CONNECTED
 from arbiter_tui.link.rosbridge import RosLink
 from arbiter_tui.session.settings import Settings
 from arbiter_tui.shell.app import make_app
-from arbiter_tui.shell.widgets import LINK_DOWN, StatusLine
+from arbiter_tui.shell.widgets.text import LINK_DOWN, StatusLine
 
 from ..support.backend import free_port, get_json, start_backend
 from ..support.points import make_point

@@ -13,7 +13,7 @@ from arbiter_tui.link.base import CONNECTED, DISCONNECTED, RECONNECTING
 from arbiter_tui.link.rosbridge import RosLink
 from arbiter_tui.session.settings import Settings
 from arbiter_tui.shell.app import make_app
-from arbiter_tui.shell.screens.topics import TopicsList
+from arbiter_tui.shell.widgets.topics import TopicsList
 
 from ..support.backend import get_json, start_backend
 from ..support.tui import until

@@ -79,7 +79,7 @@ async def test_topics_screen_polls_the_backend_and_echoes_the_selected_topic(tmp
     """Screen 4 against the real backend: the table fills from GET /api/topics, the simulator's odometry
     is ok at its rate, and the selected topic's latest message arrives through rosbridge (throttled).
     Leaving the screen stops both the polls and the echo."""
-    from arbiter_tui.shell.screens.topics import TopicDetail, TopicsList
+    from arbiter_tui.shell.widgets.topics import TopicDetail, TopicsList
 
     backend = start_backend("--topics-window", "2")
     link = RosLink("127.0.0.1", backend.bridge_port)

@@ -10,10 +10,10 @@ from arbiter_core.kinematics import Pose
 from arbiter_tui.analytics.labels import STAT_LABELS, format_stat
 from arbiter_tui.analytics.store import STATS_FIELDS
 from arbiter_tui.link.base import CONNECTED, RECONNECTING
-from arbiter_tui.shell.plots import ErrorPlot, LatencyHistogram, LatencyPlot, LiveMap, TrajectoryPlot
-from arbiter_tui.shell.screens.analytics import CompareTable
 from arbiter_tui.shell.screens.control import ControlScreen
-from arbiter_tui.shell.widgets import (
+from arbiter_tui.shell.widgets.analytics import CompareTable
+from arbiter_tui.shell.widgets.plots import ErrorPlot, LatencyHistogram, LatencyPlot, LiveMap, TrajectoryPlot
+from arbiter_tui.shell.widgets.text import (
     CARDS,
     ClientLine,
     RobotPanel,
@@ -280,7 +280,7 @@ async def test_the_dashboard_latency_lines_take_as_many_rows_as_they_have_whenev
 def test_a_line_of_figures_breaks_between_its_parts_never_inside_one():
     from rich.text import Text
 
-    from arbiter_tui.shell.widgets import fit_lines
+    from arbiter_tui.shell.widgets.text import fit_lines
 
     line = Text.assemble(("this console", "bold"), " · rtt p50 0.600 ms · jitter 0.032 ms\nclock +1.0 ms")
     fitted = fit_lines(line, 31)
@@ -367,7 +367,7 @@ async def test_readme_names_the_missions_n_cycles_and_the_algorithms_a_cycles_in
 
 
 async def test_the_map_follows_the_robot_at_most_every_follow_period_and_ends_where_it_is():
-    from arbiter_tui.shell.plots import FOLLOW_S
+    from arbiter_tui.shell.widgets.plots import FOLLOW_S
 
     app = still_app()
     async with app.run_test(size=(100, 30)) as pilot:

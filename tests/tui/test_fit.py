@@ -9,7 +9,7 @@ from rich.cells import cell_len
 
 from arbiter_core.timesync import TimeSync
 from arbiter_tui.session.views import RobotView
-from arbiter_tui.shell.widgets import LABEL, ClientLine, RobotPanel, TrackerLine
+from arbiter_tui.shell.widgets.text import LABEL, ClientLine, RobotPanel, TrackerLine
 
 from ..support.tui import show_frame, still_app, until
 
@@ -108,7 +108,7 @@ async def test_the_analytics_trajectory_has_rows_enough_at_80x24():
     """At 80x24 the trajectory was 3 rows on a -10...10 axis: at equal aspect the metres per row (the
     path's height over 3 rows) set the metres per column, so 29 columns spanned 36 m. The plots now keep
     at least 10 rows on a short terminal (the comparison above them scrolls), 5 of them for the path."""
-    from arbiter_tui.shell.plots import TrajectoryPlot
+    from arbiter_tui.shell.widgets.plots import TrajectoryPlot
 
     app = still_app()
     async with app.run_test(size=(80, 24)) as pilot:
@@ -124,7 +124,7 @@ async def test_the_analytics_trajectory_has_rows_enough_at_80x24():
 async def test_the_analytics_table_is_full_where_it_fits_and_compact_where_it_would_scroll(size):
     """At 120x36 the full table needed sideways scrolling while the compact one fits (the switch was at a
     fixed 104 columns): the full view is shown only where all of it fits."""
-    from arbiter_tui.shell.screens.analytics import CompareTable
+    from arbiter_tui.shell.widgets.analytics import CompareTable
 
     app = still_app()
     async with app.run_test(size=size) as pilot:
@@ -146,7 +146,7 @@ async def test_topic_types_are_whole_where_the_name_column_has_room(size):
     columns go to the name and the type, each up to its longest cell."""
     from arbiter_core.topicstats import TopicFigures
     from arbiter_tui.latency.topics_table import short_type
-    from arbiter_tui.shell.screens.topics import TopicsList
+    from arbiter_tui.shell.widgets.topics import TopicsList
 
     from .test_topics_screen import STATE, topics_app
 

@@ -5,8 +5,9 @@ import pytest
 
 from arbiter_tui.link.sim import SimLink
 from arbiter_tui.session.settings import Settings
-from arbiter_tui.shell import give_way, lifecycle
+from arbiter_tui.shell import lifecycle
 from arbiter_tui.shell.app import make_app
+from arbiter_tui.shell.perf import give_way
 
 from ..support.tui import until
 

@@ -9,9 +9,9 @@ from arbiter_tui.analytics.runs import COMPLETED, OVERRIDDEN
 from arbiter_tui.analytics.store import AnalyticsStore
 from arbiter_tui.link.sim import SimLink
 from arbiter_tui.session.views import PLOT_PERIOD_S
-from arbiter_tui.shell.plots import ErrorPlot, LiveMap, TrajectoryPlot
-from arbiter_tui.shell.screens.analytics import CompareTable, RingWarning, RuleLine
 from arbiter_tui.shell.screens.goal import GoalPrompt
+from arbiter_tui.shell.widgets.analytics import CompareTable, RingWarning, RuleLine
+from arbiter_tui.shell.widgets.plots import ErrorPlot, LiveMap, TrajectoryPlot
 
 from ..support.tui import FakeClock, still_app, until
 
@@ -105,7 +105,7 @@ async def test_the_hints_name_the_controller_that_will_drive_from_the_registry(t
 
 
 async def test_a_finished_run_stays_on_the_panel_until_the_next_key(tmp_path):
-    from arbiter_tui.shell.widgets import RobotPanel
+    from arbiter_tui.shell.widgets.text import RobotPanel
 
     app, clock = sim_app(tmp_path)
     async with app.run_test(size=SIZE) as pilot:
@@ -138,7 +138,7 @@ async def test_a_manual_samples_errors_are_those_the_panel_shows(tmp_path):
     """No goal on screen (manual, nothing to resume): the samples' errors are 0, not a distance to a
     waypoint nobody drives to. After an override: the interrupted goal, as the panel shows it."""
     from arbiter_core.kinematics import distance_error
-    from arbiter_tui.shell.widgets import RobotPanel
+    from arbiter_tui.shell.widgets.text import RobotPanel
 
     app, clock = sim_app(tmp_path)
     async with app.run_test(size=SIZE) as pilot:

@@ -5,7 +5,7 @@ from arbiter_core.record import LatencyRecord
 from arbiter_core.timesync import TimeSync
 from arbiter_tui.latency.clocksync import LatencyMeter
 from arbiter_tui.session.views import LatencySnapshot
-from arbiter_tui.shell.widgets import ClientLine
+from arbiter_tui.shell.widgets.text import ClientLine
 
 
 def drifting_meter(offset_ms, drift_ppm, seconds=40, up_ms=0.4, down_ms=0.4):

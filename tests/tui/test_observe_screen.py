@@ -7,7 +7,7 @@ import pytest
 
 from arbiter_tui.latency.autonomy import RobotSideView
 from arbiter_tui.shell.screens.goal import GoalPrompt
-from arbiter_tui.shell.widgets import RobotPanel
+from arbiter_tui.shell.widgets.text import RobotPanel
 
 from ..support.tui import still_app, until
 

@@ -12,7 +12,7 @@ from arbiter_tui.analytics.model import stats_of_points
 from arbiter_tui.cli import main
 from arbiter_tui.session.recording import recording_view
 from arbiter_tui.shell.paths import complete
-from arbiter_tui.shell.screens.analytics import CompareTable, FileBanner
+from arbiter_tui.shell.widgets.analytics import CompareTable, FileBanner
 
 from ..support.bags import T0_NS, Recording, drive, write_bag
 from ..support.tui import still_app, until

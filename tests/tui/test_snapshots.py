@@ -61,7 +61,7 @@ def test_comparison_per_run_sorted(snap_compare, size):
     """The comparison per run (v), sorted by time to complete (clicked twice: longest first)."""
 
     async def per_run_by_time(pilot):
-        from arbiter_tui.shell.screens.analytics import CompareTable
+        from arbiter_tui.shell.widgets.analytics import CompareTable
 
         await pilot.press("2", "v")
         table = pilot.app.screen.query_one(CompareTable)

@@ -3,7 +3,7 @@ always the theme Textual itself would find."""
 
 from textual.app import App
 
-from arbiter_tui.shell.theme import RegistryTheme
+from arbiter_tui.shell.perf.theme import RegistryTheme
 
 
 class Plain(RegistryTheme):

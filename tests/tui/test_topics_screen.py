@@ -6,7 +6,7 @@ import pytest
 
 from arbiter_core.topicstats import NOT_INSTALLED, TopicFigures
 from arbiter_tui.latency.topics_client import TopicsState
-from arbiter_tui.shell.screens.topics import RatePlot, TopicDetail, TopicsList
+from arbiter_tui.shell.widgets.topics import RatePlot, TopicDetail, TopicsList
 
 from ..support.tui import burst, still_app, until
 
@@ -260,3 +260,26 @@ def test_a_late_message_of_the_last_topic_never_takes_the_new_topics_echo():
     assert app.session.echo.current == ("/scan", "waiting for a message ...")
     link.echoes["/scan"]({"ranges": [1.0]})
     assert app.session.echo.current[0] == "/scan" and "ranges" in app.session.echo.current[1]
+
+
+async def test_showing_the_topics_screen_forces_one_frame_not_two():
+    """Textual calls every class's on_screen_resume in the MRO: the topics screen's own must not call
+    BaseScreen's again (it did: two forced frames per showing, the dearest kind)."""
+    from ..support.tui import still_app
+
+    app = still_app()
+    forced = []
+    real = app.refresh_frame
+
+    def counting(force: bool = False) -> None:
+        forced.append(force)
+        real(force)
+
+    app.refresh_frame = counting
+    async with app.run_test(size=(100, 30)) as pilot:
+        await pilot.press("4")
+        await pilot.pause()
+        forced.clear()
+        await pilot.press("1", "4")
+        await pilot.pause()
+        assert forced.count(True) == 2  # one as screen 1 comes back, one as screen 4 does

@@ -10,10 +10,9 @@ from textual_plot.plot_widget import BarPlot, LinePlot
 from arbiter_tui.analytics.runs import COMPLETED
 from arbiter_tui.analytics.store import AnalyticsStore, DataPoint
 from arbiter_tui.session.views import AnalyticsView
-from arbiter_tui.shell import dialogs
-from arbiter_tui.shell.plots import ErrorPlot, LatencyHistogram, LatencyPlot
-from arbiter_tui.shell.screens.analytics import CompareTable, EmptyState, RingWarning
-from arbiter_tui.shell.widgets import TrackerCards, TrackerLine
+from arbiter_tui.shell.widgets.analytics import CompareTable, EmptyState, RingWarning
+from arbiter_tui.shell.widgets.plots import ErrorPlot, LatencyHistogram, LatencyPlot
+from arbiter_tui.shell.widgets.text import TrackerCards, TrackerLine
 
 from ..support.tui import show_frame, still_app, tracker_said, until
 
@@ -165,7 +164,7 @@ async def test_at_80x24_the_comparison_shows_every_column_and_the_warning_says_w
 async def test_export_all_writes_one_stem_and_nothing_when_empty(tmp_path):
     app = still_app(tmp_path)
     async with app.run_test(size=(100, 30)):
-        results = dialogs.export(app, app, "csv", "json", "mcap")
+        results = app.dialogs.export("csv", "json", "mcap")
         assert all(r.error is None for r in results)
         assert len({r.path.stem for r in results}) == 1
         assert sorted(p.suffix for p in tmp_path.iterdir()) == [".csv", ".json", ".mcap"]
@@ -173,7 +172,7 @@ async def test_export_all_writes_one_stem_and_nothing_when_empty(tmp_path):
     empty.mkdir()
     app = still_app(empty, store=AnalyticsStore())
     async with app.run_test(size=(100, 30)):
-        (result,) = dialogs.export(app, app, "csv", "json", "mcap")
+        (result,) = app.dialogs.export("csv", "json", "mcap")
         assert result.path is None and "0 samples" in result.error
         assert list(empty.iterdir()) == []
 
@@ -194,13 +193,13 @@ async def test_the_trajectory_legend_fits_its_border():
     app = still_app()
     async with app.run_test(size=(80, 24)) as pilot:
         await pilot.press("2")
-        from arbiter_tui.shell.plots import TrajectoryPlot
+        from arbiter_tui.shell.widgets.plots import TrajectoryPlot
 
         plot = app.screen.query_one(TrajectoryPlot)
         assert await until(pilot, lambda: bool(plot.border_subtitle))
         assert len(plot.border_subtitle) <= plot.size.width - 6 and "…" not in plot.border_subtitle
         assert plot.border_subtitle == "+ go_to_goal x pure_pursuit"
-        from arbiter_tui.shell.plots import legend_text
+        from arbiter_tui.shell.widgets.plots import legend_text
 
         items = [("·", "manual"), ("+", "go_to_goal"), ("x", "pure_pursuit"), ("o", "waypoint"),
                  ("G", "goal")]  # fmt: skip
@@ -211,7 +210,7 @@ async def test_the_trajectory_legend_fits_its_border():
 async def test_the_status_line_at_80_columns_shows_whole_parts_and_marks_what_it_left_out():
     """At 80 columns the full line (83 columns here) does not fit: the deploy mode is left out whole (…),
     the count, the hint and the algorithm stay; widened, everything shows again; on every screen."""
-    from arbiter_tui.shell.widgets import StatusLine
+    from arbiter_tui.shell.widgets.text import StatusLine
 
     app = still_app()
     async with app.run_test(size=(80, 24)) as pilot:

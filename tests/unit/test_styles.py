@@ -25,7 +25,7 @@ def test_an_unknown_controller_gets_a_style_from_its_name_not_its_position(name)
 
 
 def test_the_terminal_plots_draw_each_controller_with_its_style():
-    from arbiter_tui.shell.plots import algorithm_style
+    from arbiter_tui.shell.widgets.plots import algorithm_style
 
     for name in ALGORITHMS:
         assert algorithm_style(name) == (style_of(name).marker, style_of(name).colour)

@@ -4,7 +4,7 @@ the frame every widget on it shows (``frame``: widgets take it with ``data_bind`
 
 from __future__ import annotations
 
-from typing import Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 from rich.text import Text
 from textual import events
@@ -20,10 +20,13 @@ from arbiter_core import topics
 from ...session.frames import Frame
 from ...session.robot import RobotSession
 from ...session.views import observe_banner
-from ..heap import freeze_heap
 from ..keys import KeyRouter
-from ..plots import PlotBudget
-from ..widgets import StatusLine
+from ..perf.heap import freeze_heap
+from ..widgets.plots import PlotBudget
+from ..widgets.text import StatusLine
+
+if TYPE_CHECKING:  # the dialogs are above the screens: named here, never imported at run time
+    from ..dialogs import Dialogs
 
 
 @runtime_checkable
@@ -43,6 +46,10 @@ class Console(Protocol):
     def go(self, restart: bool = False) -> bool:
         """Resume or start the selected mission (``restart``: from its first waypoint); False, with a
         notice saying why, if it cannot."""
+
+    @property
+    def dialogs(self) -> Dialogs:
+        """What the console asks the user (``shell/dialogs.py``): screens reach dialogs through it."""
 
 
 MIN_WIDTH, MIN_HEIGHT = 80, 24

@@ -14,13 +14,12 @@ from textual.widgets import Static
 from arbiter_core.controllers import ALGORITHMS
 
 from ...control.teleop import key_name
-from .. import dialogs
-from ..heap import freeze_heap
-from ..plots import ErrorPlot, LatencyHistogram, LatencyPlot, LiveMap, TrajectoryPlot
-from ..widgets import FIT, KEY_HELP, ClientLine, RobotPanel, StatsCards, TrackerCards, TrackerLine
-from .analytics import CompareTable, RuleLine
+from ..perf.heap import freeze_heap
+from ..widgets.analytics import CompareTable, RuleLine
+from ..widgets.plots import ErrorPlot, LatencyHistogram, LatencyPlot, LiveMap, TrajectoryPlot
+from ..widgets.text import FIT, KEY_HELP, ClientLine, RobotPanel, StatsCards, TrackerCards, TrackerLine
+from ..widgets.topics import TopicsPane
 from .base import PLOTTED, BaseScreen
-from .topics import TopicsPane
 
 DASHBOARD_WIDTH, DASHBOARD_HEIGHT = 160, 45
 WIDE_PANEL = 100  # from this width the control panel is wide enough for every row's longest form
@@ -140,4 +139,4 @@ class ControlScreen(BaseScreen):
 
     def action_goal(self) -> None:
         if not self.console.session.too_small:
-            dialogs.ask_goal(self.app, self.console)
+            self.console.dialogs.ask_goal()

@@ -10,8 +10,16 @@ Textual.
 
 from __future__ import annotations
 
+import textual
 from textual.app import App
 from textual.theme import Theme
+
+CHECKED = ("8.2.8",)  # the releases whose App keeps its registry in ``_registered_themes``
+
+
+def checked() -> bool:
+    """Whether this Textual release was checked (``RegistryTheme`` falls back to Textual otherwise)."""
+    return textual.__version__ in CHECKED
 
 
 class RegistryTheme(App[None]):
@@ -19,5 +27,7 @@ class RegistryTheme(App[None]):
 
     @property
     def current_theme(self) -> Theme:
-        theme = self._registered_themes.get(self.theme)
+        if not checked():  # a release not checked: Textual's own lookup
+            return super().current_theme
+        theme = self._registered_themes.get(self.theme)  # Textual 8.2.8's registry (private)
         return theme if theme is not None else super().current_theme

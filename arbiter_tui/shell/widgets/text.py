@@ -18,13 +18,13 @@ from textual.widget import Widget
 from arbiter_core.controllers import goal_driver
 from arbiter_core.timesync import TimeSync
 
-from ..analytics.labels import STAT_LABELS, format_stat
-from ..analytics.store import STATS_FIELDS
-from ..control.teleop import legend_compact
-from ..latency.clocksync import OffsetEstimate
-from ..session.frames import Frame
-from ..session.views import AnalyticsView, LatencySnapshot, RobotView, StatusView, fit_fields
-from . import give_way
+from ...analytics.labels import STAT_LABELS, format_stat
+from ...analytics.store import STATS_FIELDS
+from ...control.teleop import legend_compact
+from ...latency.clocksync import OffsetEstimate
+from ...session.frames import Frame
+from ...session.views import AnalyticsView, LatencySnapshot, RobotView, StatusView, fit_fields
+from ..perf import give_way
 
 LINK_DOWN = (  # two lines of the 36 columns inside the panel: the rows below stay in view
     "LINK DOWN: nothing is sent.\nThe robot stops on its own timeout.\n"

@@ -21,14 +21,14 @@ from textual_hires_canvas.canvas import Canvas
 from textual_plot import HiResMode, PlotWidget
 from textual_plot.axis_formatter import AxisFormatter
 
-from ..analytics import axes
-from ..analytics.linkcurve import LinkCurve, LinkSweepView, format_ms
-from ..analytics.runs import MANUAL
-from ..analytics.styles import GOAL, ROBOT_ARROWS, WAYPOINT, style_of
-from ..session.frames import Frame
-from ..session.views import PLOT_PERIOD_S, AnalyticsView, LatencySnapshot, MapView, thin
-from .canvas_rows import changed_rows_only
-from .messages import GoalPicked
+from ...analytics import axes
+from ...analytics.linkcurve import LinkCurve, LinkSweepView, format_ms
+from ...analytics.runs import MANUAL
+from ...analytics.styles import GOAL, ROBOT_ARROWS, WAYPOINT, style_of
+from ...session.frames import Frame
+from ...session.views import PLOT_PERIOD_S, AnalyticsView, LatencySnapshot, MapView, thin
+from ..messages import GoalPicked
+from ..perf.canvas_rows import changed_rows_only
 
 V = TypeVar("V")  # the part of the frame a plot shows
 K = TypeVar("K")  # what it draws of it: equal keys, equal drawings
