@@ -16,10 +16,9 @@ import logging
 import signal
 import time
 from collections.abc import Callable, Iterable
-from dataclasses import replace
 from functools import partial
 
-from textual import events, on, work
+from textual import events, on
 from textual.app import App, SystemCommand
 from textual.binding import Binding
 from textual.command import CommandPalette
@@ -27,30 +26,24 @@ from textual.driver import Driver
 from textual.screen import Screen
 from textual.widgets import Input, TextArea
 
-from ..analytics.linkcurve import FAILED, READY, CurveError
 from ..analytics.store import AnalyticsStore
-from ..latency.topics_client import PERIOD_S as TOPICS_PERIOD_S
-from ..latency.topics_client import TopicsPoller
 from ..latency.tracker_client import TrackerClient
 from ..link.base import Link, PendingLink
 from ..session.config import save_theme
-from ..session.frames import CONTROL, LATENCY, TOPICS, Frame, FrameClock, FrameSampler, Shown
-from ..session.link_sweep import sweep_curve
-from ..session.pollers import poll_forever
+from ..session.frames import CONTROL, Frame, FrameClock, FrameSampler, Shown
 from ..session.robot import MissionFinished, RobotSession, StopDone
 from ..session.settings import Settings
-from . import lifecycle, palette, perf, robot_side
+from . import lifecycle, palette, perf, robot_side, sweep
 from .dialogs import Dialogs
-from .keys import STOP_BINDINGS, KeyRouter, direct_keys
+from .keys import NOT_TEXT, STOP_BINDINGS, KeyRouter, direct_keys
 from .messages import (
     BackendFailed,
     BackendStarted,
     FrameDue,
     GoalPicked,
-    LinkSweepFailed,
-    RecordingFailed,
     RecordingOpened,
     RunFinished,
+    Said,
     StopReported,
 )
 from .perf import give_way
@@ -64,7 +57,6 @@ from .screens.latency import LatencyScreen
 from .screens.topics import TopicsScreen
 
 log = logging.getLogger(__name__)
-NOTICE_AFTER_STOP_S = 0.1  # a run's end is told once its stop command has reached the robot
 EXIT_DEADLINE_S = 2.0  # after SIGHUP/SIGTERM the process is gone by then, whatever the terminal does
 PALETTE_PROMPT = "Search for commands…  (ctrl+k stops the robot)"
 
@@ -181,20 +173,11 @@ class ArbiterApp(RegistryTheme):
         self.refresh_frame(force=True)
 
     def _poll(self) -> None:
-        """The tracker's two pollers: latency records (every ``poll_period`` while a screen shows them,
-        else every ``idle_poll_period``, for the status line: a poll costs more than a bare Textual
-        app's frame), topics while a screen shows them."""
-        tracker, s = self.tracker, self.settings
-        if tracker is None or not s.live:
-            return
-        period = lambda: s.poll_period if _shown(self).shows(LATENCY) else s.idle_poll_period  # noqa: E731
-        latency = poll_forever(tracker.poll, period, self.sampler.latency_polled)  # by value: the sampler's
-        self.run_worker(latency, group="poll", exclusive=True)
-        shown = lambda: _shown(self).shows(TOPICS)  # noqa: E731
-        topics = poll_forever(TopicsPoller(tracker).poll, TOPICS_PERIOD_S, self.sampler.topics_polled, shown)
-        self.run_worker(topics, group="topics", exclusive=True)
-        if s.observe:  # the robot-side controller: g starts it there, and the panel says how it is
-            robot_side.poll(self)
+        """The tracker's pollers (``lifecycle.poll``), and observe mode's robot-side controller."""
+        if self.tracker is not None and self.settings.live:
+            lifecycle.poll(self, self.tracker, self.sampler, lambda: _shown(self))
+            if self.settings.observe:  # g starts it there, and the panel says how it is
+                robot_side.poll(self)
 
     def _on_signal(self, sig: int) -> None:
         self.session.stop(f"signal {signal.Signals(sig).name}")
@@ -246,21 +229,7 @@ class ArbiterApp(RegistryTheme):
                 screen.plot_budget.renew(None if force else 1)  # a tick's frame draws at most one plot
                 screen.frame = frame  # (the same frame again: only for the plots that waited)
         if shown.shows("analytics"):
-            mission = self.sampler.sweep_wanted()
-            if mission is not None:
-                self._sweep(mission)
-
-    @work(exclusive=True, group="link-sweep", exit_on_error=False)
-    async def _sweep(self, mission: str) -> None:
-        """The analytics screen's error-vs-latency sweep for ``mission`` (cached on disk: link_sweep.py)."""
-        teleop = self.session.teleop
-        try:
-            curve = await sweep_curve(mission, teleop.speed, teleop.turn, pause=self.sampler.sweep_pause)
-        except (CurveError, OSError) as exc:
-            self.sampler.sweep_changed(replace(self.frame.link_sweep, state=FAILED, error=str(exc)))
-            self.post_message(LinkSweepFailed(str(exc)))
-            return
-        self.sampler.sweep_changed(replace(self.frame.link_sweep, state=READY, curve=curve))
+            sweep.start_if_wanted(self, self.session, self.sampler)
 
     # -- keys --------------------------------------------------------------------------------------------
     def get_driver_class(self) -> type[Driver]:
@@ -286,7 +255,7 @@ class ArbiterApp(RegistryTheme):
 
     def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
         """space and k stop everywhere but in a text input, where they are text (ctrl+k stops there)."""
-        if action == "stop_key":
+        if action == "stop" and parameters == (NOT_TEXT,):
             return not isinstance(self.focused, (Input, TextArea))
         return True
 
@@ -330,36 +299,17 @@ class ArbiterApp(RegistryTheme):
         self.notify(f"{self.session.loop.algorithm} driving to ({event.x:+.2f}, {event.y:+.2f})", timeout=3)
         self.refresh_frame(force=True)
 
-    @on(LinkSweepFailed)
-    def _link_sweep_failed(self, event: LinkSweepFailed) -> None:
-        self.notify(f"latency sweep failed: {event.error}", severity="warning", timeout=8)
-
-    @on(RecordingOpened)
-    def _recording_opened(self, event: RecordingOpened) -> None:
-        self.sampler.recording_opened(event.view)
-        self.refresh_frame(force=True)
-        if event.view is not None:
-            text = f"showing {event.view.source}: escape on screen 2 for the live session"
-            self.notify(text, timeout=5, markup=False)
-
-    @on(RecordingFailed)
-    def _recording_failed(self, event: RecordingFailed) -> None:
-        self.notify(f"cannot open {event.path}: {event.error}", severity="error", timeout=10, markup=False)
-
-    @on(StopReported)
-    def _stop_reported(self, event: StopReported) -> None:
-        report = event.report
-        if report.worth_saying():
-            severity = "warning" if report.unsure else "information"
-            self.notify(report.text(), severity=severity, timeout=10, markup=False)
-
-    @on(RunFinished)
-    def _run_finished(self, event: RunFinished) -> None:
-        # The toast waits until the stop command the run's end sent is through: painting it at once
-        # (and the terminal drawing it) took the CPU the backend needed to take that command, which then
-        # arrived 10-20x slower than the others (bench/stop_command.py --tmux).
-        text = f"{event.algorithm} finished the {event.mission} mission"
-        self.set_timer(NOTICE_AFTER_STOP_S, lambda: self.notify(text, timeout=4))
+    @on(Said)
+    def _said(self, event: Said) -> None:
+        """Every event the user is told about (``messages.Said``); a recording also replaces the live
+        analytics (or gives them back)."""
+        if isinstance(event, RecordingOpened):
+            self.sampler.recording_opened(event.view)
+            self.refresh_frame(force=True)
+        n = event.notice()
+        if n is not None:
+            say = partial(self.notify, n.text, severity=n.severity, timeout=n.timeout, markup=False)
+            self.set_timer(n.after_s, say) if n.after_s else say()
 
     # -- actions -------------------------------------------------------------------------------------------
     def action_mode(self, name: str) -> None:
@@ -370,13 +320,11 @@ class ArbiterApp(RegistryTheme):
         if not isinstance(self.screen, HelpScreen):
             self.push_screen(HelpScreen())
 
-    def action_stop(self) -> None:
-        """Every stop key (space, k, ctrl+k), on every screen and dialog: ``RobotSession.stop_all``."""
+    def action_stop(self, where: str = "") -> None:
+        """Every stop key (space, k, ctrl+k), on every screen and dialog: ``RobotSession.stop_all``
+        (``where``: the keys' condition, ``check_action``'s)."""
         self.session.stop_all("stop key")
         self.refresh_frame()
-
-    def action_stop_key(self) -> None:
-        self.action_stop()
 
     async def action_stop_and_quit(self) -> None:
         self.session.stop("quit")

@@ -109,11 +109,12 @@ def direct_keys(base: type[Driver], router: Callable[[], KeyRouter | None]) -> t
 
 
 # -- the stop keys' bindings (one definition: the app's, and what every dialog's footer shows) ------------
+NOT_TEXT = "not_text"  # the stop's parameter for the keys that are text in a text input
 STOP_BINDINGS = [
     # priority: a dialog, a table or a button never takes them first; space and k are text in a text
     # input (the app's check_action then passes them on), ctrl+k never is
-    Binding("space", "stop_key", "Stop", priority=True),
-    Binding("k", "stop_key", "Stop", show=False, priority=True),
+    Binding("space", f"stop('{NOT_TEXT}')", "Stop", priority=True),
+    Binding("k", f"stop('{NOT_TEXT}')", "Stop", show=False, priority=True),
     Binding(ANYWHERE_STOP, "stop", "Stop", show=False, priority=True),
 ]
 # what a dialog's footer shows (the app's priority bindings above answer the keys first)

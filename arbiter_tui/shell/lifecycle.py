@@ -14,10 +14,13 @@ from functools import partial
 
 from textual.app import App
 
+from ..latency.topics_client import PERIOD_S as TOPICS_PERIOD_S
+from ..latency.topics_client import TopicsPoller
 from ..latency.tracker_client import TrackerClient
 from ..link.base import Link
 from ..session.cpu_share import SPARE_CORES, cores_available
-from ..session.frames import FrameClock, FrameSampler
+from ..session.frames import LATENCY, TOPICS, FrameClock, FrameSampler, Shown
+from ..session.pollers import poll_forever
 from ..session.robot import DEFAULT_CONTROL_HZ
 from .messages import BackendFailed, BackendStarted, FrameDue
 from .perf import give_way
@@ -41,6 +44,19 @@ def connect(connector: Connector, app: App[object]) -> None:
         cleanup()
         return
     app.post_message(BackendStarted(link, tracker, cleanup))
+
+
+def poll(app: App[object], tracker: TrackerClient, sampler: FrameSampler, shown: Callable[[], Shown]) -> None:
+    """The tracker's two pollers, each answer handed to the sampler by value: latency records (every
+    ``poll_period`` while a screen shows them, else every ``idle_poll_period``, for the status line: a
+    poll costs more than a bare Textual app's frame), topics while a screen shows them."""
+    s = sampler.settings
+    period = lambda: s.poll_period if shown().shows(LATENCY) else s.idle_poll_period  # noqa: E731
+    app.run_worker(poll_forever(tracker.poll, period, sampler.latency_polled), group="poll", exclusive=True)
+    topics = poll_forever(
+        TopicsPoller(tracker).poll, TOPICS_PERIOD_S, sampler.topics_polled, lambda: shown().shows(TOPICS)
+    )
+    app.run_worker(topics, group="topics", exclusive=True)
 
 
 def frames_after_ticks(app: App[object], sampler: FrameSampler) -> FrameClock:

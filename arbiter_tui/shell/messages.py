@@ -8,6 +8,8 @@ finished, failed or was decided.
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Literal
 
 from textual.message import Message
 
@@ -16,6 +18,25 @@ from ..latency.tracker_client import TrackerClient
 from ..link.base import Link
 from ..session.frames import FrameClock
 from ..session.views import AnalyticsView
+
+Severity = Literal["information", "warning", "error"]
+
+
+@dataclass(frozen=True)
+class Notice:
+    """What the console tells the user about an event: a notification that expires."""
+
+    text: str
+    severity: Severity = "information"
+    timeout: float = 4.0
+    after_s: float = 0.0  # shown this long after the event (0: at once)
+
+
+class Said(Message):
+    """An event the user is told about; the app shows each one's :meth:`notice` (None: nothing to say)."""
+
+    def notice(self) -> Notice | None:
+        return None
 
 
 class BackendStarted(Message):
@@ -36,13 +57,23 @@ class BackendFailed(Message):
         self.error = error
 
 
-class RunFinished(Message):
+NOTICE_AFTER_STOP_S = 0.1  # a run's end is told once its stop command has reached the robot
+
+
+class RunFinished(Said):
     """An autonomous mission run reached its last waypoint."""
 
     def __init__(self, algorithm: str, mission: str) -> None:
         super().__init__()
         self.algorithm = algorithm
         self.mission = mission
+
+    def notice(self) -> Notice:
+        # told once the stop command the run's end sent is through: painted at once (and the terminal
+        # drawing it), it took the CPU the backend needed to take that command, which then arrived 10-20x
+        # slower than the others (bench/stop_command.py --tmux)
+        text = f"{self.algorithm} finished the {self.mission} mission"
+        return Notice(text, after_s=NOTICE_AFTER_STOP_S)
 
 
 class GoalPicked(Message):
@@ -54,12 +85,15 @@ class GoalPicked(Message):
         self.y = y
 
 
-class LinkSweepFailed(Message):
+class LinkSweepFailed(Said):
     """The analytics screen's latency sweep (``arbiter-tui compare`` in a child process) failed."""
 
     def __init__(self, error: str) -> None:
         super().__init__()
         self.error = error
+
+    def notice(self) -> Notice:
+        return Notice(f"latency sweep failed: {self.error}", "warning", 8)
 
 
 class FrameDue(Message):
@@ -71,15 +105,19 @@ class FrameDue(Message):
         self.clock = clock
 
 
-class StopReported(Message):
+class StopReported(Said):
     """A stop's part beyond the console's own commands ended (``session/remote_stop.py``): what it did."""
 
     def __init__(self, report: StopReport) -> None:
         super().__init__()
         self.report = report
 
+    def notice(self) -> Notice | None:
+        r = self.report
+        return Notice(r.text(), "warning" if r.unsure else "information", 10) if r.worth_saying() else None
 
-class RecordingOpened(Message):
+
+class RecordingOpened(Said):
     """A recording or an export was read and graded (``session/recording.py``): the analytics show it
     (None: the user asked for the live session again)."""
 
@@ -87,11 +125,19 @@ class RecordingOpened(Message):
         super().__init__()
         self.view = view
 
+    def notice(self) -> Notice | None:
+        if self.view is None:
+            return None
+        return Notice(f"showing {self.view.source}: escape on screen 2 for the live session", timeout=5)
 
-class RecordingFailed(Message):
+
+class RecordingFailed(Said):
     """A file the user asked to open could not be read: one line saying why."""
 
     def __init__(self, path: str, error: str) -> None:
         super().__init__()
         self.path = path
         self.error = error
+
+    def notice(self) -> Notice:
+        return Notice(f"cannot open {self.path}: {self.error}", "error", 10)

@@ -1,0 +1,34 @@
+"""The analytics screen's error-vs-latency sweep (``session/link_sweep.py``: ``arbiter-tui compare`` in a
+niced child process, cached on disk), started as a worker when the screen shows it and the sampler says
+the selected mission's curve is wanted; its curve, or why it failed, goes back to the sampler."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from functools import partial
+
+from textual.app import App
+
+from ..analytics.linkcurve import FAILED, READY, CurveError
+from ..session.frames import FrameSampler
+from ..session.link_sweep import sweep_curve
+from ..session.robot import RobotSession
+from .messages import LinkSweepFailed
+
+
+def start_if_wanted(app: App[object], session: RobotSession, sampler: FrameSampler) -> None:
+    mission = sampler.sweep_wanted()
+    if mission is not None:
+        run = partial(_sweep, app, session, sampler, mission)
+        app.run_worker(run, exclusive=True, group="link-sweep", exit_on_error=False)
+
+
+async def _sweep(app: App[object], session: RobotSession, sampler: FrameSampler, mission: str) -> None:
+    teleop = session.teleop
+    try:
+        curve = await sweep_curve(mission, teleop.speed, teleop.turn, pause=sampler.sweep_pause)
+    except (CurveError, OSError) as exc:
+        sampler.sweep_changed(replace(sampler.frame.link_sweep, state=FAILED, error=str(exc)))
+        app.post_message(LinkSweepFailed(str(exc)))
+        return
+    sampler.sweep_changed(replace(sampler.frame.link_sweep, state=READY, curve=curve))
