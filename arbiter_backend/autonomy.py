@@ -3,7 +3,7 @@
 One of the console's controllers (``arbiter_core.controllers``, the same code) follows a named mission
 on the robot's own odometry, in the backend's process: no link inside the control loop. It publishes
 what a robot-side controller leaves on the graph, which the console's observe mode grades
-(README, "Grade any controller"): ``plan`` (``nav_msgs/Path``: where the run started, then every
+(docs/analytics.md, "Grade any controller"): ``plan`` (``nav_msgs/Path``: where the run started, then every
 waypoint), ``goal_pose`` (``geometry_msgs/PoseStamped``: the last waypoint), and each command as a
 stamped envelope on ``stamped_cmd_vel`` (the seed's section 6.1: commands that are time-stamped and
 measured by the latency tracker, which forwards them to ``cmd_vel_measured``).

@@ -230,7 +230,7 @@ FLEET_FLAGS = ("zenoh", "robot_name", "zenoh_config", "expect", "advertise_host"
 
 
 def add_fleet_arguments(p: argparse.ArgumentParser) -> None:
-    """``--zenoh`` and its companions (README "Many robots: the fleet"); checked by ``fleet.py``."""
+    """``--zenoh`` and its companions (docs/fleet.md); checked by ``fleet.py``."""
     g = p.add_argument_group("fleet: announce this robot to fleet consoles over Zenoh (the [fleet] extra)")
     g.add_argument(
         "--zenoh",

@@ -97,7 +97,7 @@ def build_parser() -> argparse.ArgumentParser:
         "as given (default: odom; a Jazzy diff_drive_controller: diff_drive_controller/odom)",
     )
     obs = p.add_argument_group(
-        "observe (README 'Grade any controller'): analytics of what drives the robot, from its own topics"
+        "observe (docs/analytics.md): analytics of what drives the robot, from its own topics"
     )
     obs.add_argument(
         "--observe",

@@ -1,6 +1,6 @@
 """Recorded ``ros2 bag``s as runs: ``arbiter-tui stats BAG``.
 
-What is read (README, "Grade any controller"): a rosbag2 directory (``metadata.yaml``: MCAP or SQLite 3
+What is read (docs/analytics.md): a rosbag2 directory (``metadata.yaml``: MCAP or SQLite 3
 storage, split into several files or not, zstd file or message compression), a lone storage file as it
 is shared (``.mcap`` or ``.db3``), or a directory of storage files whose ``metadata.yaml`` is missing (a
 recorder killed before it wrote one), read from its files with a note. The files are opened with the

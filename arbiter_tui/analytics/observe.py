@@ -8,7 +8,7 @@ behind a ROS action (Nav2's ``navigate_to_pose``), the action's goal status
 DataPoints the console records, in the same store, so the nine AnalyticsStats, the tracking metrics, the
 ranking and the exports treat them as driven runs.
 
-Rules (README, "Grade any controller"):
+Rules (docs/analytics.md, "Grade any controller"):
 - a **sample** is taken from odometry at ``rate_hz`` (the console's collection rate), with the latest
   command as ``linearVel``/``angularVel`` (the odometry's measured velocity before any command came);
 - a **goal** comes from ``goal_pose`` or from a plan whose last pose is more than ``tolerance_m`` from

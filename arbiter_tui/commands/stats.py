@@ -42,7 +42,7 @@ def build_parser() -> argparse.ArgumentParser:
         "directory, split or compressed, with or without metadata.yaml, or a lone .mcap or .db3 file): its "
         "runs from odometry, command, plan, goal, action status and scan topics",
     )
-    bag = p.add_argument_group("ros2 bags ('Grade any controller' in the README)")
+    bag = p.add_argument_group("ros2 bags ('Grade any controller' in docs/analytics.md)")
     for flag, default, kind in (
         ("--odom-topic", DEFAULT_TOPICS.odom, "nav_msgs/Odometry"),
         ("--cmd-topic", DEFAULT_TOPICS.cmd, "geometry_msgs/Twist or TwistStamped"),
@@ -78,8 +78,8 @@ def build_parser() -> argparse.ArgumentParser:
         "outside every run last, under 'no run'. algorithm: as "
         "the screen groups them, 'ALGORITHM on MISSION' from the file's summaries, else per algorithm over "
         "the file's run samples (samples outside every run belong to no algorithm). controller: each "
-        "algorithm's scorecard over all of its runs (Nav2's controller benchmark and the BARN score: README, "
-        "'Scorecards'). A path length never spans a gap between separate stretches",
+        "algorithm's scorecard over all of its runs (Nav2's controller benchmark and the BARN score: "
+        "docs/analytics.md, 'Scorecards'). A path length never spans a gap between separate stretches",
     )
     return p
 

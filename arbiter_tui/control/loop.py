@@ -187,8 +187,8 @@ class ControlLoop:
     def sample_goal(self, pose: Pose) -> tuple[float, float] | None:
         """What a sample's errors are measured to: the goal the control screen shows (the run's, the
         interrupted mission's that ``g`` resumes, or the selected mission's first from here). None while
-        driving manually with nothing to resume: no goal, so the sample's errors are 0 (README, "What a
-        manual sample's error means")."""
+        driving manually with nothing to resume: no goal, so the sample's errors are 0 (docs/analytics.md,
+        "What a sample's error is measured to")."""
         plan = self.plan(pose)
         return None if plan is None else plan.goal
 
@@ -353,7 +353,7 @@ class ControlLoop:
         self.follow_life()
         if self.link.state in NO_ODOMETRY or not self.link.telemetry.odometry_live(time.monotonic()):
             # no sample of a pose that is not live: the record has a gap here, never the last pose
-            # repeated (README, "A record that never lies")
+            # repeated (docs/analytics.md, "A record that never lies")
             self.gap_pending = True
             return None
         pose, v_odom, w_odom, latency = self.link.telemetry.snapshot()

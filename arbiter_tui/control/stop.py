@@ -1,4 +1,4 @@
-"""What "stop" means, in each mode, in one place (README, "Safety"), and what a stop did, in words.
+"""What "stop" means, in each mode, in one place (docs/drive.md, "Safety"), and what a stop did, in words.
 
 Every stop key, on every screen, dialog and text input, ends in ``RobotSession.stop_all``: the console's
 own driving stops at once (a held key, a mission: one zero command now, on its own stamped path), and

@@ -44,7 +44,7 @@ SCALE_KEYS: dict[str, tuple[float, float]] = {
 }
 STOP_KEYS = frozenset({"k", " ", "space"})
 # The stop key that is never text: it stops from inside a text input too (where space and k type), on
-# every screen and dialog (README, "Safety").
+# every screen and dialog (docs/drive.md, "Safety").
 ANYWHERE_STOP = "ctrl+k"
 
 

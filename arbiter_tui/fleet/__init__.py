@@ -1,4 +1,4 @@
-"""``arbiter-tui fleet``: many robots in one console, over Zenoh (README "Many robots: the fleet").
+"""``arbiter-tui fleet``: many robots in one console, over Zenoh (docs/fleet.md).
 
 ``rows`` is the pure model (one row per robot ever seen: alive, stale or lost, never dropped; bad data
 marked; severity order; the cells both the screen and ``--json`` show), ``client`` the Zenoh session

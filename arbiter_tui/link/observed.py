@@ -1,8 +1,8 @@
 """rosbridge messages (JSON) of a robot's own topics into an :class:`Observer`'s calls: the odometry,
 the command (Twist or TwistStamped), the plan, the goal and an action's goal status. Stamped with this
 host's clock on arrival, so a TwistStamped's age is this host's receive time minus the sender's stamp
-(README, "Grade any controller"). A message that does not parse is skipped: a foreign robot's topics
-are not ours to trust."""
+(docs/analytics.md, "Grade any controller"). A message that does not parse is skipped: a foreign robot's
+topics are not ours to trust."""
 
 from __future__ import annotations
 
