@@ -187,16 +187,4 @@ class RemoteStop:
                 time.sleep(pause)
 
 
-def scope_summary(scope: StopScope) -> str:
-    """What a stop reaches here, for the observe banner and the help."""
-    parts: list[str] = ["the console's own commands"]
-    if scope.robot_side:
-        parts.append("the robot-side controller")
-    if scope.actions:
-        parts.append(f"goals of {len(scope.actions)} action servers")
-    if scope.zero_topic:
-        parts.append(f"zero on {scope.zero_topic}")
-    return ", ".join(parts)
-
-
-__all__ = ["RemoteStop", "scope_summary"]
+__all__ = ["RemoteStop"]
