@@ -83,7 +83,8 @@ class Encoder:
             convert = getattr(self.bus, "cbor_values", None) or cborenc.values_of
             frame = cborenc.encode({"op": "publish", "topic": topic, "msg": convert(type_name, msg)})
         else:  # cbor-raw: the CDR bytes and the time received (subscribe checked the bus has ``cdr``)
-            raw, received_ns = self.bus.cdr(type_name, msg)  # type: ignore[attr-defined]  # the ROS bus's, checked by subscribe
+            cdr = self.bus.cdr  # type: ignore[attr-defined]  # only the ROS bus has it: subscribe checked
+            raw, received_ns = cdr(type_name, msg)
             secs, nsecs = divmod(received_ns, 1_000_000_000)
             frame = cborenc.encode(
                 {"op": "publish", "topic": topic, "msg": {"secs": secs, "nsecs": nsecs, "bytes": raw}}

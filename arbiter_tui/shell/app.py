@@ -294,7 +294,9 @@ class ArbiterApp(RegistryTheme):
 
     def action_command_palette(self) -> None:
         """The palette, saying in its prompt how to stop the robot while typing in it."""
-        if self.use_command_palette and not CommandPalette.is_open(self):  # type: ignore[arg-type]  # Textual says App[object]
+        if self.use_command_palette and not CommandPalette.is_open(
+            self  # type: ignore[arg-type]  # Textual wants an App[object], and App[T] is invariant
+        ):
             self.push_screen(CommandPalette(id="--command-palette", placeholder=PALETTE_PROMPT))
 
     def get_system_commands(self, screen: Screen[object]) -> Iterable[SystemCommand]:
