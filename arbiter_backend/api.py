@@ -8,9 +8,11 @@ from collections.abc import Callable
 from typing import Any, Protocol
 
 from aiohttp import web
+from aiohttp.typedefs import Handler
 
 from arbiter_core import auth
 from arbiter_core.hostclock import HostClock
+from arbiter_core.timesync import TimeSync
 
 from .tracker import DEFAULT_LIMIT, LatencyTracker
 
@@ -46,7 +48,7 @@ def _error(status: int, message: str) -> web.Response:
 
 
 @web.middleware
-async def json_errors(request: web.Request, handler: Any) -> web.StreamResponse:
+async def json_errors(request: web.Request, handler: Handler) -> web.StreamResponse:
     try:
         return await handler(request)
     except web.HTTPMethodNotAllowed as exc:
@@ -61,7 +63,7 @@ async def json_errors(request: web.Request, handler: Any) -> web.StreamResponse:
 
 def bearer_required(token: str) -> Any:
     @web.middleware
-    async def check(request: web.Request, handler: Any) -> web.StreamResponse:
+    async def check(request: web.Request, handler: Handler) -> web.StreamResponse:
         if not auth.token_matches(auth.bearer(request.headers.get("Authorization")), token):
             resp = _error(401, "missing or wrong bearer token (Authorization: Bearer TOKEN)")
             resp.headers["WWW-Authenticate"] = 'Bearer realm="arbiter"'
@@ -151,7 +153,7 @@ def make_app(
         # it with the server, so that the first /api/health seldom waits for it
         pending.append(asyncio.get_running_loop().run_in_executor(None, clock.read))
 
-    pending: list[asyncio.Future] = []
+    pending: list[asyncio.Future[TimeSync]] = []
 
     app.on_startup.append(probe_early)
     app.router.add_get("/api/health", health)

@@ -143,7 +143,8 @@ class Autonomy:
             self.mission = mission.ended(Phase.COMPLETED, now_ms)
             self.final_error_m = distance_error(pose, mission.waypoints[-1])
             return (0.0, 0.0)
-        v, w = clamp_twist(*self._controller.command(pose, mission), self._limits)
+        want_v, want_w = self._controller.command(pose, mission)
+        v, w = clamp_twist(want_v, want_w, self._limits)
         self.commands += 1
         return v, w
 

@@ -120,7 +120,8 @@ def decode(data: bytes) -> dict[str, Any]:
         raise CborError(f"a frame must be a CBOR map, got {type(obj).__name__}")
     req_id = obj.get("id")
     try:
-        return _to_json_form(obj, "frame", 0)
+        frame: dict[str, Any] = _to_json_form(obj, "frame", 0)
+        return frame
     except CborError as exc:
         raise CborError(str(exc), req_id if isinstance(req_id, (str, int)) else None) from None
 

@@ -9,6 +9,7 @@ import logging
 import signal
 import ssl
 import sys
+from collections.abc import Callable, Coroutine
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -351,13 +352,14 @@ async def _run(config: BackendConfig, ros_args: list[str], fleet: FleetSettings 
     return 0
 
 
-def _event_loop_runner() -> Any:
+def _event_loop_runner() -> Callable[[Coroutine[Any, Any, int]], int]:
     """uvloop where it is installed (about 70 µs less per command on a small machine), else asyncio."""
     try:
         import uvloop
     except ImportError:
         return asyncio.run
-    return uvloop.run
+    run: Callable[[Coroutine[Any, Any, int]], int] = uvloop.run  # typed here even where uvloop is Any
+    return run
 
 
 class _BadRequestFilter(logging.Filter):

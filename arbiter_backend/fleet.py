@@ -119,7 +119,7 @@ def sources_of(backend: Any, advertise_host: str | None = None) -> Sources:
     last: dict[str, Any] = {}
     odom_topic = getattr(backend, "topic_odom", None)
     bus = getattr(backend, "bus", None)
-    if odom_topic is not None and hasattr(bus, "taps"):  # the embedded bus: every publish passes its taps
+    if odom_topic is not None and bus is not None and hasattr(bus, "taps"):  # the embedded bus: its taps
 
         def tap(topic: str, type_name: str, msg: dict[str, Any]) -> None:
             if topic == odom_topic:

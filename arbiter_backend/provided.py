@@ -128,7 +128,7 @@ class ProvidedAction:
             on_feedback,
         )
         self.goals[goal.id] = goal
-        goal.result.add_done_callback(lambda _f, g=goal: self._forget(g))
+        goal.result.add_done_callback(lambda _f: self._forget(goal))
         frame = {
             "op": "send_action_goal",
             "id": goal.id,

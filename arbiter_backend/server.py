@@ -29,7 +29,7 @@ from arbiter_core.topicstats import WINDOW_S
 from . import api, bridge, rosapi
 from . import autonomy as autonomy_mod
 from .autonomy import AutonomyService
-from .bridge import MAX_FRAME_BYTES, WS_PING_S
+from .bridge import MAX_FRAME_BYTES, WS_PING_S, RosbridgeEndpoint
 from .bus import Bus, TopicBus
 from .pacing import WAIT_S as PACED_WAIT_S
 from .topicwatch import EmbeddedTopics, TopicFilter, TopicWatch
@@ -70,7 +70,7 @@ class BackendConfig:
     params_glob: str | None = None  # ... and of the parameters rosapi reads and sets (names, no node)
     autonomy: bool = False  # the robot-side controller, driven through /api/autonomy (embedded transport)
 
-    def make_endpoint(self, bus: Bus) -> bridge.RosbridgeEndpoint:
+    def make_endpoint(self, bus: Bus) -> RosbridgeEndpoint:  # not bridge.…: the field `bridge` hides it
         """The rosbridge endpoint of either transport (the embedded bus or the DDS relay)."""
         topics = TopicFilter.parse(self.topics_glob, None) if self.topics_glob else None
         services = TopicFilter.parse(self.services_glob, None) if self.services_glob else None
@@ -139,8 +139,8 @@ class Servers:
         site = web.TCPSite(runner, self.config.host, port, reuse_address=True, ssl_context=self._ssl)
         await site.start()
         server = site._server
-        assert server is not None and server.sockets  # type: ignore[union-attr]
-        return int(server.sockets[0].getsockname()[1])  # type: ignore[union-attr]
+        assert server is not None and server.sockets  # type: ignore[attr-defined]  # the loop's Server
+        return int(server.sockets[0].getsockname()[1])  # type: ignore[attr-defined]  # the loop's Server
 
     async def start_servers(
         self,
@@ -178,7 +178,7 @@ class Servers:
         return format_listening(
             self.config.host,
             self.bridge_port,
-            self.api_port,
+            self.api_port,  # type: ignore[arg-type]  # set by start_servers, before anyone asks
             secure=self._ssl is not None,
             deploy_mode=self.config.deploy_mode,
             sim="on" if self.sim_enabled else "off",

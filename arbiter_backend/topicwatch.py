@@ -17,7 +17,7 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, TypeGuard
 
 from arbiter_core.topicstats import WINDOW_S, TopicFigures, TopicWindow
 
@@ -137,6 +137,10 @@ class TopicWatch:
         return {"window_s": self.window_s, "topics": [f.to_json() for f in self.figures()]}
 
 
+def _finite_number(v: object) -> TypeGuard[int | float]:
+    return isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
+
+
 def header_delay(msg: dict[str, Any], wall_now: float) -> tuple[float | None, bool]:
     """(now - header.stamp, malformed) for a rosbridge-JSON message; (None, False) without a header."""
     header = msg.get("header")
@@ -146,8 +150,7 @@ def header_delay(msg: dict[str, Any], wall_now: float) -> tuple[float | None, bo
     if not isinstance(stamp, dict):
         return None, True
     sec, nsec = stamp.get("sec", stamp.get("secs")), stamp.get("nanosec", stamp.get("nsecs", 0))
-    ok = all(isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v) for v in (sec, nsec))
-    if not ok or not 0 <= nsec < 1e9:
+    if not (_finite_number(sec) and _finite_number(nsec)) or not 0 <= nsec < 1e9:
         return None, True
     return wall_now - (sec + nsec / 1e9), False
 

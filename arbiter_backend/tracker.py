@@ -213,7 +213,8 @@ class LatencyTracker:
         first, at most ``limit``; ``more`` says whether others follow. A client passes the
         ``last_rx_seq`` it has seen and gets only what is new.
         """
-        return json.loads(self.latency_response_text(limit, since))
+        response: dict[str, Any] = json.loads(self.latency_response_text(limit, since))
+        return response
 
     def latency_response_text(self, limit: int = DEFAULT_LIMIT, since: int | None = None) -> str:
         """``latency_response`` as JSON text; records are spliced in pre-serialised (the API's path)."""

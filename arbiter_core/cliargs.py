@@ -9,7 +9,7 @@ import os
 import secrets
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any, NoReturn
+from typing import Any, NoReturn, TypeVar
 
 from . import topics
 from .urls import UrlError, rosbridge_endpoint, tracker_endpoint
@@ -30,8 +30,11 @@ def takes(value_type: Callable[..., Any] | None) -> str:
     return _TAKES.get(value_type, "a string") if value_type is not None else "a string"
 
 
-def _kind(kind: str) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
-    def mark(fn: Callable[..., Any]) -> Callable[..., Any]:
+_Parse = TypeVar("_Parse", bound=Callable[..., Any])
+
+
+def _kind(kind: str) -> Callable[[_Parse], _Parse]:
+    def mark(fn: _Parse) -> _Parse:
         _TAKES[fn] = kind
         return fn
 

@@ -30,7 +30,7 @@ import math
 import re
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
-from typing import Any
+from typing import Any, Literal, overload
 
 from .topicstats import Expectation, TopicFigures
 
@@ -136,7 +136,17 @@ def _get(obj: dict[str, Any], where: str, name: str, optional: bool) -> Any:
     return obj[name]
 
 
-def _num(obj: dict[str, Any], where: str, name: str, optional: bool = False, lo: float | None = None) -> Any:
+@overload
+def _num(
+    obj: dict[str, Any], where: str, name: str, optional: Literal[False] = False, lo: float | None = None
+) -> float: ...
+@overload
+def _num(
+    obj: dict[str, Any], where: str, name: str, optional: Literal[True], lo: float | None = None
+) -> float | None: ...
+def _num(
+    obj: dict[str, Any], where: str, name: str, optional: bool = False, lo: float | None = None
+) -> float | None:
     v = _get(obj, where, name, optional)
     if v is None and optional:
         return None
@@ -146,7 +156,11 @@ def _num(obj: dict[str, Any], where: str, name: str, optional: bool = False, lo:
     return float(v)
 
 
-def _int(obj: dict[str, Any], where: str, name: str, optional: bool = False) -> Any:
+@overload
+def _int(obj: dict[str, Any], where: str, name: str, optional: Literal[False] = False) -> int: ...
+@overload
+def _int(obj: dict[str, Any], where: str, name: str, optional: Literal[True]) -> int | None: ...
+def _int(obj: dict[str, Any], where: str, name: str, optional: bool = False) -> int | None:
     v = _get(obj, where, name, optional)
     if v is None and optional:
         return None
@@ -155,9 +169,32 @@ def _int(obj: dict[str, Any], where: str, name: str, optional: bool = False) -> 
     return v
 
 
+@overload
 def _str(
-    obj: dict[str, Any], where: str, name: str, size: str, optional: bool = False, choices: Any = None
-) -> Any:
+    obj: dict[str, Any],
+    where: str,
+    name: str,
+    size: str,
+    optional: Literal[False] = False,
+    choices: Sequence[str] | None = None,
+) -> str: ...
+@overload
+def _str(
+    obj: dict[str, Any],
+    where: str,
+    name: str,
+    size: str,
+    optional: Literal[True],
+    choices: Sequence[str] | None = None,
+) -> str | None: ...
+def _str(
+    obj: dict[str, Any],
+    where: str,
+    name: str,
+    size: str,
+    optional: bool = False,
+    choices: Sequence[str] | None = None,
+) -> str | None:
     v = _get(obj, where, name, optional)
     if v is None and optional:
         return None
@@ -176,6 +213,12 @@ def _bool(obj: dict[str, Any], where: str, name: str) -> bool | None:
     return v
 
 
+@overload
+def _vector(obj: dict[str, Any], where: str, name: str, n: Literal[2]) -> tuple[float, float] | None: ...
+@overload
+def _vector(
+    obj: dict[str, Any], where: str, name: str, n: Literal[3]
+) -> tuple[float, float, float] | None: ...
 def _vector(obj: dict[str, Any], where: str, name: str, n: int) -> tuple[float, ...] | None:
     v = obj.get(name)
     if v is None:
@@ -250,8 +293,8 @@ class Status:
             run_state=_str(o, w, "run_state", "short", optional=True),
             waypoint=_int(o, w, "waypoint", optional=True),
             waypoints=_int(o, w, "waypoints", optional=True),
-            pose=_vector(o, w, "pose", 3),  # type: ignore[arg-type]
-            velocity=_vector(o, w, "velocity", 2),  # type: ignore[arg-type]
+            pose=_vector(o, w, "pose", 3),
+            velocity=_vector(o, w, "velocity", 2),
             rosbridge=_url(o, w, "rosbridge", ("ws", "wss")),
             tracker=_url(o, w, "tracker", ("http", "https")),
             namespace=_namespace(o, w),
@@ -424,7 +467,7 @@ class Runs:
 
 
 Payload = Status | Latency | Topics | Runs
-_CLASSES: dict[str, Any] = {STATUS: Status, LATENCY: Latency, TOPICS: Topics, RUNS: Runs}
+_CLASSES: dict[str, type[Payload]] = {STATUS: Status, LATENCY: Latency, TOPICS: Topics, RUNS: Runs}
 
 
 @dataclass(frozen=True, slots=True)
@@ -446,7 +489,7 @@ HISTORY_TOPICS_S = 30.0
 
 def to_obj(p: Payload | History) -> dict[str, Any]:
     """The payload as the JSON object sent (tuples as lists, the header first)."""
-    body = asdict(p)  # type: ignore[call-overload]
+    body = asdict(p)
     body.pop("robot")
     if isinstance(p, History):
         body["entries"] = [to_obj(e) for e in p.entries]
@@ -491,6 +534,14 @@ def decode(data: bytes, kind: str, robot: str) -> Payload | History:
 
 
 def decode_obj(obj: Any, kind: str, robot: str) -> Payload | History:
+    checked = _header(obj, kind, robot)
+    if kind == HISTORY:
+        return _history(checked, robot)
+    return _CLASSES[kind].from_obj(checked)
+
+
+def _header(obj: Any, kind: str, robot: str) -> dict[str, Any]:
+    """``obj`` itself once its type, version, kind and robot are checked."""
     if not isinstance(obj, dict):
         raise FleetPayloadError(f"{kind}: a JSON {type(obj).__name__}, not an object")
     v = obj.get("v")
@@ -504,29 +555,27 @@ def decode_obj(obj: Any, kind: str, robot: str) -> Payload | History:
         raise FleetPayloadError(
             f"{kind}: the payload names robot {str(obj.get('robot'))[:40]!r} on {robot}'s key"
         )
-    if kind == HISTORY:
-        return _history(obj, robot)
-    return _CLASSES[kind].from_obj(obj)
+    return obj
 
 
 def _history(o: dict[str, Any], robot: str) -> History:
     raw = o.get("entries")
     if not isinstance(raw, list):
         raise _fail("history.entries", "a list", raw)
-    entries = []
+    entries: list[Payload] = []
     for i, e in enumerate(raw):
         k = e.get("kind") if isinstance(e, dict) else None
         if k not in KINDS:
             raise _fail(f"history.entries[{i}].kind", f"one of {', '.join(KINDS)}", k)
         try:
-            entries.append(decode_obj(e, k, robot))
+            entries.append(_CLASSES[k].from_obj(_header(e, k, robot)))  # decode_obj, k not HISTORY
         except FleetPayloadError as exc:
             raise FleetPayloadError(f"history.entries[{i}]: {exc}") from None
     return History(
         robot=robot,
         t=_num(o, HISTORY, "t", lo=0),
         minutes=_num(o, HISTORY, "minutes", lo=0),
-        entries=tuple(entries),  # type: ignore[arg-type]
+        entries=tuple(entries),
     )
 
 

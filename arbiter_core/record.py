@@ -5,12 +5,11 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
 from .envelope import StampedCommand
-from .stats import Summary, summarize
+from .stats import ArrayLike, Summary, summarize
 
 NS_PER_MS = 1_000_000
 
@@ -169,7 +168,7 @@ def build_record(
     )
 
 
-def latency_stats(latencies: Sequence[float]) -> dict[str, Any]:
+def latency_stats(latencies: ArrayLike) -> dict[str, Any]:
     """``{"count", "mean_ms", "min_ms", "max_ms", "p95_ms", "stddev_ms"}``; ms fields null when empty.
 
     Values are rounded to 4 places, like the records they summarise.

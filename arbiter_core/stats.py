@@ -24,6 +24,7 @@ import numpy.typing as npt
 
 FloatArray = npt.NDArray[np.float64]
 ArrayLike = FloatArray | Sequence[float]
+BoolArrayLike = npt.NDArray[np.bool_] | Sequence[bool]
 
 
 def _arr(values: ArrayLike) -> FloatArray:
@@ -114,7 +115,7 @@ def _kth_smallest(a: FloatArray, k: int) -> float:
     return float(np.partition(a, k)[k])
 
 
-def path_length(xs: ArrayLike, ys: ArrayLike, gaps: ArrayLike | None = None) -> float:
+def path_length(xs: ArrayLike, ys: ArrayLike, gaps: BoolArrayLike | None = None) -> float:
     """Sum of Euclidean distances between consecutive (x, y) samples. ``gaps`` (booleans, one per
     sample): a sample that follows a gap in the recording (the link was down, the odometry stale or
     reset); the step into it is not counted, since nobody saw the way the robot took."""

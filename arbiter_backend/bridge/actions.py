@@ -55,9 +55,12 @@ class ActionRoom:
             args = self.interfaces.values(type_name, "Goal", args, path="args")  # MessageError: status
         ended: list[bool] = []  # the result went out: later feedback is not sent (ROS carries feedback
         # and result on different channels, so the last feedback can arrive after the result)
-        on_feedback = None
-        if feedback:
-            on_feedback = lambda values: ended or self._goal_feedback(client, action, req_id, values)  # noqa: E731
+
+        def feedback_until_ended(values: Any) -> None:
+            if not ended:
+                self._goal_feedback(client, action, req_id, values)
+
+        on_feedback = feedback_until_ended if feedback else None
         if provided is not None:
             goal = provided.start(args, on_feedback)
             if req_id is not None:

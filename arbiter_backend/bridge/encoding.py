@@ -38,8 +38,10 @@ class Encoder:
 
     def __init__(self, bus: Bus) -> None:
         self.bus = bus
-        # (topic, encoding) -> (the last message, its frame); (topic, "fragments:<size>") -> its parts
-        self._encoded: dict[tuple[str, str], tuple[Any, Payload | list[str]]] = {}
+        # (topic, encoding) -> (the last message, its frame); (topic, "fragments:<size>") -> (the last
+        # message, its parts)
+        self._encoded: dict[tuple[str, str], tuple[Any, Payload]] = {}
+        self._fragmented: dict[tuple[str, str], tuple[Any, list[str]]] = {}
         self._fragment_ids = itertools.count(1)
 
     @property
@@ -65,7 +67,7 @@ class Encoder:
         key = (topic, encoding)
         cached = self._encoded.get(key)
         if cached is not None and cached[0] is msg:
-            return cached[1]  # type: ignore[return-value]
+            return cached[1]
         frame: Payload
         if encoding in ("none", "png"):  # ROS mode: the JSON form is made on first use (ros/bus.py)
             json_form = getattr(self.bus, "json_form", None)
@@ -81,7 +83,8 @@ class Encoder:
             convert = getattr(self.bus, "cbor_values", None) or cborenc.values_of
             frame = cborenc.encode({"op": "publish", "topic": topic, "msg": convert(type_name, msg)})
         else:  # cbor-raw: the CDR bytes and the time received (subscribe checked the bus has ``cdr``)
-            raw, received_ns = self.bus.cdr(type_name, msg)  # type: ignore[attr-defined]
+            cdr = self.bus.cdr  # type: ignore[attr-defined]  # only the ROS bus has it: subscribe checked
+            raw, received_ns = cdr(type_name, msg)
             secs, nsecs = divmod(received_ns, 1_000_000_000)
             frame = cborenc.encode(
                 {"op": "publish", "topic": topic, "msg": {"secs": secs, "nsecs": nsecs, "bytes": raw}}
@@ -93,9 +96,9 @@ class Encoder:
         """``frame`` as rosbridge ``fragment`` frames of ``size`` characters of its text, under an id of
         its own (made once per message and size for all the clients that get it)."""
         key = (topic, f"fragments:{size}")
-        cached = self._encoded.get(key)
+        cached = self._fragmented.get(key)
         if cached is not None and cached[0] is msg:
-            return Fragments(cached[1])  # type: ignore[arg-type]
+            return Fragments(cached[1])
         frag_id = f"{topic}#{next(self._fragment_ids)}"
         total = -(-len(frame) // size)
         parts = [
@@ -110,10 +113,12 @@ class Encoder:
             )
             for i in range(total)
         ]
-        self._encoded[key] = (msg, parts)
+        self._fragmented[key] = (msg, parts)
         return Fragments(parts)
 
     def forget(self, topic: str) -> None:
         """No client subscribes to ``topic`` any more: its last frames (a camera's: megabytes) go."""
         for key in [k for k in self._encoded if k[0] == topic]:
             del self._encoded[key]
+        for key in [k for k in self._fragmented if k[0] == topic]:
+            del self._fragmented[key]

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import json
 import re
-from typing import Any
+from typing import Any, Literal, TypeVar, overload
 
 from .. import jsonframe
 
@@ -33,6 +33,15 @@ def _reject_constant(token: str) -> Any:
 DECODER = json.JSONDecoder(parse_constant=_reject_constant)  # made once: json.loads(kw) makes one per call
 
 
+_T = TypeVar("_T")
+
+
+@overload
+def field(frame: Frame, name: str, kind: type[_T], required: Literal[True] = True) -> _T: ...
+@overload
+def field(frame: Frame, name: str, kind: type[_T], required: bool) -> _T | None: ...
+@overload
+def field(frame: Frame, name: str, kind: tuple[type, ...], required: bool = True) -> Any: ...
 def field(frame: Frame, name: str, kind: type | tuple[type, ...], required: bool = True) -> Any:
     """``frame[name]`` if it is a ``kind`` (a bool only where ``kind`` names bool); None when absent and
     not ``required``."""

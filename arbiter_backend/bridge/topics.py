@@ -15,6 +15,7 @@ import time
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import partial
 from typing import Any
 
 from ..bus import Bus
@@ -136,7 +137,7 @@ class TopicRoom:
         if sub is None:
             sub = Subscription(topic)
             client.subs[topic] = sub
-            sub.unsubscribe = self.bus.subscribe(topic, lambda m, c=client, s=sub: self._deliver(c, s, m))
+            sub.unsubscribe = self.bus.subscribe(topic, partial(self._deliver, client, sub))
         sub.requests[frame.get("id", f"_anon{len(sub.requests)}")] = (
             throttle,
             queue_length,

@@ -62,7 +62,7 @@ async def writer(client: Client) -> None:
         log.exception("writer for client %d failed", client.id)
 
 
-async def liveness(client: Client, transport: asyncio.BaseTransport, interval: float) -> None:
+async def liveness(client: Client, transport: asyncio.Transport, interval: float) -> None:
     """Ping ``client`` while it is silent; cut the connection once it has been silent too long."""
     loop = asyncio.get_running_loop()
     pings: set[asyncio.Task[None]] = set()

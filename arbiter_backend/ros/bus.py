@@ -52,18 +52,18 @@ REMATCH_S = 1.0  # how often the publishers of relayed topics are looked at: a d
 @dataclass
 class _Pub:
     type_name: str
-    publisher: Publisher
+    publisher: Publisher[Any]
     users: int = 0
 
 
 @dataclass
 class _Sub:
     type_name: str
-    subscription: Subscription
+    subscription: Subscription[Any]
     qos: QoSProfile
     callbacks: list[Callback] = field(default_factory=list)
     generation: int = 0  # bumped when the DDS subscription is replaced (publishers' QoS changed)
-    retiring: Subscription | None = None  # the one replaced, kept until the new one delivers
+    retiring: Subscription[Any] | None = None  # the one replaced, kept until the new one delivers
     swap: _Swap | None = None  # while both deliver: which of their messages are handed on
     # a transient-local (latched) topic: its last ``depth`` samples, replayed to each client that
     # subscribes after the shared DDS subscription got them (as a late-joining DDS reader would get them)
@@ -140,7 +140,7 @@ def lifespan_s(profile: QoSProfile) -> float | None:
     return ns / 1e9 if 0 < ns < 2**63 - 1 else None
 
 
-class RosMessage(dict):  # type: ignore[type-arg]
+class RosMessage(dict[str, Any]):
     """A message as the endpoint gets it: rosbridge's JSON form, with the ROS message it came from
     and when it was received (wall clock, ns), for the CBOR encodings.
 
@@ -333,7 +333,7 @@ class RosBus:
 
     def _create_subscription(
         self, topic: str, type_name: str, qos: QoSProfile, generation: int
-    ) -> Subscription:
+    ) -> Subscription[Any]:
         log.debug("%s: subscribing (%s, %s)", topic, qos.reliability.name, qos.durability.name)
         events = SubscriptionEventCallbacks(
             matched=lambda info: log.debug(
@@ -397,7 +397,9 @@ class RosBus:
         sub = self._subs.get(topic)
         if sub is None:
             qos, lifespan = self._qos_for(topic)
-            latched = deque(maxlen=qos.depth) if qos.durability == DurabilityPolicy.TRANSIENT_LOCAL else None
+            latched: deque[tuple[float, dict[str, Any]]] | None = (
+                deque(maxlen=qos.depth) if qos.durability == DurabilityPolicy.TRANSIENT_LOCAL else None
+            )
             created = self._create_subscription(topic, t, qos, 0)
             sub = _Sub(t, created, qos, latched=latched, lifespan=lifespan)
             self._subs[topic] = sub
@@ -480,7 +482,7 @@ class RosBus:
             return
         received_ns = info.get("received_timestamp") or time.time_ns()  # the middleware's, wall clock
         try:
-            msg = deserialize_message(raw, cls)
+            msg: Any = deserialize_message(raw, cls)
         except Exception:  # bytes that do not fit the type (a foreign publisher): skipped, never fatal
             if topic not in self._undecodable:
                 self._undecodable.add(topic)

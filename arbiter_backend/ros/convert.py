@@ -47,12 +47,12 @@ MAX_DEPTH = 32
 
 
 @lru_cache(maxsize=256)
-def message_class(type_name: str) -> type:
+def message_class(type_name: str) -> type[Any]:
     """The generated class for ``pkg/msg/Type`` (or ``pkg/Type``); MessageError if it is not installed."""
     pkg, _, name = normalize_type(type_name).split("/")
     try:
         module = importlib.import_module(f"{pkg}.msg")
-        cls = getattr(module, name)
+        cls: type[Any] = getattr(module, name)
     except (ImportError, AttributeError):
         raise MessageError(f"message type {pkg}/msg/{name} is not installed") from None
     if not hasattr(cls, "get_fields_and_field_types"):
@@ -61,7 +61,7 @@ def message_class(type_name: str) -> type:
 
 
 @lru_cache(maxsize=128)
-def service_class(type_name: str) -> type:
+def service_class(type_name: str) -> type[Any]:
     """The generated class for ``pkg/srv/Name`` (or ``pkg/Name``); MessageError if it is not installed."""
     parts = type_name.split("/")
     if len(parts) == 3 and parts[1] == "srv":
@@ -71,7 +71,7 @@ def service_class(type_name: str) -> type:
     else:
         raise MessageError(f"invalid service type name {type_name[:80]!r}")
     try:
-        cls = getattr(importlib.import_module(f"{pkg}.srv"), name)
+        cls: type[Any] = getattr(importlib.import_module(f"{pkg}.srv"), name)
     except (ImportError, AttributeError, ValueError):
         raise MessageError(f"service type {pkg}/srv/{name} is not installed here") from None
     if not hasattr(cls, "Request"):
@@ -79,7 +79,7 @@ def service_class(type_name: str) -> type:
     return cls
 
 
-def _interface_class(type_name: str, kind: str, marker: str) -> type:
+def _interface_class(type_name: str, kind: str, marker: str) -> type[Any]:
     """The generated class for ``pkg/<kind>/Name`` (or ``pkg/Name``); MessageError if it is not installed."""
     parts = type_name.split("/") if isinstance(type_name, str) else []
     if len(parts) == 3 and parts[1] == kind:
@@ -89,7 +89,7 @@ def _interface_class(type_name: str, kind: str, marker: str) -> type:
     else:
         raise MessageError(f"invalid {kind} type name {str(type_name)[:80]!r}")
     try:
-        cls = getattr(importlib.import_module(f"{pkg}.{kind}"), name)
+        cls: type[Any] = getattr(importlib.import_module(f"{pkg}.{kind}"), name)
     except (ImportError, AttributeError, ValueError):
         raise MessageError(f"{kind} type {pkg}/{kind}/{name} is not installed here") from None
     if not hasattr(cls, marker):
@@ -98,7 +98,7 @@ def _interface_class(type_name: str, kind: str, marker: str) -> type:
 
 
 @lru_cache(maxsize=128)
-def action_class(type_name: str) -> type:
+def action_class(type_name: str) -> type[Any]:
     """The generated class for ``pkg/action/Name`` (or ``pkg/Name``); MessageError if not installed."""
     return _interface_class(type_name, "action", "Goal")
 
@@ -114,12 +114,14 @@ def type_name_of(cls: type) -> str:
     return f"{pkg}/msg/{cls.__name__}"
 
 
+# mypy takes no class for Hashable (python/mypy#11470), which the cache asks of its arguments: the
+# callers' `ignore[arg-type]`s
 @lru_cache(maxsize=256)
-def _fields(cls: type) -> tuple[tuple[str, Any], ...]:
+def _fields(cls: type[Any]) -> tuple[tuple[str, Any], ...]:
     return tuple(zip(cls.get_fields_and_field_types(), cls.SLOT_TYPES, strict=True))
 
 
-def _nested_class(t: rd.NamespacedType) -> type:
+def _nested_class(t: rd.NamespacedType) -> type[Any]:
     return message_class("/".join([*t.namespaces, t.name]))
 
 
@@ -152,7 +154,7 @@ def typedef_text(type_name: str) -> str:
             root = False
             with open(os.path.join(_share_dir(pkg), "msg", f"{name}.msg"), encoding="utf-8") as f:
                 out.append(f.read())
-            for _field, slot in _fields(message_class(full)):
+            for _field, slot in _fields(message_class(full)):  # type: ignore[arg-type]  # mypy#11470, above
                 while isinstance(slot, rd.AbstractNestedType):
                     slot = slot.value_type
                 if isinstance(slot, rd.NamespacedType):
@@ -244,7 +246,10 @@ def _basic(typename: str, value: Any, path: str) -> Any:
 # -- ROS -> JSON ----------------------------------------------------------------------------------
 def to_json(msg: Any) -> dict[str, Any]:
     """rosbridge JSON of a message instance."""
-    return {name: _to_json_value(t, getattr(msg, name)) for name, t in _fields(type(msg))}
+    return {
+        name: _to_json_value(t, getattr(msg, name))
+        for name, t in _fields(type(msg))  # type: ignore[arg-type]  # a class hashes: python/mypy#11470
+    }
 
 
 def _to_json_value(t: Any, value: Any) -> Any:
@@ -297,7 +302,10 @@ _TYPED = {"float": "float32", "double": "float64", **{t: t for t in cborenc.TYPE
 def to_cbor(msg: Any) -> dict[str, Any]:
     """The CBOR form of a message instance (``cborenc``): byte arrays as bytes, numeric arrays as
     little-endian typed arrays, fixed-size ones included (rosbridge fails on those)."""
-    return {name: _to_cbor_value(t, getattr(msg, name)) for name, t in _fields(type(msg))}
+    return {
+        name: _to_cbor_value(t, getattr(msg, name))
+        for name, t in _fields(type(msg))  # type: ignore[arg-type]  # a class hashes: python/mypy#11470
+    }
 
 
 def _to_cbor_value(t: Any, value: Any) -> Any:

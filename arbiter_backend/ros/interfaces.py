@@ -29,10 +29,11 @@ import concurrent.futures
 import contextlib
 import logging
 import threading
-from collections.abc import Awaitable, Callable
+from collections.abc import Callable, Coroutine
 from typing import Any
 
-from rclpy.action import ActionClient, ActionServer, CancelResponse
+from rclpy.action.client import ActionClient
+from rclpy.action.server import ActionServer, CancelResponse
 from rclpy.callback_groups import ReentrantCallbackGroup
 from rclpy.context import Context
 from rclpy.executors import MultiThreadedExecutor
@@ -90,7 +91,7 @@ class _Withdrawable:
 
     GRACE_S = 0.2
 
-    def __init__(self, loop: asyncio.AbstractEventLoop, destroy: Callable[[], None]) -> None:
+    def __init__(self, loop: asyncio.AbstractEventLoop, destroy: Callable[[], object]) -> None:
         self.loop = loop
         self._destroy = destroy
         self._lock = threading.Lock()
@@ -137,7 +138,7 @@ class RosInterfaces:
         self.executor = MultiThreadedExecutor(num_threads=PROVIDER_THREADS, context=context)
         self.executor.add_node(self.provider_node)
         self.group = ReentrantCallbackGroup()
-        self._action_clients: dict[str, tuple[type, ActionClient]] = {}
+        self._action_clients: dict[str, tuple[type, ActionClient[Any, Any, Any]]] = {}
         self._closed = False
         self._thread = spin_in_thread(self.executor, "rclpy-provider", "the provider executor")
 
@@ -175,7 +176,7 @@ class RosInterfaces:
 
     # -- services WebSocket clients provide ------------------------------------------------------
     def advertise_service(
-        self, name: str, type_name: str, call: Callable[[Any, float], Awaitable[tuple[bool, Any]]]
+        self, name: str, type_name: str, call: Callable[[Any, float], Coroutine[Any, Any, tuple[bool, Any]]]
     ) -> Callable[[], None]:
         """An rclpy service ``name`` whose requests go to ``call``; returns what takes it away."""
         srv = service_class(type_name)
@@ -324,14 +325,11 @@ class RosInterfaces:
         else:
             raise MessageError(f"Action {action} is not available")
 
-        def feedback(message: Any) -> None:  # executor thread
-            values = to_json(message.feedback)
-            with contextlib.suppress(RuntimeError):
-                self.loop.call_soon_threadsafe(on_feedback, values)
-
         try:
             sent = self._on_loop(
-                client.send_goal_async(request, feedback_callback=feedback if on_feedback else None)
+                client.send_goal_async(
+                    request, feedback_callback=self._feedback_to_loop(on_feedback) if on_feedback else None
+                )
             )
             try:
                 # a goal request sent as the server first matches us can lose its answer (DDS discovery
@@ -352,7 +350,15 @@ class RosInterfaces:
             raise
         return response.status, to_json(response.result)
 
-    async def _result(self, action: str, client: ActionClient, handle: Any) -> Any:
+    def _feedback_to_loop(self, on_feedback: Callable[[Any], None]) -> Callable[[Any], None]:
+        def feedback(message: Any) -> None:  # executor thread
+            values = to_json(message.feedback)
+            with contextlib.suppress(RuntimeError):
+                self.loop.call_soon_threadsafe(on_feedback, values)
+
+        return feedback
+
+    async def _result(self, action: str, client: ActionClient[Any, Any, Any], handle: Any) -> Any:
         """The goal's result, never waited for without end: a result request whose answer is lost (one
         sent as the service first matches can be) is sent again once the status topic says the goal
         ended; a server that leaves the graph fails the goal."""

@@ -49,12 +49,12 @@ def _measured(value: str) -> str:
 
 
 def _limits_params(node: Node, config: BackendConfig) -> tuple[Limits, float, str]:
-    max_linear = node.declare_parameter("max_linear", float(config.limits.max_linear)).value
-    max_angular = node.declare_parameter("max_angular", float(config.limits.max_angular)).value
-    lin_acc = node.declare_parameter("max_linear_accel", float(config.limits.max_linear_accel)).value
-    ang_acc = node.declare_parameter("max_angular_accel", float(config.limits.max_angular_accel)).value
-    cmd_timeout = node.declare_parameter("cmd_timeout", float(config.cmd_timeout)).value
-    measured_type = node.declare_parameter("measured_type", config.measured_type).value
+    max_linear: float = node.declare_parameter("max_linear", float(config.limits.max_linear)).value
+    max_angular: float = node.declare_parameter("max_angular", float(config.limits.max_angular)).value
+    lin_acc: float = node.declare_parameter("max_linear_accel", float(config.limits.max_linear_accel)).value
+    ang_acc: float = node.declare_parameter("max_angular_accel", float(config.limits.max_angular_accel)).value
+    cmd_timeout: float = node.declare_parameter("cmd_timeout", float(config.cmd_timeout)).value
+    measured_type: str = node.declare_parameter("measured_type", config.measured_type).value
     limits = dataclasses.replace(
         config.limits,
         max_linear=_positive("max_linear", max_linear),
@@ -69,14 +69,14 @@ class TrackerNode(Node):
     def __init__(self, config: BackendConfig, context: Context) -> None:
         super().__init__(tracker.NODE_NAME, namespace=config.namespace, context=context)
         limits, cmd_timeout, measured_type = _limits_params(self, config)
-        deploy_mode = self.declare_parameter("deploy_mode", config.deploy_mode).value
+        deploy_mode: str = self.declare_parameter("deploy_mode", config.deploy_mode).value
         max_records = int(self.declare_parameter("max_records", config.max_records).value)
         if max_records < 1:
             raise ParameterError(f"parameter max_records must be at least 1, got {max_records}")
         api_port = int(self.declare_parameter("api_port", config.api_port).value)
         if not 0 <= api_port <= 65535:
             raise ParameterError(f"parameter api_port must be 0..65535, got {api_port}")
-        host = self.declare_parameter("host", config.host).value
+        host: str = self.declare_parameter("host", config.host).value
         max_age = float(self.declare_parameter("max_command_age_ms", float(config.max_command_age_ms)).value)
         if not max_age >= 0:
             raise ParameterError(f"parameter max_command_age_ms must be 0 (off) or positive, got {max_age}")

@@ -63,6 +63,8 @@ def cdr_stamp(raw: bytes) -> float | None:
     bytes cannot hold one (too short, nanoseconds out of range)."""
     if len(raw) < 12:
         return None
+    sec: int
+    nsec: int
     sec, nsec = (_STAMP_LE if raw[1] & 1 else _STAMP_BE).unpack_from(raw, 4)
     if nsec >= 1_000_000_000:
         return None
@@ -94,7 +96,7 @@ class RosTopics:
         self.node = node
         self.watch = watch
         # topic -> (type, best effort, subscription, stamped)
-        self._subs: dict[str, tuple[str, bool, Subscription | None, bool]] = {}
+        self._subs: dict[str, tuple[str, bool, Subscription[Any] | None, bool]] = {}
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         # what the relay reads (``RosBus.relayed``): topic -> (type, best effort); set by the backend
@@ -213,7 +215,9 @@ class RosTopics:
         self._shared[topic] = stamped
         log.debug("%s: measured on the relay's reader", topic)
 
-    def _subscribe(self, topic: str, type_name: str, best_effort: bool) -> tuple[Subscription | None, bool]:
+    def _subscribe(
+        self, topic: str, type_name: str, best_effort: bool
+    ) -> tuple[Subscription[Any] | None, bool]:
         try:
             cls = message_class(type_name)
         except MessageError:

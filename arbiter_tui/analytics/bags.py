@@ -25,7 +25,7 @@ from collections.abc import Callable, Iterator
 from contextlib import ExitStack
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
@@ -36,6 +36,9 @@ from .exports import MCAP_MAGIC, MCAP_POINT_TOPIC, Export, ExportFormatError
 from .observe import ObserveConfig, Observer
 from .scorecards import Scans, nearest_obstacle
 from .store import AnalyticsStore
+
+if TYPE_CHECKING:
+    from rosbags.rosbag2.reader import DirectoryReader
 
 MAX_SAMPLES = 1_000_000  # the store's largest ring: a day at 10 Hz
 ODOMETRY = "nav_msgs/msg/Odometry"
@@ -208,7 +211,8 @@ def _read(
             bag.open()
             stack.callback(bag.close)
             storages: list[Any] = [bag]
-            what = f"{kind} ({_describe(bag.storage.storages, bag.compression_mode)})"
+            directory = cast("DirectoryReader", bag.storage)  # the Reader of a directory reads it with one
+            what = f"{kind} ({_describe(directory.storages, bag.compression_mode)})"
             message_zstd = False
         else:
             files_ = [path] if path.is_file() else storage_files(path)
@@ -240,9 +244,9 @@ def _open_storage(file: Path, stack: ExitStack) -> Any:
         import shutil
 
         try:
-            from compression import zstd  # type: ignore[import-not-found]  # Python 3.14
+            from compression import zstd  # Python 3.14
         except ImportError:
-            from backports import zstd  # type: ignore[import-not-found,no-redef]  # rosbags' dependency
+            from backports import zstd  # rosbags' dependency
         tmp = Path(stack.enter_context(tempfile.TemporaryDirectory(prefix="arbiter-bag-")))
         plain = tmp / file.name.removesuffix(".zstd")
         with file.open("rb") as src, zstd.open(src, "rb") as unz, plain.open("wb") as dst:
@@ -413,10 +417,11 @@ def _messages(storages: list[Any], wanted: list[tuple[Any, Any]]) -> Iterator[tu
 
 def _unzstd(raw: bytes | memoryview) -> bytes:
     try:
-        from compression import zstd  # type: ignore[import-not-found]
+        from compression import zstd
     except ImportError:
-        from backports import zstd  # type: ignore[import-not-found,no-redef]
-    return zstd.decompress(bytes(raw))
+        from backports import zstd
+    plain: bytes = zstd.decompress(bytes(raw))
+    return plain
 
 
 def _warn_frames(frames: dict[str, str], odom: str, warn: Callable[[str], None]) -> None:

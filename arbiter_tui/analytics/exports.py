@@ -238,9 +238,9 @@ def to_mcap(
     odom_schema = writer.register_msgdef(MCAP_ODOM_TYPE, MCAP_ODOM_DEF)
     stats_schema = writer.register_msgdef(MCAP_STATS_TYPE, MCAP_STATS_DEF)
     # the summary channels exist when the summaries were given (even none): "no runs", not "unknown"
-    run_schema = writer.register_msgdef(MCAP_RUN_TYPE, MCAP_RUN_DEF) if runs is not None else 0
+    run_schema = writer.register_msgdef(MCAP_RUN_TYPE, MCAP_RUN_DEF) if runs is not None else None
     algorithm_schema = (
-        writer.register_msgdef(MCAP_ALGORITHM_TYPE, MCAP_ALGORITHM_DEF) if algorithms is not None else 0
+        writer.register_msgdef(MCAP_ALGORITHM_TYPE, MCAP_ALGORITHM_DEF) if algorithms is not None else None
     )
     last_ns = 0
     for p, row in zip(points, rows, strict=False):
@@ -250,15 +250,17 @@ def to_mcap(
         writer.write_message(
             MCAP_ODOM_TOPIC, odom_schema, _odometry(p, t_ns), log_time=t_ns, publish_time=t_ns
         )
-    for r, row in zip(runs or (), run_rows, strict=True):
-        t_ns = max(0, int((r.end_ms if r.end_ms is not None else r.last_ms or r.start_ms) * 1_000_000))
-        writer.write_message(MCAP_RUNS_TOPIC, run_schema, row, log_time=t_ns, publish_time=t_ns)
-    for row in algorithm_rows:
-        writer.write_message(
-            MCAP_ALGORITHMS_TOPIC, algorithm_schema, row, log_time=last_ns, publish_time=last_ns
-        )
+    if run_schema is not None:  # else no runs, no rows
+        for r, row in zip(runs or (), run_rows, strict=True):
+            t_ns = max(0, int((r.end_ms if r.end_ms is not None else r.last_ms or r.start_ms) * 1_000_000))
+            writer.write_message(MCAP_RUNS_TOPIC, run_schema, row, log_time=t_ns, publish_time=t_ns)
+    if algorithm_schema is not None:  # else no rows
+        for row in algorithm_rows:
+            writer.write_message(
+                MCAP_ALGORITHMS_TOPIC, algorithm_schema, row, log_time=last_ns, publish_time=last_ns
+            )
     writer.write_message(MCAP_STATS_TOPIC, stats_schema, stats_row, log_time=last_ns, publish_time=last_ns)
-    writer.finish()
+    writer.finish()  # type: ignore[no-untyped-call]  # mcap_ros2's Writer.finish is not annotated
     return buf.getvalue()
 
 
@@ -368,13 +370,13 @@ def _opt_number(raw: Any, where: str) -> float | None:
 def _stats_from(raw: Any, where: str) -> AnalyticsStats:
     if not isinstance(raw, dict):
         raise ExportFormatError(f"{where}: stats must be an object")
-    values = []
+    values: dict[str, float] = {}
     for name in STATS_FIELDS:
         v = _opt_number(raw.get(name), f"{where}.stats.{name}")
         if v is None:
             raise ExportFormatError(f"{where}: stats.{name} missing")
-        values.append(int(v) if name == "sampleCount" else v)
-    return AnalyticsStats(*values)
+        values[name] = v
+    return AnalyticsStats(int(values.pop("sampleCount")), **values)
 
 
 def _text(raw: Any, where: str) -> str:

@@ -18,7 +18,7 @@ from .bags import DEFAULT_CONFIG, DEFAULT_TOPICS, BagTopics, Recording, bag_kind
 from .exports import Export
 from .files import load_export
 from .observe import ObserveConfig
-from .ranking import Ranking, rank
+from .ranking import Entry, Ranking, rank
 from .runs import RunSummary
 
 
@@ -39,8 +39,8 @@ class Graded:
 
     def ranking(self) -> Ranking:
         """As the analytics screen ranks its rows: per mission, then overall (``ranking``)."""
-        rows: Sequence[object] = self.export.algorithms or self.runs
-        return rank(rows)  # type: ignore[arg-type]
+        rows: Sequence[Entry] = self.export.algorithms or self.runs
+        return rank(rows)
 
     def card(self, run_id: int) -> SC.RunCard | None:
         return next((c for c in self.cards if c.run == run_id), None)
@@ -52,8 +52,9 @@ def grade(path: Path, topics: BagTopics = DEFAULT_TOPICS, config: ObserveConfig 
     ``OSError`` (``FileNotFoundError``, ``PermissionError``) when it cannot be read."""
     path = Path(path)
     notes: list[str] = []
+    recording: Recording | None
     if bag_kind(path) is not None:
-        recording: Recording | None = read_bag(path, topics, config, warn=notes.append)
+        recording = read_bag(path, topics, config, warn=notes.append)
         export, what = recording.export, recording.what
         no_scan = f"no sensor_msgs/LaserScan on {topics.scan} in the recording"
         scans = recording.scans

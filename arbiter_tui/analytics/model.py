@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 from collections.abc import Hashable, Iterable, Sequence
 from dataclasses import asdict, dataclass, fields
+from typing import TypeVar
 
 import numpy as np
 
@@ -141,12 +142,15 @@ def stats_of_points(points: Iterable[DataPoint]) -> AnalyticsStats:
     )  # fmt: skip
 
 
+Label = TypeVar("Label", bound=Hashable)
+
+
 def grouped_stats(
     cols: dict[str, np.ndarray],
-    labels: Sequence[Hashable],
+    labels: Sequence[Label],
     stretch: np.ndarray | None = None,
     gaps: np.ndarray | None = None,
-) -> dict[Hashable, AnalyticsStats]:
+) -> dict[Label, AnalyticsStats]:
     """AnalyticsStats per label over time-ordered columns (first-seen order of the labels).
 
     A group's path length counts only steps between two samples that are next to each other in the
@@ -164,7 +168,7 @@ def grouped_stats(
         joined &= stretch[1:] == stretch[:-1]
     if gaps is not None:
         joined &= ~np.asarray(gaps, dtype=bool)[1:]
-    out: dict[Hashable, AnalyticsStats] = {}
+    out: dict[Label, AnalyticsStats] = {}
     for i, label in enumerate(order):
         mask = codes == i
         path = float(steps[joined & mask[1:]].sum())

@@ -129,12 +129,12 @@ class Observer:
         pose = Pose(x, y, theta)
         self._pose = pose
         if self._pending_goal is not None:
-            goal, plans = self._pending_goal, self._pending_plans
+            pending, plans = self._pending_goal, self._pending_plans
             self._pending_goal, self._pending_plans = None, []
             if not plans:
-                self._start(t_ns, goal, reference_path((x, y), [goal]), stand_in=True)
+                self._start(t_ns, pending, reference_path((x, y), [pending]), stand_in=True)
             else:
-                self._start(t_ns, goal, plans[0], stand_in=False)
+                self._start(t_ns, pending, plans[0], stand_in=False)
                 if len(plans) > 1:
                     self.store.follow_path(plans[-1])
         self._next_sample_ns = t_ns + self._period_ns

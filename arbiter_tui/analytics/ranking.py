@@ -23,8 +23,9 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import Protocol, TypeVar
 
+from arbiter_core.controllers import MANUAL
+
 from .model import AnalyticsStats
-from .runs import MANUAL
 from .tracking import TrackingStats
 
 RULE_MISSION = "per mission: completed first, then lowest mean cross-track error to the path (avg e_xt)"
@@ -145,9 +146,9 @@ def rank(entries: Iterable[Entry]) -> Ranking:
     ranks = {a: [m.algorithms.index(a) + 1 for m in fair] for a in algorithms}
     mean = {a: sum(r) / len(r) for a, r in ranks.items()}
     wins = {a: sum(1 for m in fair if m.best == a) for a in algorithms}
-    order = sorted(algorithms, key=lambda a: (mean[a], -wins[a]))
-    top = order[0]
-    tied = tuple(a for a in order if (mean[a], wins[a]) == (mean[top], wins[top]))
+    standing = sorted(algorithms, key=lambda a: (mean[a], -wins[a]))
+    top = standing[0]
+    tied = tuple(a for a in standing if (mean[a], wins[a]) == (mean[top], wins[top]))
     over = ", ".join(m.mission for m in fair)
     if len(tied) > 1:
         best = None
@@ -160,8 +161,8 @@ def rank(entries: Iterable[Entry]) -> Ranking:
         Overall(
             best,
             tuple(m.mission for m in fair),
-            tuple((a, round(mean[a], 4)) for a in order),
-            tuple((a, wins[a]) for a in order),
+            tuple((a, round(mean[a], 4)) for a in standing),
+            tuple((a, wins[a]) for a in standing),
             tied if best is None else (),
             reason,
         ),

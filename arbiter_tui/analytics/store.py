@@ -50,7 +50,8 @@ def _order(size: int, cap: int, nxt: int) -> np.ndarray | slice:
     """Indices of the stored points, oldest first."""
     if not _wrapped(size, cap, nxt):
         return slice(0, size)
-    return np.r_[nxt:size, 0:nxt]
+    wrapped: np.ndarray = np.r_[nxt:size, 0:nxt]
+    return wrapped
 
 
 def _last(size: int, cap: int, nxt: int, n: int | None) -> np.ndarray | slice:
@@ -60,7 +61,8 @@ def _last(size: int, cap: int, nxt: int, n: int | None) -> np.ndarray | slice:
         return slice(size - k, size)
     if k <= nxt:  # nxt holds the oldest point; the newest is at nxt - 1
         return slice(nxt - k, nxt)
-    return np.r_[size - (k - nxt) : size, 0:nxt]
+    wrapped: np.ndarray = np.r_[size - (k - nxt) : size, 0:nxt]
+    return wrapped
 
 
 class AnalyticsStore:
@@ -376,7 +378,7 @@ class AnalyticsStore:
             gaps = self._gap[order]
             names = list(self._algos)
         cols = {name: num[i] for name, i in _COL.items()}
-        return grouped_stats(cols, [names[c] for c in codes.tolist()], runs, gaps)  # type: ignore[return-value]
+        return grouped_stats(cols, [names[c] for c in codes.tolist()], runs, gaps)
 
     def nbytes(self) -> int:
         """Bytes held by the buffer arrays."""

@@ -9,7 +9,7 @@ from __future__ import annotations
 import zlib
 from dataclasses import dataclass
 
-from .runs import MANUAL
+from arbiter_core.controllers import MANUAL
 
 
 @dataclass(frozen=True, slots=True)

@@ -11,9 +11,11 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
+from arbiter_core.controllers import MANUAL
+
 from . import ranking
 from .labels import format_stat
-from .runs import LOWER_IS_BETTER, MANUAL, AlgorithmSummary, RunSummary, best_in_columns, column_value
+from .runs import LOWER_IS_BETTER, AlgorithmSummary, RunSummary, best_in_columns, column_value
 from .tracking import TRACKING_FIELDS
 
 BEST_CELL = "◆"
@@ -131,7 +133,7 @@ class Table:
     marked: tuple[tuple[int, ...], ...] = ()  # compact: the best cells of each row
 
 
-def sort_value(row: Row, key: str) -> tuple[bool, float | str]:
+def sort_value(row: Row, key: str) -> tuple[bool, float | str] | tuple[bool, bool, float]:
     """Missing values last; text columns alphabetically."""
     if key == RANK:
         return ranking.rank_key(row)
@@ -158,13 +160,13 @@ def build(
 ) -> Table:
     """Rows grouped by mission (in the order missions were first driven; manual driving last), sorted
     within each mission; ``★`` on each mission's best, the overall best by ``ranking.RULE_OVERALL``."""
-    columns = ALGORITHM_COLUMNS if mode == BY_ALGORITHM else RUN_COLUMNS
+    columns: tuple[Column, ...] = ALGORITHM_COLUMNS if mode == BY_ALGORITHM else RUN_COLUMNS
     if compact:
         columns = tuple(c for c in columns if c.key not in COMPACT_OMITS)
     source: list[Row] = list(algorithms if mode == BY_ALGORITHM else runs)
     groups: dict[tuple[bool, str], list[Row]] = {}
     for item in source:
-        groups.setdefault((item.algorithm == ranking.MANUAL, item.mission), []).append(item)
+        groups.setdefault((item.algorithm == MANUAL, item.mission), []).append(item)
     items: list[Row] = []
     for key in sorted(groups, key=lambda k: k[0]):  # stable: first-seen order, manual last
         items.extend(sorted(groups[key], key=lambda r: sort_value(r, sort), reverse=descending))

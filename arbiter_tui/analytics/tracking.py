@@ -91,7 +91,7 @@ class TrackingStats:
             if f == "success" and not 0.0 <= v <= 1.0:
                 raise ValueError("tracking.success must be between 0 and 1")
             values[f] = float(v)
-        return cls(samples, **values)  # type: ignore[arg-type]
+        return cls(samples, **values)  # type: ignore[arg-type]  # checked above: None only where OPTIONAL
 
 
 def reference_path(start: Point, waypoints: Sequence[Point]) -> np.ndarray:
@@ -121,7 +121,8 @@ def segment_distance(
     u = np.where(seg2 > 0, u, 0.0)
     ex = px - (ax + u * dx)
     ey = py - (ay + u * dy)
-    return np.sqrt(ex * ex + ey * ey)
+    distance: np.ndarray = np.sqrt(ex * ex + ey * ey)
+    return distance
 
 
 class PathIndex:
@@ -168,7 +169,8 @@ class PathIndex:
         px = np.asarray(x, dtype=np.float64).ravel()
         py = np.asarray(y, dtype=np.float64).ravel()
         if len(self.path) == 1:
-            return np.hypot(px - self.path[0, 0], py - self.path[0, 1])
+            to_point: np.ndarray = np.hypot(px - self.path[0, 0], py - self.path[0, 1])
+            return to_point
         out = np.empty(px.size, dtype=np.float64)
         if not self.levels:
             step = max(1, self.BATCH_PAIRS // len(self._a))

@@ -85,6 +85,7 @@ def figure(cells: list[SweepCell]) -> Figure:
     n = len(data)
     cols = min(n, 2)
     rows = math.ceil(n / cols)
+    fig: Figure
     fig, axes = plt.subplots(rows, cols, figsize=(6.0 * cols, 4.0 * rows), squeeze=False)
     first = cells[0].link
     for ax, (mission, lines) in zip(axes.flat, data.items(), strict=False):

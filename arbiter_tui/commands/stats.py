@@ -5,12 +5,14 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from arbiter_core.cliargs import OneLineParser
+from arbiter_core.controllers import MANUAL
 
 from ..analytics import scorecards as SC
 from ..analytics.bags import DEFAULT_TOPICS, BagTopics
@@ -26,7 +28,7 @@ from ..analytics.model import (
     stats_of_points,
 )
 from ..analytics.observe import ObserveConfig
-from ..analytics.runs import MANUAL, RunSummary
+from ..analytics.runs import RunSummary
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -164,7 +166,7 @@ def _grouped(points: list[DataPoint], labels: list[str]) -> dict[str, AnalyticsS
         return {}
     runs = np.fromiter((p.runId or 0 for p in points), dtype=np.int64, count=len(points))
     gaps = np.fromiter((p.gap for p in points), dtype=bool, count=len(points))
-    return grouped_stats(columns_of(points), labels, runs, gaps)  # type: ignore[return-value]
+    return grouped_stats(columns_of(points), labels, runs, gaps)
 
 
 def run(argv: list[str]) -> int:
@@ -194,7 +196,7 @@ def run(argv: list[str]) -> int:
             return 1
     if args.json:
         if args.by is None:
-            body: dict[str, object] = groups[""][0].as_dict()
+            body: Mapping[str, object] = groups[""][0].as_dict()
         else:
             body = {
                 k: v.as_dict()

@@ -16,11 +16,11 @@ from collections import deque
 from collections.abc import Callable
 from dataclasses import replace
 
-from arbiter_core.controllers import ALGORITHMS, MISSIONS, goal_driver, make_controller
+from arbiter_core.controllers import ALGORITHMS, MANUAL, MISSIONS, goal_driver, make_controller
 from arbiter_core.kinematics import Limits, Pose, clamp_twist, distance_error, heading_error
 from arbiter_core.mission import Mission, Phase
 
-from ..analytics.runs import ABORTED, COMPLETED, ENDED, MANUAL, MANUAL_IDLE_S, OVERRIDDEN
+from ..analytics.runs import ABORTED, COMPLETED, ENDED, MANUAL_IDLE_S, OVERRIDDEN
 from ..analytics.store import AnalyticsStore, DataPoint
 from ..analytics.tracking import reference_path
 from ..link.base import CONNECTING, DISCONNECTED, RECONNECTING, STARTING, Link
@@ -318,7 +318,7 @@ class ControlLoop:
                 cmd = self.teleop.tick(now)
             else:
                 limits = self.autonomy_limits()
-                self.controller.limits = limits
+                self.controller.limits = limits  # type: ignore[union-attr]  # a run is never manual's
                 cmd = self.controller.command(pose, self.mission)
         else:
             cmd = self.teleop.tick(now)

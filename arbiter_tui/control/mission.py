@@ -8,10 +8,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
+from arbiter_core.controllers import MANUAL
 from arbiter_core.kinematics import Pose
 from arbiter_core.mission import Mission, Phase
-
-from ..analytics.runs import MANUAL
 
 
 @dataclass(frozen=True)

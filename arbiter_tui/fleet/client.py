@@ -230,7 +230,7 @@ class FleetClient:
                 self.model.reject(name, str(exc), self.mono())
             return
         with self._lock:
-            self.model.accept(decoded, size, self.mono())  # type: ignore[arg-type]
+            self.model.accept(decoded, size, self.mono())  # type: ignore[arg-type]  # kind in KINDS: Payload
 
     # -- what the screen asks ---------------------------------------------------------------------
     def session_words(self) -> str:

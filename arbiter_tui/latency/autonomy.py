@@ -36,7 +36,7 @@ class AutonomyStatus:
         if not isinstance(body, dict) or not isinstance(body.get("state"), str):
             raise ValueError("not an autonomy status: no state")
 
-        def opt(name: str, kind: type) -> Any:
+        def opt(name: str, kind: type | tuple[type, ...]) -> Any:
             value = body.get(name)
             return value if isinstance(value, kind) and not isinstance(value, bool) else None
 

@@ -39,6 +39,7 @@ import math
 import threading
 from collections import deque
 from dataclasses import dataclass, replace
+from typing import overload
 
 import numpy as np
 
@@ -73,12 +74,18 @@ def _as_clock(e: OffsetEstimate) -> ClockEstimate:
                          e.samples, e.steps)  # fmt: skip
 
 
-def _estimate(c: ClockEstimate, steps: int, digits: int | None = None) -> OffsetEstimate:
-    def r(v: float | None) -> float | None:
-        return v if v is None or digits is None else round(v, digits)
+@overload
+def _rounded(v: float, digits: int | None) -> float: ...
+@overload
+def _rounded(v: None, digits: int | None) -> None: ...
+def _rounded(v: float | None, digits: int | None) -> float | None:
+    return v if v is None or digits is None else round(v, digits)
 
-    return OffsetEstimate(r(c.offset_ms), r(c.bound_ms), r(c.best_delay_ms), c.points, r(c.drift_ppm),
-                          r(c.drift_bound_ppm), steps)  # fmt: skip
+
+def _estimate(c: ClockEstimate, steps: int, digits: int | None = None) -> OffsetEstimate:
+    return OffsetEstimate(_rounded(c.offset_ms, digits), _rounded(c.bound_ms, digits),
+                          _rounded(c.best_delay_ms, digits), c.points, _rounded(c.drift_ppm, digits),
+                          _rounded(c.drift_bound_ppm, digits), steps)  # fmt: skip
 
 
 @dataclass(frozen=True)

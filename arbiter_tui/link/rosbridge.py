@@ -64,7 +64,7 @@ def _write_now(proto: Any, payload: bytes) -> None:
     if not isinstance(written, int):  # an error object: the connection is going; Twisted reports it
         return
     if written < len(frame):
-        transport.write(frame[written:])
+        transport.write(frame[written:])  # type: ignore[no-untyped-call]  # Twisted's is not annotated
 
 
 class RosLink:
@@ -160,7 +160,7 @@ class RosLink:
         factory.clientConnectionLost = lost
         link = self
 
-        class Protocol(factory.protocol):  # type: ignore[misc, name-defined]
+        class Protocol(factory.protocol):  # type: ignore[misc, name-defined]  # roslibpy's, untyped
             def connectionMade(self) -> None:
                 # commands are small and must leave at once: no Nagle (also under TLS)
                 for layer in (self.transport, getattr(self.transport, "transport", None)):
@@ -223,7 +223,9 @@ class RosLink:
     def _on_reactor_thread(self) -> bool:
         from twisted.python import threadable
 
-        return bool(self._reactor.running and threadable.isInIOThread())
+        return bool(
+            self._reactor.running and threadable.isInIOThread()  # type: ignore[no-untyped-call]  # Twisted's
+        )
 
     def _set_error(self, text: str) -> None:
         with self._lock:
@@ -446,7 +448,7 @@ def tls_options(host: str, ca_file: Path | None) -> Any:
     from twisted.internet import ssl
 
     if ca_file is None:
-        trust = ssl.platformTrust()
+        trust = ssl.platformTrust()  # type: ignore[no-untyped-call]  # Twisted's is not annotated
     else:
         pem = Path(ca_file).read_bytes()
         certs = [
@@ -455,7 +457,7 @@ def tls_options(host: str, ca_file: Path | None) -> Any:
         ]
         if not certs:
             raise ValueError(f"--ca-file {ca_file}: no PEM certificate in it")
-        trust = ssl.trustRootFromCertificates(certs)
+        trust = ssl.trustRootFromCertificates(certs)  # type: ignore[no-untyped-call]  # Twisted's
     return ssl.optionsForClientTLS(host, trustRoot=trust)
 
 
@@ -474,7 +476,7 @@ def make_ros(url: str, headers: dict[str, str] | None, tls: Any) -> Any:
 
     base = select_factory()
 
-    class VerifiedFactory(base):  # type: ignore[misc, valid-type]
+    class VerifiedFactory(base):  # type: ignore[misc, valid-type]  # roslibpy's, chosen at run time
         def _connect(self) -> None:
             self.connector = connectWS(self, contextFactory=tls)
 

@@ -14,13 +14,13 @@ from typing import Any
 import numpy as np
 
 from arbiter_core import stats as S
-from arbiter_core.controllers import ALGORITHMS, MISSIONS
+from arbiter_core.controllers import ALGORITHMS, MANUAL, MISSIONS
 from arbiter_core.kinematics import Pose, distance_error
 from arbiter_core.linkmodel import LinkModel
 from arbiter_core.simulator import RATE_HZ
 
 from ..analytics import ranking
-from ..analytics.runs import MANUAL, RunSummary
+from ..analytics.runs import RunSummary
 from ..analytics.store import AnalyticsStats, AnalyticsStore, DataPoint
 from ..analytics.tracking import TrackingStats, reference_path, tracking_stats
 from ..link.modelled import ModelledLink

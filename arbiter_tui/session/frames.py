@@ -18,6 +18,7 @@ from dataclasses import dataclass, field, fields, replace
 from typing import TypeVar
 
 from ..analytics.linkcurve import RUNNING, LinkSweepView, measured_p95
+from ..latency.autonomy import RobotSideView
 from ..latency.topics_client import NO_BACKEND, TopicsState
 from ..latency.tracker_client import TrackerAnswer, TrackerClient
 from ..link.base import STARTING
@@ -30,7 +31,6 @@ from .views import (
     LatencySnapshot,
     MapView,
     Observed,
-    RobotSideView,
     RobotView,
     StatusView,
     analytics_view,

@@ -195,6 +195,7 @@ class SweepPause:
 
 
 _PR_SET_PDEATHSIG = 1
+_prctl: Callable[..., int] | None
 try:
     _prctl = ctypes.CDLL(None, use_errno=True).prctl
 except (AttributeError, OSError):  # not Linux

@@ -15,7 +15,7 @@ import logging
 import threading
 import time
 from collections.abc import Callable
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from ..control.stop import (
     CANCEL_ALL,
@@ -124,14 +124,11 @@ class RemoteStop:
             arrived.set()
         elif isinstance(link, ReachesOthers):
             for action in scope.actions:
-                sent = link.call_service(
-                    action + CANCEL_SUFFIX,
-                    CANCEL_ALL,
-                    CANCEL_TIMEOUT_S,
-                    lambda ok, values, a=action: answered(
-                        a, cancel_outcome(a, values) if ok else cancel_failure(a, values)
-                    ),
-                )
+
+                def done(ok: bool, values: Any, a: str = action) -> None:
+                    answered(a, cancel_outcome(a, values) if ok else cancel_failure(a, values))
+
+                sent = link.call_service(action + CANCEL_SUFFIX, CANCEL_ALL, CANCEL_TIMEOUT_S, done)
                 if not sent:
                     answered(action, ActionCancel(action, Cancel.FAILED, detail="the link is down"))
         robot_side = self._ask_robot_side() if scope.robot_side else None  # meanwhile the cancels travel

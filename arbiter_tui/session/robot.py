@@ -25,13 +25,12 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from arbiter_core.controllers import choose_controller_hint, goal_driver
+from arbiter_core.controllers import MANUAL, choose_controller_hint, goal_driver
 from arbiter_core.simulator import RATE_HZ as SIM_HZ
 from arbiter_core.topicstats import TopicFigures
 
 from ..analytics.files import FORMATS, ExportError, NothingToExport, export_stem, export_store
 from ..analytics.observe import ObserveConfig, Observer
-from ..analytics.runs import MANUAL
 from ..analytics.store import AnalyticsStore, DataPoint
 from ..control.loop import ControlLoop
 from ..control.stop import StopReport, StopScope, stop_scope

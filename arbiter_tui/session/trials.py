@@ -96,7 +96,8 @@ def _value(r: RunResult, name: str) -> float | None:
         return r.time_s if r.completed else None
     if name == "avgDistanceError":
         return r.stats.avgDistanceError
-    return getattr(r.tracking, name)
+    value: float | None = getattr(r.tracking, name)
+    return value
 
 
 def summarize(runs: Sequence[RunResult]) -> CellSummary:
@@ -106,13 +107,13 @@ def summarize(runs: Sequence[RunResult]) -> CellSummary:
     for name in FIGURES:
         values = [v for r in runs if (v := _value(r, name)) is not None]
         figures[name] = Figure(*mean_ci95(values)) if values else Figure(float("nan"), 0.0)
+    def stat_mean(name: str) -> float:
+        total: float = sum(getattr(r.stats, name) for r in runs)
+        return total / len(runs)
+
     stats = AnalyticsStats(
-        **{
-            f.name: (round if f.name == "sampleCount" else float)(
-                sum(getattr(r.stats, f.name) for r in runs) / len(runs)
-            )
-            for f in fields(AnalyticsStats)
-        }
+        round(stat_mean("sampleCount")),
+        **{f.name: float(stat_mean(f.name)) for f in fields(AnalyticsStats) if f.name != "sampleCount"},
     )
     times = [r.time_s for r in runs if r.completed]
     ratios = [r.tracking.path_ratio for r in runs if r.tracking.path_ratio is not None]

@@ -16,12 +16,13 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from arbiter_core import stats as S
+from arbiter_core.controllers import MANUAL
 from arbiter_core.kinematics import distance_error, heading_error
 from arbiter_core.record import LatencyRecord
 from arbiter_core.stats import Summary
 from arbiter_core.timesync import TimeSync, one_way_bound_ms
 
-from ..analytics.runs import MANUAL, AlgorithmSummary, RunSummary
+from ..analytics.runs import AlgorithmSummary, RunSummary
 from ..analytics.store import EMPTY_STATS, AnalyticsStats, AnalyticsStore
 from ..control.loop import ControlLoop
 from ..control.stop import StopScope
@@ -339,8 +340,9 @@ def odometry_warning(link: Link, now: float) -> str | None:
     """``no odometry on TOPIC`` while the link is up and odometry has not come for a while, with the
     cause when the server named one (e.g. the topic has another type)."""
     if link.state == CONNECTED and link.telemetry.odometry_missing(now):
-        explains = isinstance(link, Explains)
-        cause, topic = (link.odometry_problem, link.topic_odom) if explains else (None, "/odom")
+        cause, topic = (
+            (link.odometry_problem, link.topic_odom) if isinstance(link, Explains) else (None, "/odom")
+        )
         return f"no odometry on {topic}" + (f": {cause}" if cause else "")
     return None
 

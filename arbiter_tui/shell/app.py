@@ -17,10 +17,11 @@ import signal
 import time
 from collections.abc import Callable, Iterable
 from functools import partial
+from typing import Any
 
 from textual import events, on
 from textual.app import App, SystemCommand
-from textual.binding import Binding
+from textual.binding import Binding, BindingType
 from textual.command import CommandPalette
 from textual.driver import Driver
 from textual.screen import Screen
@@ -61,13 +62,13 @@ EXIT_DEADLINE_S = 2.0  # after SIGHUP/SIGTERM the process is gone by then, whate
 PALETTE_PROMPT = "Search for commands…  (ctrl+k stops the robot)"
 
 
-SCREENS = {
+SCREENS: dict[str, str | Callable[[], Screen[Any]]] = {
     "control": ControlScreen,
     "analytics": AnalyticsScreen,
     "latency": LatencyScreen,
     "topics": TopicsScreen,
 }
-KEYS = [
+KEYS: list[BindingType] = [
     Binding("ctrl+c", "stop_and_quit", "Quit", priority=True, show=False),
     Binding("ctrl+q", "stop_and_quit", "Quit", priority=True),
     # short labels: the footer fits in 80 columns on every screen (full names in ? help and ctrl+p)
@@ -158,7 +159,7 @@ class ArbiterApp(RegistryTheme):
             self.notify(f"could not save the theme in {self.settings.config_path}: {exc}", severity="warning")
 
     @on(BackendStarted)
-    def _attach(self, event: BackendStarted) -> None:
+    def _backend_started(self, event: BackendStarted) -> None:
         self.session.attach(event.link)
         self.session.autonomy = None if event.tracker is None else event.tracker.autonomy()
         self.tracker = self.sampler.tracker = event.tracker
@@ -261,7 +262,9 @@ class ArbiterApp(RegistryTheme):
 
     def action_command_palette(self) -> None:
         """The palette, saying in its prompt how to stop the robot while typing in it."""
-        if self.use_command_palette and not CommandPalette.is_open(self):
+        if self.use_command_palette and not CommandPalette.is_open(
+            self  # type: ignore[arg-type]  # Textual wants an App[object], and App[T] is invariant
+        ):
             self.push_screen(CommandPalette(id="--command-palette", placeholder=PALETTE_PROMPT))
 
     def get_system_commands(self, screen: Screen[object]) -> Iterable[SystemCommand]:

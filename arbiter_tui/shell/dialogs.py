@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from functools import partial
 from pathlib import Path
+from typing import Any
 
 from textual.app import App
 
@@ -24,7 +25,7 @@ from .screens.open_file import OpenRecording
 
 
 class Dialogs:
-    def __init__(self, app: App[object], console: Console) -> None:
+    def __init__(self, app: App[Any], console: Console) -> None:
         self.app = app
         self.console = console
 

@@ -97,7 +97,7 @@ def direct_keys(base: type[Driver], router: Callable[[], KeyRouter | None]) -> t
     """``base`` (the terminal driver Textual chose) with keys offered to ``router()`` on the driver's
     input thread, before they join the UI's queue."""
 
-    class DirectKeysDriver(base):  # type: ignore[misc, valid-type]
+    class DirectKeysDriver(base):  # type: ignore[misc, valid-type]  # the driver Textual chose at run time
         def process_message(self, message: Message) -> None:
             keys = router()
             if isinstance(message, events.Key) and keys is not None:

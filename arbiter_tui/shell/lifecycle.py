@@ -11,6 +11,7 @@ import signal
 import threading
 from collections.abc import Callable
 from functools import partial
+from typing import Any
 
 from textual.app import App
 
@@ -30,7 +31,7 @@ log = logging.getLogger(__name__)
 Connector = Callable[[], tuple[Link, "TrackerClient | None", Callable[[], None]]]
 
 
-def connect(connector: Connector, app: App[object]) -> None:
+def connect(connector: Connector, app: App[Any]) -> None:
     """A worker's thread: start the embedded backend (when there is one) and the link, then tell the app
     (``BackendStarted``), or why not (``BackendFailed``: one line on screen, never a traceback)."""
     try:
@@ -46,7 +47,7 @@ def connect(connector: Connector, app: App[object]) -> None:
     app.post_message(BackendStarted(link, tracker, cleanup))
 
 
-def poll(app: App[object], tracker: TrackerClient, sampler: FrameSampler, shown: Callable[[], Shown]) -> None:
+def poll(app: App[Any], tracker: TrackerClient, sampler: FrameSampler, shown: Callable[[], Shown]) -> None:
     """The tracker's two pollers, each answer handed to the sampler by value: latency records (every
     ``poll_period`` while a screen shows them, else every ``idle_poll_period``, for the status line: a
     poll costs more than a bare Textual app's frame), topics while a screen shows them."""
@@ -59,7 +60,7 @@ def poll(app: App[object], tracker: TrackerClient, sampler: FrameSampler, shown:
     app.run_worker(topics, group="topics", exclusive=True)
 
 
-def frames_after_ticks(app: App[object], sampler: FrameSampler) -> FrameClock:
+def frames_after_ticks(app: App[Any], sampler: FrameSampler) -> FrameClock:
     """Frames at ``ui_rate``, each asked for just after a control tick (``FrameClock``), fewer while
     commands leave late (the session's ``tick_late_s``): the session's thread posts ``FrameDue``
     (``post_message`` is thread-safe). The analytics sweep's child is held while the robot drives

@@ -4,6 +4,8 @@ clear and export, each the same call its key makes."""
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable
+from functools import partial
+from typing import Any
 
 from textual.app import App, SystemCommand
 
@@ -15,7 +17,7 @@ from .screens.base import Console
 SCREENS = ("control", "analytics", "latency", "topics")
 
 
-def commands(app: App[object], console: Console, switch: Callable[[str], None]) -> Iterable[SystemCommand]:
+def commands(app: App[Any], console: Console, switch: Callable[[str], None]) -> Iterable[SystemCommand]:
     session = console.session
 
     def then_show(action: Callable[[], object]) -> Callable[[], None]:
@@ -36,13 +38,13 @@ def commands(app: App[object], console: Console, switch: Callable[[str], None]) 
         yield SystemCommand(
             f"Algorithm: {algo}",
             "Select the controller (g runs it)",
-            then_show(lambda a=algo: session.select_algorithm(a)),
+            then_show(partial(session.select_algorithm, algo)),
         )
     for mission in MISSIONS:
         yield SystemCommand(
             f"Mission: {mission}",
             "Select the mission (g runs it)",
-            then_show(lambda m=mission: session.select_mission(m)),
+            then_show(partial(session.select_mission, mission)),
         )
     yield SystemCommand(
         "Go", "Resume the interrupted mission, or start the selected one (g)", lambda: console.go()

@@ -5,7 +5,7 @@ the selected mission's curve is wanted; its curve, or why it failed, goes back t
 from __future__ import annotations
 
 from dataclasses import replace
-from functools import partial
+from typing import Any
 
 from textual.app import App
 
@@ -16,14 +16,14 @@ from ..session.robot import RobotSession
 from .messages import LinkSweepFailed
 
 
-def start_if_wanted(app: App[object], session: RobotSession, sampler: FrameSampler) -> None:
+def start_if_wanted(app: App[Any], session: RobotSession, sampler: FrameSampler) -> None:
     mission = sampler.sweep_wanted()
     if mission is not None:
-        run = partial(_sweep, app, session, sampler, mission)
-        app.run_worker(run, exclusive=True, group="link-sweep", exit_on_error=False)
+        sweep = _sweep(app, session, sampler, mission)
+        app.run_worker(sweep, exclusive=True, group="link-sweep", exit_on_error=False)
 
 
-async def _sweep(app: App[object], session: RobotSession, sampler: FrameSampler, mission: str) -> None:
+async def _sweep(app: App[Any], session: RobotSession, sampler: FrameSampler, mission: str) -> None:
     teleop = session.teleop
     try:
         curve = await sweep_curve(mission, teleop.speed, teleop.turn, pause=sampler.sweep_pause)

@@ -32,6 +32,7 @@ from typing import Any
 
 from textual.geometry import Region
 from textual.strip import Strip
+from textual.widget import Widget
 from textual_hires_canvas.canvas import Canvas
 
 from . import give_way
@@ -44,7 +45,7 @@ _render_lines = Canvas.render_lines
 _installed = False
 
 
-def _render_lines_once(self: Canvas, crop: Region) -> list[Strip]:
+def _render_lines_once(self: Widget, crop: Region) -> list[Strip]:
     """One paint of the canvas: its base style looked up once for all its rows (after giving way to
     a control tick that is due: ``give_way.py``)."""
     give_way.now()
@@ -128,6 +129,6 @@ def install() -> bool:
         return False
     global _installed
     _installed = True
-    Canvas.render_line = _render_line_cached  # type: ignore[method-assign]
-    Canvas.render_lines = _render_lines_once  # type: ignore[method-assign]
+    Canvas.render_line = _render_line_cached  # type: ignore[method-assign]  # the patch, on purpose
+    Canvas.render_lines = _render_lines_once  # type: ignore[method-assign]  # the patch, on purpose
     return True

@@ -17,7 +17,7 @@ release keeps its own code, and ``tests/unit/test_strips.py`` says whether the c
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 
 import textual
 from rich.style import Style
@@ -29,7 +29,7 @@ _divide = Strip.divide
 _crop_extend = Strip.crop_extend
 
 
-def _divide_acyclic(self: Strip, cuts: Iterable[int]) -> list[Strip]:
+def _divide_acyclic(self: Strip, cuts: Iterable[int]) -> Sequence[Strip]:
     cuts = list(cuts)
     length = self.cell_length
     if [cut for cut in cuts if cut <= length] == [length]:
@@ -47,6 +47,6 @@ def install() -> bool:
     """Patch ``Strip`` (once; idempotent). False when this Textual release was not checked."""
     if textual.__version__ not in CHECKED:
         return False
-    Strip.divide = _divide_acyclic  # type: ignore[method-assign]
-    Strip.crop_extend = _crop_extend_acyclic  # type: ignore[method-assign]
+    Strip.divide = _divide_acyclic  # type: ignore[method-assign]  # the patch, on purpose
+    Strip.crop_extend = _crop_extend_acyclic  # type: ignore[method-assign]  # the patch, on purpose
     return True

@@ -4,7 +4,7 @@ the frame every widget on it shows (``frame``: widgets take it with ``data_bind`
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Protocol, runtime_checkable
+from typing import TYPE_CHECKING, ClassVar, Protocol, runtime_checkable
 
 from rich.text import Text
 from textual import events
@@ -26,6 +26,8 @@ from ..widgets.plots import PlotBudget
 from ..widgets.text import StatusLine
 
 if TYPE_CHECKING:  # the dialogs are above the screens: named here, never imported at run time
+    from textual._path import CSSPathType
+
     from ..dialogs import Dialogs
 
 
@@ -60,22 +62,22 @@ TOO_SMALL = (
 
 
 class BaseScreen(Screen[None]):
-    CSS_PATH = "base.tcss"
+    CSS_PATH: ClassVar[CSSPathType | None] = "base.tcss"
     # the latest frame: set by the app for the screens it shows, bound (data_bind) into every widget
     frame: reactive[Frame] = reactive(Frame, repaint=False, always_update=True)
-    _console: Console | None = None
+    _console_app: Console | None = None  # not _console: Textual's Widget has one (the Rich console)
     _frozen = False  # its widgets, made on its first showing, are out of the collector's way
     # the plot redraws each frame allows, handed down to its plots (data_bind), renewed by the app
     plot_budget: reactive[PlotBudget] = reactive(PlotBudget, repaint=False)
 
     @property
     def console(self) -> Console:
-        if self._console is None:
+        if self._console_app is None:
             app = self.app
             if not isinstance(app, Console):
                 raise TypeError(f"{type(self).__name__} needs a console app, not {type(app).__name__}")
-            self._console = app
-        return self._console
+            self._console_app = app
+        return self._console_app
 
     def compose(self) -> ComposeResult:
         yield StatusLine(id="status").data_bind(BaseScreen.frame)

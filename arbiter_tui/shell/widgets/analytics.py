@@ -41,7 +41,7 @@ class CompareTable(DataTable[Text]):
     can_focus = True
     mode: reactive[str] = reactive(T.BY_ALGORITHM)
     room: reactive[int] = reactive(0)  # the columns it is given (0: not laid out yet)
-    sort: reactive[str] = reactive(T.RANK)
+    sort: reactive[str] = reactive(T.RANK)  # type: ignore[assignment]  # hides DataTable.sort, unused here
     descending: reactive[bool] = reactive(False)
     frame: reactive[Frame] = reactive(Frame, repaint=False, init=False)  # bound to the screen's
     fills = 0  # tests: how often the table was rebuilt (a changed cell is updated in place)

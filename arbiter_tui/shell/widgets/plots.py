@@ -21,9 +21,10 @@ from textual_hires_canvas.canvas import Canvas
 from textual_plot import HiResMode, PlotWidget
 from textual_plot.axis_formatter import AxisFormatter
 
+from arbiter_core.controllers import MANUAL
+
 from ...analytics import axes
 from ...analytics.linkcurve import LinkCurve, LinkSweepView, format_ms
-from ...analytics.runs import MANUAL
 from ...analytics.styles import GOAL, ROBOT_ARROWS, WAYPOINT, style_of
 from ...session.frames import Frame
 from ...session.views import PLOT_PERIOD_S, AnalyticsView, LatencySnapshot, MapView, thin
@@ -372,9 +373,9 @@ class LiveMap(MapPlot[MapView, MapKey]):
             legend.append(("·", "trail"))
         legend += self.draw_mission(view.waypoints, view.goal)
         if view.pose is not None:
-            x, y, theta = view.pose
+            px, py, theta = view.pose
             arrow = heading_arrow(theta)
-            self.scatter([x], [y], marker=arrow, marker_style="dim" if view.stale else "bold green")
+            self.scatter([px], [py], marker=arrow, marker_style="dim" if view.stale else "bold green")
             legend.insert(0, (arrow, "robot (stale)" if view.stale else "robot"))
         self.border_subtitle = legend_text(legend, self.size.width - 6)
 

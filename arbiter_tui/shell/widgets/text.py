@@ -91,7 +91,7 @@ def fitted(widget: Widget, text: Text) -> Text:
     most = max(last_rows, rows) if shape == last_shape else rows
     if most != last_rows:
         widget.refresh(layout=True)
-    widget._fit = (shape, most)  # type: ignore[attr-defined]
+    widget._fit = (shape, most)  # type: ignore[attr-defined]  # kept on the widget, whichever it is
     if rows < most:
         text.append("\n" * (most - rows))
     return text

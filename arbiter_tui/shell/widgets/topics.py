@@ -40,7 +40,8 @@ PRIORITY = ("topic", "state", "Hz", "age", "B/s", "delay", "pub/sub", "size", "u
 
 def layout(width: int) -> tuple[int, ...]:
     """Indices into COLUMNS of the columns shown at ``width``, in COLUMNS order."""
-    shown, used = [], 0
+    shown: list[str] = []
+    used = 0
     for name in PRIORITY:
         need = WIDTHS[name] + (1 if shown else 0)
         if used + need > width:
@@ -95,7 +96,7 @@ class TopicsList(Widget, can_focus=True):
     renders = 0
     _shown: object = None
 
-    def rows(self) -> list:
+    def rows(self) -> list[TopicFigures]:
         return select(self.state.topics, self.text, self.sort, self.reverse)
 
     def action_move(self, step: int) -> None:
