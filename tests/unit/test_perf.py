@@ -38,3 +38,28 @@ def test_importing_the_console_installs_no_patch():
     )
     out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=60)
     assert out.stdout.strip() == "True", out.stderr
+
+
+def test_the_theme_lookup_reads_no_package_metadata(monkeypatch):
+    """``textual.__version__`` reads package metadata on every access; the lookup runs per rendered line,
+    so it must decide once, at install (a per-line check doubled the console's CPU with a key held)."""
+    import importlib.metadata
+
+    import textual
+    from textual.app import App
+
+    if "__version__" in vars(textual):  # left there by a monkeypatch's undo in an earlier test
+        monkeypatch.delitem(vars(textual), "__version__")
+
+    class Themed(theme.RegistryTheme, App[None]):
+        pass
+
+    assert perf.install()["theme"] is True
+    app = Themed()
+    assert app.current_theme.name == app.theme
+    reads: list[str] = []
+    real = importlib.metadata.version
+    monkeypatch.setattr(importlib.metadata, "version", lambda name: reads.append(name) or real(name))
+    for _ in range(100):
+        assert app.current_theme is not None
+    assert reads == []

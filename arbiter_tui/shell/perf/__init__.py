@@ -34,6 +34,6 @@ def install() -> dict[str, bool]:
     global _installed
     if _installed is None:
         _installed = {
-            "strips": strips.install(), "canvas_rows": canvas_rows.install(), "theme": theme.checked()
+            "strips": strips.install(), "canvas_rows": canvas_rows.install(), "theme": theme.install()
         }  # fmt: skip
     return dict(_installed)

@@ -17,9 +17,19 @@ from textual.theme import Theme
 CHECKED = ("8.2.8",)  # the releases whose App keeps its registry in ``_registered_themes``
 
 
+_installed = False  # set once by install(): ``textual.__version__`` reads package metadata per access
+
+
 def checked() -> bool:
     """Whether this Textual release was checked (``RegistryTheme`` falls back to Textual otherwise)."""
     return textual.__version__ in CHECKED
+
+
+def install() -> bool:
+    """Turn the registry lookup on (once) when this release was checked; whether it took."""
+    global _installed
+    _installed = checked()
+    return _installed
 
 
 class RegistryTheme(App[None]):
@@ -27,7 +37,7 @@ class RegistryTheme(App[None]):
 
     @property
     def current_theme(self) -> Theme:
-        if not checked():  # a release not checked: Textual's own lookup
+        if not _installed:  # not installed, or a release not checked: Textual's own lookup
             return super().current_theme
         theme = self._registered_themes.get(self.theme)  # Textual 8.2.8's registry (private)
         return theme if theme is not None else super().current_theme
