@@ -209,11 +209,14 @@ class RobotSession:
                 log.exception("sampling failed")
                 return None
 
-    def step_link(self) -> None:
+    def step_link(self) -> bool:
+        """One step of a link that runs in-process (the simulator); False when the link has none."""
         link = self.link
         if isinstance(link, Stepped):
             with self.lock:
                 link.step()
+            return True
+        return False
 
     def start(self) -> None:
         """Run the clocked work on the session's own thread until :meth:`close`."""

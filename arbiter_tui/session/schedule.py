@@ -2,10 +2,10 @@
 slow paint never delays a command (the robot's clock is not the UI's clock).
 
 Three jobs, each at its own period: the control tick (``--repeat-rate``), sampling
-(``--collection-rate``) and stepping the client-side simulator (50 Hz). After a control tick that
-published, the command is on the socket before anything else of this thread takes the GIL (``_written``);
-then the paint that gave way goes on (``give_way``), the tick's lateness is measured, the collector may
-run, and the frame hook is called. The session (``robot.py``) takes commands and owns the link; this
+(``--collection-rate``) and stepping the client-side simulator (50 Hz; a link with nothing to step is
+asked four times a second). After a control tick that published, the command is on the socket before
+anything else of this thread takes the GIL (``_written``); then the paint that gave way goes on
+(``give_way``), the tick's lateness is measured, the collector may run, and the frame hook is called. The session (``robot.py``) takes commands and owns the link; this
 module owns the thread, the due times and their counters. No Textual.
 """
 
@@ -21,6 +21,7 @@ from ..latency.clocksync import LatencyMeter
 from .collector import TickCollector
 
 SWITCH_INTERVAL_S = 0.001
+NO_STEP_RECHECK_S = 0.25  # how often a link with nothing to step is asked again
 WRITE_WAIT_S = 0.02  # a tick waits at most this long for its command to be written (_written)
 
 
@@ -42,7 +43,7 @@ class Jobs:
 
     tick: Callable[[], bool]  # the control tick: True when it handed the link a command it took
     sample: Callable[[], object]
-    step: Callable[[], None]
+    step: Callable[[], bool]  # one step of an in-process link; False: the link has none (asked again later)
     meter: Callable[[], LatencyMeter]  # the link's meter (the link may be replaced while running)
     driving: Callable[[], bool]  # a mission runs or a key drives
     control_s: float
@@ -105,6 +106,8 @@ class Schedule:
             written = j.meter().sent
             published = job()
             upcoming = next_due(due[job], started, periods[job])
+            if job == j.step and not published:  # nothing to step (a rosbridge link): 4 wake-ups a second
+                upcoming = started + NO_STEP_RECHECK_S  # instead of 50 (the link may still be replaced)
             if job == j.tick:
                 self._written(written, bool(published))  # before the frame and a collection take the GIL
                 with self._tick_written:  # a paint that gave way goes on (give_way)

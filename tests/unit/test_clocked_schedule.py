@@ -58,3 +58,48 @@ def test_the_rule():
     assert next_due(1.0, 1.04, 0.1) == pytest.approx(1.1)  # a little late: back on the grid
     assert next_due(1.0, 1.09, 0.1) == pytest.approx(1.19)  # over half a period late: a period from its start
     assert next_due(1.0, 1.25, 0.1) == pytest.approx(1.35)
+
+
+def run_schedule(steps: bool, ticks: int = 20) -> tuple[int, float]:
+    """A real Schedule (its own thread) until ``ticks`` control ticks ran: how often it asked the link to
+    step, and how long that took."""
+    import threading
+    import time
+
+    from arbiter_tui.latency.clocksync import LatencyMeter
+    from arbiter_tui.session.schedule import Jobs, Schedule
+
+    asked, done = [0], threading.Event()
+    count = [0]
+
+    def tick() -> bool:
+        count[0] += 1
+        if count[0] >= ticks:
+            done.set()
+        return False
+
+    def step() -> bool:
+        asked[0] += 1
+        return steps
+
+    meter = LatencyMeter()
+    jobs = Jobs(tick=tick, sample=lambda: None, step=step, meter=lambda: meter, driving=lambda: False,
+                control_s=0.01, sample_s=0.1, step_s=0.002)  # fmt: skip
+    schedule = Schedule(jobs)
+    t0 = time.monotonic()
+    schedule.start()
+    try:
+        assert done.wait(30)
+    finally:
+        schedule.stop()
+    return asked[0], time.monotonic() - t0
+
+
+def test_a_link_with_nothing_to_step_is_asked_four_times_a_second_not_at_the_step_rate():
+    """A rosbridge link runs on its own: the session's thread does not wake 50 times a second to step it."""
+    from arbiter_tui.session.schedule import NO_STEP_RECHECK_S
+
+    asked, took = run_schedule(steps=False)
+    assert asked <= 2 + took / NO_STEP_RECHECK_S, (asked, took)
+    stepped, took = run_schedule(steps=True)
+    assert stepped >= 20, stepped  # a simulator is stepped at its rate (several steps per tick)
