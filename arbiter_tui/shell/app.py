@@ -82,11 +82,9 @@ KEYS: list[BindingType] = [
 
 
 class ArbiterApp(RegistryTheme):
-    """The console: four screens over one robot session (one link, one analytics store: the seed's
-    singleton, one control loop) and one tracker. The link, tracker, store and clock are injected
-    (:func:`make_app`), or the link is made by a ``connector`` in a worker after the first frame. Every
-    way out (quit, signal, focus loss, a terminal too small) stops the robot first; an autonomous run
-    keeps driving while another screen is shown, and space or k stop it anywhere."""
+    """The console: four screens over one robot session (one link, one analytics store, one control
+    loop) and one tracker, injected (:func:`make_app`) or the link made by a ``connector`` after the first
+    frame. Every way out stops the robot first; the stop keys stop whatever drives, anywhere."""
 
     TITLE = "arbiter-tui"
     MODES = SCREENS
