@@ -5,8 +5,9 @@ Three jobs, each at its own period: the control tick (``--repeat-rate``), sampli
 (``--collection-rate``) and stepping the client-side simulator (50 Hz; a link with nothing to step is
 asked four times a second). After a control tick that published, the command is on the socket before
 anything else of this thread takes the GIL (``_written``); then the paint that gave way goes on
-(``give_way``), the tick's lateness is measured, the collector may run, and the frame hook is called. The session (``robot.py``) takes commands and owns the link; this
-module owns the thread, the due times and their counters. No Textual.
+(``give_way``), the tick's lateness is measured, the collector may run, and the frame hook is called.
+The session (``robot.py``) takes commands and owns the link; this module owns the thread, the due
+times and their counters. No Textual.
 """
 
 from __future__ import annotations

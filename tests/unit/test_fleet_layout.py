@@ -2,9 +2,8 @@
 alone, and nothing on the console's or the plain backend's path loads the fleet (import-linter contracts in
 pyproject.toml, and at run time with Zenoh blocked)."""
 
-import shutil
 
-from .test_layout import ROOT, lint_imports, run_blocked
+from .test_layout import copy_packages, lint_imports, run_blocked
 
 
 def test_the_single_console_and_the_plain_backend_import_with_zenoh_blocked():
@@ -15,12 +14,7 @@ def test_the_single_console_and_the_plain_backend_import_with_zenoh_blocked():
 
 
 def test_the_contracts_catch_zenoh_outside_the_fleet_and_the_fleet_on_the_console_path(tmp_path):
-    for name in ("arbiter_core", "arbiter_backend", "arbiter_tui", "pyproject.toml"):
-        src = ROOT / name
-        if src.is_dir():
-            shutil.copytree(src, tmp_path / name, ignore=shutil.ignore_patterns("__pycache__"))
-        else:
-            shutil.copy(src, tmp_path / name)
+    copy_packages(tmp_path)
     with (tmp_path / "arbiter_tui" / "session" / "robot.py").open("a") as f:
         f.write("\nimport zenoh  # noqa\n")
     with (tmp_path / "arbiter_tui" / "launch.py").open("a") as f:

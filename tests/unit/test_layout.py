@@ -19,6 +19,16 @@ LINT_IMPORTS = Path(sys.executable).with_name("lint-imports")
 FRAMEWORKS = {"textual", "rich", "aiohttp", "httpx", "roslibpy", "twisted", "autobahn", "rclpy", "mcap"}
 
 
+def copy_packages(dest: Path) -> None:
+    """The three packages and the contracts, copied for a test to break."""
+    for name in ("arbiter_core", "arbiter_backend", "arbiter_tui", "pyproject.toml"):
+        src = ROOT / name
+        if src.is_dir():
+            shutil.copytree(src, dest / name, ignore=shutil.ignore_patterns("__pycache__"))
+        else:
+            shutil.copy(src, dest / name)
+
+
 def lint_imports(cwd: Path) -> subprocess.CompletedProcess:
     return subprocess.run(
         [str(LINT_IMPORTS), "--config", str(cwd / "pyproject.toml"), "--no-cache"],
@@ -36,12 +46,7 @@ def test_import_contracts_are_kept():
 
 
 def test_import_contracts_catch_a_console_import_of_the_backend_and_textual_in_core(tmp_path):
-    for name in ("arbiter_core", "arbiter_backend", "arbiter_tui", "pyproject.toml"):
-        src = ROOT / name
-        if src.is_dir():
-            shutil.copytree(src, tmp_path / name, ignore=shutil.ignore_patterns("__pycache__"))
-        else:
-            shutil.copy(src, tmp_path / name)
+    copy_packages(tmp_path)
     with (tmp_path / "arbiter_tui" / "shell" / "app.py").open("a") as f:
         f.write("\nimport arbiter_backend.tracker  # noqa\n")
     with (tmp_path / "arbiter_core" / "stats.py").open("a") as f:
