@@ -267,7 +267,8 @@ class ArbiterApp(RegistryTheme):
 
     def get_system_commands(self, screen: Screen[object]) -> Iterable[SystemCommand]:
         yield from super().get_system_commands(screen)
-        yield from palette.commands(self, self, self.action_mode)
+        shown = self.sampler.recording is not None
+        yield from palette.commands(self, self, self.action_mode, recording_shown=shown)
 
     # -- what needs the app: notices and dialogs -------------------------------------------------------
     def go(self, restart: bool = False) -> bool:

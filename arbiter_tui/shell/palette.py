@@ -17,7 +17,10 @@ from .screens.base import Console
 SCREENS = ("control", "analytics", "latency", "topics")
 
 
-def commands(app: App[Any], console: Console, switch: Callable[[str], None]) -> Iterable[SystemCommand]:
+def commands(
+    app: App[Any], console: Console, switch: Callable[[str], None], recording_shown: bool = False
+) -> Iterable[SystemCommand]:
+    """``recording_shown``: screen 2 shows a file, so "Back to the live session" is offered."""
     session = console.session
 
     def then_show(action: Callable[[], object]) -> Callable[[], None]:
@@ -63,10 +66,11 @@ def commands(app: App[Any], console: Console, switch: Callable[[str], None]) -> 
         "Open a recording…", "A ros2 bag or an export, graded as `stats` grades it (f on screen 2)",
         console.dialogs.open_recording,
     )  # fmt: skip
-    yield SystemCommand(
-        "Back to the live session", "Leave the recording shown on screen 2 (escape there)",
-        console.dialogs.live_session,
-    )  # fmt: skip
+    if recording_shown:
+        yield SystemCommand(
+            "Back to the live session", "Leave the recording shown on screen 2 (escape there)",
+            console.dialogs.live_session,
+        )  # fmt: skip
     for fmt in FORMATS:
         yield SystemCommand(
             f"Export {fmt.upper()}",

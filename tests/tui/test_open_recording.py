@@ -28,6 +28,14 @@ def bag(tmp_path_factory):
     return write_bag(tmp_path_factory.mktemp("bags") / "nav2_run", rec, "mcap")
 
 
+LIVE = "Back to the live session"
+
+
+def palette_titles(app) -> list[str]:
+    """The palette's command titles as it would list them now."""
+    return [c.title for c in app.get_system_commands(app.screen)]
+
+
 def stats_json(path, capsys) -> dict:
     assert main(["stats", str(path), "--by", "run", "--json"]) == 0
     return json.loads(capsys.readouterr().out)
@@ -37,9 +45,11 @@ async def test_a_bag_opened_on_screen_2_is_graded_as_stats_grades_it(bag, tmp_pa
     cli = stats_json(bag, capsys)  # what the command line prints, before the app owns the terminal
     app = still_app(tmp_path)
     async with app.run_test(size=(120, 36)) as pilot:
+        assert LIVE not in palette_titles(app)  # nothing to leave yet
         await pilot.press("2", "f")
         await pilot.press(*str(bag), "enter")
         assert await until(pilot, lambda: bool(app.frame.analytics.source), timeout=30)
+        assert LIVE in palette_titles(app)
         view = app.frame.analytics
         assert view.source.startswith("nav2_run (ros2 bag")
         ours = {f"run {r.id}": r for r in view.runs}
@@ -60,6 +70,7 @@ async def test_a_bag_opened_on_screen_2_is_graded_as_stats_grades_it(bag, tmp_pa
         await pilot.press("escape")
         assert await until(pilot, lambda: not app.frame.analytics.source)
         assert app.frame.analytics.runs == app.session.store.runs()  # the live session's again
+        assert LIVE not in palette_titles(app)
 
 
 async def test_a_file_that_cannot_be_read_is_one_line_and_the_live_session_stays(tmp_path):
