@@ -365,7 +365,8 @@ class Observed:
 
 
 def observe_banner(label: str, watched: Sequence[str], scope: StopScope) -> str:
-    """Observe mode's banner on every screen: what drives, what the console watches, what a stop does."""
+    """Observe mode's banner on every screen: what is observed, what a stop does (first: it matters most,
+    and a narrow terminal cuts the line's end), what the console watches."""
     stop = ["the console's keys"]
     if scope.robot_side:
         stop.append("the robot-side controller")
@@ -373,7 +374,7 @@ def observe_banner(label: str, watched: Sequence[str], scope: StopScope) -> str:
         stop.append(f"{len(scope.actions)} action servers' goals")
     if scope.zero_topic:
         stop.append(f"zero on {scope.zero_topic}")
-    return f"OBSERVING {label} · watching {' '.join(watched)} · a stop key stops {', '.join(stop)}"
+    return f"OBSERVING {label} · a stop key stops {', '.join(stop)} · watching {' '.join(watched)}"
 
 
 def robot_view(

@@ -22,9 +22,10 @@ async def test_the_banner_panel_and_footer_of_observe_mode(tmp_path):
     app = still_app(tmp_path, **OBSERVE)
     async with app.run_test(size=(100, 30)) as pilot:
         banner = str(app.screen.query_one("#observe-banner").render())
-        assert banner.startswith("OBSERVING nav2_rpp · watching /odom /cmd_vel_measured /plan /goal_pose")
+        assert banner.startswith("OBSERVING nav2_rpp · a stop key stops the console's keys, the robot-side ")
         assert "a stop key stops the console's keys, the robot-side controller, 8 action servers' goals, " \
-               "zero on /cmd_vel_measured" in banner  # fmt: skip
+               "zero on /cmd_vel_measured · watching /odom /cmd_vel_measured /plan /goal_pose" \
+               in banner  # fmt: skip
         app.refresh_frame(force=True)
         await pilot.pause()
         panel = str(app.screen.query_one(RobotPanel).render())
