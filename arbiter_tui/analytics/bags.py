@@ -468,7 +468,7 @@ def _first(exc: BaseException) -> str:
 
 def _unfinished_mcap(path: Path) -> Path | None:
     """The first MCAP storage file under ``path`` that does not end with MCAP's magic (cut short)."""
-    files = [path] if path.is_file() else [f for f in storage_files(path) if f.suffix == ".mcap"]
+    files = [f for f in ([path] if path.is_file() else storage_files(path)) if f.suffix == ".mcap"]
     for f in files:
         with f.open("rb") as fh:
             fh.seek(0, 2)

@@ -84,6 +84,7 @@ def test_truncated_foreign_and_mistyped_bags_are_one_line_each(bags, tmp_path):
     cut_db3 = shutil.copytree(db3, tmp_path / "cut_db3")
     data = next(cut_db3.glob("*.db3"))
     data.write_bytes(data.read_bytes()[: data.stat().st_size // 3])
+    lone_cut_db3 = shutil.copy(data, tmp_path / "lone_cut.db3")  # a lone file is never taken for a cut MCAP
     from ..support.bags import TS, Recording
 
     chatter = Recording(messages=[("/chatter", 1, TS.types["std_msgs/msg/String"](data="hi"))])
@@ -91,12 +92,14 @@ def test_truncated_foreign_and_mistyped_bags_are_one_line_each(bags, tmp_path):
     for bag, said in (
         (cut_mcap, "truncated MCAP storage file"),
         (cut_db3, "damaged or unreadable ros2 bag"),
+        (lone_cut_db3, "damaged or unreadable ros2 bag"),
         (foreign, "has no odometry on /odom (it has /chatter)"),
     ):
         out = stats(bag)
         assert out.returncode == 1, out.stdout
         assert said in out.stderr and len(out.stderr.strip().splitlines()) == 1, out.stderr
         assert "Traceback" not in out.stderr
+        assert bag == cut_mcap or "mcap recover" not in out.stderr, out.stderr
     out = stats(mcap, "--odom-topic", "/plan")
     assert out.returncode == 1 and "/plan is nav_msgs/msg/Path, not nav_msgs/msg/Odometry" in out.stderr
 
