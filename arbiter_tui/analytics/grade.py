@@ -17,6 +17,7 @@ from . import scorecards as SC
 from .bags import DEFAULT_CONFIG, DEFAULT_TOPICS, BagTopics, Recording, bag_kind, read_bag
 from .exports import Export
 from .files import load_export
+from .model import DataPoint
 from .observe import ObserveConfig
 from .ranking import Entry, Ranking, rank
 from .runs import RunSummary
@@ -62,14 +63,18 @@ def grade(path: Path, topics: BagTopics = DEFAULT_TOPICS, config: ObserveConfig 
         export = load_export(path)
         recording, what, scans = None, "arbiter analytics export", None
         no_scan = "an export holds no scans: grade the ros2 bag with its /scan"
-    cards = tuple(_card(r, export, scans, no_scan) for r in sorted(export.runs or (), key=lambda r: r.id))
+    by_run: dict[int | None, list[DataPoint]] = {}
+    for p in export.points:  # once, not once per run
+        by_run.setdefault(p.runId, []).append(p)
+    runs = sorted(export.runs or (), key=lambda r: r.id)
+    cards = tuple(_card(r, by_run.get(r.id, []), scans, no_scan) for r in runs)
     return Graded(
         path, what, export, cards, tuple(SC.controller_cards(cards)), tuple(notes), recording is not None
     )
 
 
-def _card(run: RunSummary, export: Export, scans: SC.Scans | None, no_scan: str) -> SC.RunCard:
-    mine = [p for p in export.points if p.runId == run.id]
+def _card(run: RunSummary, mine: list[DataPoint], scans: SC.Scans | None, no_scan: str) -> SC.RunCard:
+    """``mine``: the run's points, in the export's order."""
     samples = None
     if mine and len(mine) == run.stats.sampleCount:
         samples = (

@@ -37,6 +37,7 @@ from typing import Any
 
 import numpy as np
 
+from arbiter_core import stats as S
 from arbiter_core.controllers import MANUAL
 
 from .runs import RunSummary
@@ -103,11 +104,8 @@ def obstacles_of(nearest_m: np.ndarray) -> Obstacles:
     d = np.asarray(nearest_m, dtype=np.float64)
     d = d[np.isfinite(d)]
     if not d.size:
-        why = "no scan during the run saw anything in range"
-        return Obstacles(missing(why), missing(why), missing(why), 0)
-    mean = float(d.mean())
-    return Obstacles(Figure(float(d.min())), Figure(mean), Figure(float(np.sqrt(((d - mean) ** 2).mean()))),
-                     int(d.size))  # fmt: skip
+        return no_obstacles("no scan during the run saw anything in range")
+    return Obstacles(Figure(S.minimum(d)), Figure(S.mean(d)), Figure(S.pstdev(d)), int(d.size))
 
 
 def no_obstacles(why: str) -> Obstacles:
