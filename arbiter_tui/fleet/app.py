@@ -52,9 +52,9 @@ def fit(text: str, width: int) -> str:
     return text if len(text) <= width else text[: max(0, width - 1)] + "…"
 
 
-def line(row: Row, width: int, selected: bool) -> Text:
+def line(row: Row, cols: list[tuple[int, int]], selected: bool) -> Text:
+    """One row at the columns ``layout`` gave."""
     values = cells(row)
-    cols = layout(width)
     shown = {i for i, _ in cols}
     note = values[-1]
     if not note and COLUMNS.index("worst topic") not in shown and row.worst_topic:
@@ -90,8 +90,11 @@ class FleetList(Widget, can_focus=True):
         Binding("end", "move(100000)", "Last", show=False),
         Binding("enter", "open", "Open console"),
     ]
-    view: reactive[FleetView] = reactive(FleetView)
+    # a new view repaints only when a row's text or style changed (``watch_view``): the views come twice
+    # a second, each with its own clock, and the ages shown change once a second at most
+    view: reactive[FleetView] = reactive(FleetView, repaint=False)
     selected: reactive[str | None] = reactive(None)
+    _shown: tuple[object, ...] | None = None
 
     class Chosen(Message):
         """Enter on a row: open its console."""
@@ -117,6 +120,10 @@ class FleetList(Widget, can_focus=True):
     def watch_view(self, view: FleetView) -> None:
         if view.rows and self.selected not in {r.name for r in view.rows}:
             self.selected = view.rows[0].name
+        shown = (view.filter, *((cells(r), r.worst_health) for r in view.rows))
+        if shown != self._shown:
+            self._shown = shown
+            self.refresh()
         self.post_message(self.Highlighted(self.current()))
 
     def watch_selected(self) -> None:
@@ -137,7 +144,8 @@ class FleetList(Widget, can_focus=True):
     def render(self) -> Text:
         width, height = self.size.width, max(1, self.size.height)
         head = Text(no_wrap=True, overflow="crop", style="bold")
-        for i, w in layout(width):
+        cols = layout(width)
+        for i, w in cols:
             head.append(fit(COLUMNS[i], w).ljust(w) + (" " * SEP if COLUMNS[i] != "note" else ""))
         rows = self.view.rows
         if not rows:
@@ -148,7 +156,7 @@ class FleetList(Widget, can_focus=True):
         room = height - 1
         self._top = min(max(self._top, i - room + 1), i, max(0, len(rows) - room))
         out = [head]
-        out += [line(r, width, r.name == self.selected) for r in rows[self._top : self._top + room]]
+        out += [line(r, cols, r.name == self.selected) for r in rows[self._top : self._top + room]]
         return Text("\n").join(out)
 
 
@@ -167,6 +175,7 @@ class FleetScreen(Screen[None]):
     def __init__(self, pattern: str = "") -> None:
         super().__init__()
         self.set_reactive(FleetScreen.pattern, pattern)
+        self._texts: dict[str, str] = {}
 
     def compose(self) -> ComposeResult:
         yield Static(id="fleet-head")
@@ -197,7 +206,13 @@ class FleetScreen(Screen[None]):
         head = f"fleet · {shown} robots: {', '.join(parts)} · {view.session}"
         if view.ignored:
             head += f" · {view.ignored} more names ignored"
-        self.query_one("#fleet-head", Static).update(Text(head, no_wrap=True, overflow="ellipsis"))
+        self._show("#fleet-head", head)
+
+    def _show(self, selector: str, text: str) -> None:
+        """A Static's new text; nothing (no layout) when it is the text shown."""
+        if self._texts.get(selector) != text:
+            self._texts[selector] = text
+            self.query_one(selector, Static).update(Text(text, no_wrap=True, overflow="ellipsis"))
 
     @on(FleetList.Highlighted)
     def show_detail(self, event: FleetList.Highlighted) -> None:
@@ -205,9 +220,7 @@ class FleetScreen(Screen[None]):
         lines = [] if row is None else detail_lines(row, self.view.now)
         if row is not None and self.history_line.startswith(f"{row.name}: "):
             lines.append(self.history_line.removeprefix(f"{row.name}: "))
-        self.query_one("#fleet-detail", Static).update(
-            Text("\n".join(lines), no_wrap=True, overflow="ellipsis")
-        )
+        self._show("#fleet-detail", "\n".join(lines))
 
     def watch_history_line(self) -> None:
         self.show_detail(FleetList.Highlighted(self.query_one(FleetList).current()))

@@ -5,6 +5,7 @@ console on the advertised URLs and coming back, a lost robot not opened, the his
 import time
 
 import pytest
+from textual.widgets import Static
 
 from arbiter_core import fleet
 from arbiter_core.timesync import TimeSync
@@ -202,3 +203,35 @@ async def test_history_of_the_selected_robot_on_h():
         detail = str(app.screen.query_one("#fleet-detail").content)
         assert "history (10 min): 3 summaries, p95 2-5 ms, 1 runs, last stanley completed 30.0 s" in detail
         assert "bad data (2): status: 10.5 MB" in detail
+
+
+async def test_a_view_that_shows_the_same_text_repaints_nothing(monkeypatch):
+    """Views come twice a second, each with its own clock; the list repaints only when a row's text
+    changed (an age shown in whole seconds), and the header and detail are not laid out again."""
+    model, clock = fleet_model(), [0.0]
+    renders, updates = [0], [0]
+    real_render, real_update = FleetList.render, Static.update
+
+    def render(self):
+        renders[0] += 1
+        return real_render(self)
+
+    def update(self, *args, **kwargs):
+        updates[0] += 1
+        return real_update(self, *args, **kwargs)
+
+    monkeypatch.setattr(FleetList, "render", render)
+    monkeypatch.setattr(Static, "update", update)
+    app = FleetApp(source=lambda p: model.view(W + clock[0], MONO + clock[0], p, SESSION), opener=lambda a: 0)
+    async with app.run_test(size=(120, 40)) as pilot:
+        await pilot.pause()
+        before = renders[0], updates[0]
+        for _ in range(3):  # 0.1 s later each time: every age shown is the same whole second
+            clock[0] += 0.1
+            app.screen.sample()
+            await pilot.pause()
+        assert (renders[0], updates[0]) == before
+        clock[0] += 1.0  # the ages shown move on
+        app.screen.sample()
+        await pilot.pause()
+        assert renders[0] > before[0]
