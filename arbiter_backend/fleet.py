@@ -407,7 +407,7 @@ class FleetAnnouncer:
 
     def __init__(self, backend: Any, settings: FleetSettings, link: FleetLink) -> None:
         self.link = link
-        self.host_clock = HostClock()
+        self.host_clock: HostClock = backend.host_clock  # the API's: the host is probed once for both
         src = sources_of(backend, settings.advertise_host)
         self.announcer = Announcer(settings, src, time.time(), self.host_clock)
         self._task: asyncio.Task[None] | None = None

@@ -21,6 +21,7 @@ from typing import Any
 from aiohttp import web
 
 from arbiter_core import auth, envelope, topics
+from arbiter_core.hostclock import HostClock
 from arbiter_core.kinematics import DEFAULT_LIMITS, Limits
 from arbiter_core.listening import format_listening
 from arbiter_core.simulator import RATE_HZ, DiffDriveSimulator
@@ -131,6 +132,8 @@ class Servers:
         self.api_port: int | None = None
         self.sim_enabled = False
         self._ssl = config.ssl_context()
+        # the host's clock-sync probe, cached: one for the API's /api/health and the fleet's announcer
+        self.host_clock = HostClock()
 
     async def _serve(self, app: web.Application, port: int) -> int:
         runner = web.AppRunner(app, access_log=None, handle_signals=False)
@@ -158,6 +161,7 @@ class Servers:
                 tracker,
                 self.config.token,
                 topics,
+                host_clock=self.host_clock,
                 bridge=endpoint.stats if endpoint is not None else None,
                 autonomy=autonomy,
             )
