@@ -189,6 +189,20 @@ class Plot(PlotWidget, Generic[V, K], can_focus=False):
         self.set_ylimits(y.lo, y.hi)
         self.set_yticks(list(y.ticks))
 
+    def trace(self, t: np.ndarray, y: np.ndarray, min_gap: float, budget: int | None = None) -> None:
+        """``y`` over ``t`` as a cyan braille line with no line across a gap longer than ``min_gap`` (a
+        lone sample between two gaps: a dot); ``budget``: at most about that many points in all (thinned
+        evenly in each part, none when None)."""
+        for part in axes.gaps(t.tolist(), min_gap):
+            seg_t, seg_y = t[part], y[part]
+            if budget is not None:
+                pick = thin(seg_t.size, max(2, budget * seg_t.size // t.size))
+                seg_t, seg_y = seg_t[pick], seg_y[pick]
+            if seg_t.size > 1:
+                self.plot(seg_t, seg_y, line_style="cyan", hires_mode=HiResMode.BRAILLE)
+            else:  # one sample between two gaps: a dot, not a line to its neighbours
+                self.scatter(seg_t, seg_y, marker="•", marker_style="cyan")
+
     def data_key(self, view: V) -> K:
         raise NotImplementedError
 
@@ -213,13 +227,7 @@ class ErrorPlot(Plot[AnalyticsView, int]):
             # is more than LINE_GAP_S, or three of the plotted samples' usual steps where they are sparser
             step = float(np.median(np.diff(t))) if t.size > 2 else 0.0
             budget = 2 * self.canvas_size()[0]  # braille: two dots a cell across; more draw the same line
-            for part in axes.gaps(view.error_t, max(LINE_GAP_S, 3.0 * step)):
-                seg_t, seg_e = t[part], e[part]
-                pick = thin(seg_t.size, max(2, budget * seg_t.size // t.size))
-                if seg_t.size > 1:
-                    self.plot(seg_t[pick], seg_e[pick], line_style="cyan", hires_mode=HiResMode.BRAILLE)
-                else:  # one sample between two gaps: a dot, not a line to its neighbours
-                    self.scatter(seg_t, seg_e, marker="•", marker_style="cyan")
+            self.trace(t, e, max(LINE_GAP_S, 3.0 * step), budget)
             x = axes.aligned(view.error_t[0], max(view.error_t[-1], view.error_t[0] + 1.0), cols, MIN_GAP_X)
             self.set_axes(x, axes.aligned(0.0, max(max(view.errors) * 1.05, 0.1), rows, MIN_GAP_Y))
         else:
@@ -429,11 +437,7 @@ class LatencyPlot(_LatencyWindow):
         t = t - t[-1]
         lat = np.asarray(view.window, dtype=np.float64)
         p95 = view.summary.p95
-        for part in axes.gaps(t.tolist(), LINE_GAP_S):
-            if part.stop - part.start > 1:
-                self.plot(t[part], lat[part], line_style="cyan", hires_mode=HiResMode.BRAILLE)
-            else:  # a lone command between two gaps: a dot, not a line to its neighbours
-                self.scatter(t[part], lat[part], marker="•", marker_style="cyan")
+        self.trace(t, lat, LINE_GAP_S)  # a lone command between two gaps: a dot
         cols, rows = self.scale_size()
         x = axes.aligned(float(t[0]) if t.size > 1 else -1.0, 0.0, cols, MIN_GAP_X)
         y = axes.aligned(0.0, max(float(lat.max()) * 1.05, 0.1), rows, MIN_GAP_Y)
