@@ -18,6 +18,7 @@ what to run; running out of memory is :class:`OutOfMemory`, never a damaged file
 
 from __future__ import annotations
 
+import functools
 import heapq
 import re
 import tempfile
@@ -243,10 +244,7 @@ def _open_storage(file: Path, stack: ExitStack) -> Any:
     if file.name.endswith(".zstd"):
         import shutil
 
-        try:
-            from compression import zstd  # Python 3.14
-        except ImportError:
-            from backports import zstd  # rosbags' dependency
+        zstd = _zstd()
         tmp = Path(stack.enter_context(tempfile.TemporaryDirectory(prefix="arbiter-bag-")))
         plain = tmp / file.name.removesuffix(".zstd")
         with file.open("rb") as src, zstd.open(src, "rb") as unz, plain.open("wb") as dst:
@@ -415,12 +413,19 @@ def _messages(storages: list[Any], wanted: list[tuple[Any, Any]]) -> Iterator[tu
     )
 
 
-def _unzstd(raw: bytes | memoryview) -> bytes:
+@functools.cache
+def _zstd() -> Any:
+    """The zstd module: the standard library's from Python 3.14, else rosbags' dependency. Looked up
+    once: a failed import is not cached by Python, and messages are decompressed one by one."""
     try:
         from compression import zstd
     except ImportError:
         from backports import zstd
-    plain: bytes = zstd.decompress(bytes(raw))
+    return zstd
+
+
+def _unzstd(raw: bytes | memoryview) -> bytes:
+    plain: bytes = _zstd().decompress(bytes(raw))
     return plain
 
 
