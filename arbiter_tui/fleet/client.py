@@ -18,6 +18,7 @@ import logging
 import threading
 import time
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -30,6 +31,7 @@ from .rows import FleetModel, FleetView, Row
 log = logging.getLogger(__name__)
 SYNC_REFRESH_S = 30.0
 HISTORY_TIMEOUT_S = 3.0
+BACKFILL_WORKERS = 8  # history questions asked at once
 BACKFILL_MINUTES = 1.0  # a robot first seen: its latest latency, topics and runs from its history
 
 
@@ -112,6 +114,9 @@ class FleetClient:
         self._keep: list[Any] = []
         self._asked: set[str] = set()  # robots whose history was asked when they first appeared
         self._pending = 0
+        # the history questions, off Zenoh's threads: a few at a time (a console that starts beside
+        # 200 robots hears all their tokens at once)
+        self._backfills = ThreadPoolExecutor(BACKFILL_WORKERS, thread_name_prefix="fleet-backfill")
 
     # -- the session ------------------------------------------------------------------------------
     def open(self, connect_timeout_ms: int | None = None) -> None:
@@ -151,6 +156,7 @@ class FleetClient:
 
     def close(self) -> None:
         self._closed.set()
+        self._backfills.shutdown(wait=False, cancel_futures=True)
         if self.session is not None:
             with contextlib.suppress(Exception):
                 for item in self._keep:
@@ -180,8 +186,12 @@ class FleetClient:
                 if first:
                     self._asked.add(parsed[0])
                     self._pending += 1
-            if first:  # its figures now, not a topics period later: asked off Zenoh's thread
-                threading.Thread(target=self._backfill, args=(parsed[0],), daemon=True).start()
+            if first:  # its figures now, not a topics period later
+                try:
+                    self._backfills.submit(self._backfill, parsed[0])
+                except RuntimeError:  # closed meanwhile: nobody will ask
+                    with self._lock:
+                        self._pending -= 1
         except Exception:  # never out of a callback
             log.exception("fleet: a liveliness sample was not taken")
 
