@@ -188,76 +188,6 @@ def test_embedded_rounds(embedded):
 
 
 # -- --transport ros ---------------------------------------------------------------------------------------
-def hidden(name: str) -> bool:
-    return any(part.startswith("_") for part in name.split("/"))
-
-
-class GraphTruth:
-    """rclpy's own view of the graph (the peer's node), as rosapi reads it."""
-
-    def __init__(self, peer: Any) -> None:
-        self.peer = peer
-        self.node = peer.node
-
-    def topics(self, include_hidden: bool = False) -> dict[str, str]:
-        return {
-            n: types[0]
-            for n, types in self.node.get_topic_names_and_types()
-            if include_hidden or not hidden(n)
-        }
-
-    def services(self) -> dict[str, str]:
-        return {n: types[0] for n, types in self.node.get_service_names_and_types() if not hidden(n)}
-
-    def nodes(self) -> list[str]:
-        return sorted(
-            (ns.rstrip("/") + "/" + name)
-            for name, ns in self.node.get_node_names_and_namespaces()
-            if not name.startswith("_")
-        )
-
-    def node_details(self, full_name: str) -> dict[str, list[str]]:
-        ns, _, name = full_name.rpartition("/")
-        ns = ns or "/"
-
-        def names(pairs: list[tuple[str, list[str]]]) -> list[str]:
-            return sorted(n for n, _ in pairs if not hidden(n))
-
-        return {
-            "subscribing": names(self.node.get_subscriber_names_and_types_by_node(name, ns)),
-            "publishing": names(self.node.get_publisher_names_and_types_by_node(name, ns)),
-            "services": names(self.node.get_service_names_and_types_by_node(name, ns)),
-        }
-
-    def param_names(self) -> list[str]:
-        """Every node's parameters, ``<node>:<name>``, asked of its own list_parameters service."""
-        from rcl_interfaces.srv import ListParameters
-
-        services = self.services()
-        found: list[str] = []
-        for node in self.nodes():
-            service = f"{node}/list_parameters"
-            if services.get(service) != "rcl_interfaces/srv/ListParameters":
-                continue  # a node without parameter services: rosapi lists nothing of it
-            client = self.node.create_client(ListParameters, service)
-            try:
-                assert client.wait_for_service(timeout_sec=10), service
-                future = client.call_async(ListParameters.Request())
-                assert wait_for(future.done, 10), f"{service} did not answer"
-                found += [f"{node}:{p}" for p in future.result().result.names]
-            finally:
-                self.node.destroy_client(client)
-        return found
-
-    def publishers(self, topic: str) -> list[str]:
-        return sorted(
-            {
-                i.node_namespace.rstrip("/") + "/" + i.node_name
-                for i in self.node.get_publishers_info_by_topic(topic)
-            }
-        )
-
-
 @pytest.fixture(scope="module")
 def ros_graph(node_bin: str):
     """A peer with a topic it publishes, one it subscribes, a service, an action server and a parameter,
@@ -305,7 +235,7 @@ def ros_graph(node_bin: str):
             "service_call": {"name": SERVICE, "type": "std_srvs/srv/SetBool", "args": {"data": True}},
             "action": {"name": ACTION, "type": FIBONACCI, "goal": {"order": 5}},
         }
-        truth = GraphTruth(peer)
+        truth = expected.GraphTruth(peer.node)
 
         # both sides see the whole graph before the script asks: the backend lists the peer's topic,
         # service and action topics (absolute names), the peer the backend's nodes

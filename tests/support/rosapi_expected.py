@@ -16,6 +16,8 @@ import importlib
 import re
 from typing import Any
 
+from .waits import wait_for
+
 ATOMICS = {
     "bool", "boolean", "byte", "int8", "uint8", "int16", "uint16", "int32", "uint32", "int64", "uint64",
     "float", "float32", "float64", "double", "string", "octet",
@@ -105,3 +107,72 @@ def action_servers(topics: list[str]) -> list[str]:
         for t in names
         if t.endswith("/_action/status") and t[: -len("status")] + "feedback" in names
     )
+
+
+def hidden(name: str) -> bool:
+    return any(part.startswith("_") for part in name.split("/"))
+
+
+class GraphTruth:
+    """rclpy's own view of the graph (the peer's node), as rosapi reads it."""
+
+    def __init__(self, node: Any) -> None:
+        self.node = node  # an rclpy node whose executor spins in another thread
+
+    def topics(self, include_hidden: bool = False) -> dict[str, str]:
+        return {
+            n: types[0]
+            for n, types in self.node.get_topic_names_and_types()
+            if include_hidden or not hidden(n)
+        }
+
+    def services(self) -> dict[str, str]:
+        return {n: types[0] for n, types in self.node.get_service_names_and_types() if not hidden(n)}
+
+    def nodes(self) -> list[str]:
+        return sorted(
+            (ns.rstrip("/") + "/" + name)
+            for name, ns in self.node.get_node_names_and_namespaces()
+            if not name.startswith("_")
+        )
+
+    def node_details(self, full_name: str) -> dict[str, list[str]]:
+        ns, _, name = full_name.rpartition("/")
+        ns = ns or "/"
+
+        def names(pairs: list[tuple[str, list[str]]]) -> list[str]:
+            return sorted(n for n, _ in pairs if not hidden(n))
+
+        return {
+            "subscribing": names(self.node.get_subscriber_names_and_types_by_node(name, ns)),
+            "publishing": names(self.node.get_publisher_names_and_types_by_node(name, ns)),
+            "services": names(self.node.get_service_names_and_types_by_node(name, ns)),
+        }
+
+    def param_names(self) -> list[str]:
+        """Every node's parameters, ``<node>:<name>``, asked of its own list_parameters service."""
+        from rcl_interfaces.srv import ListParameters
+
+        services = self.services()
+        found: list[str] = []
+        for node in self.nodes():
+            service = f"{node}/list_parameters"
+            if services.get(service) != "rcl_interfaces/srv/ListParameters":
+                continue  # a node without parameter services: rosapi lists nothing of it
+            client = self.node.create_client(ListParameters, service)
+            try:
+                assert client.wait_for_service(timeout_sec=10), service
+                future = client.call_async(ListParameters.Request())
+                assert wait_for(future.done, 10), f"{service} did not answer"
+                found += [f"{node}:{p}" for p in future.result().result.names]
+            finally:
+                self.node.destroy_client(client)
+        return found
+
+    def publishers(self, topic: str) -> list[str]:
+        return sorted(
+            {
+                i.node_namespace.rstrip("/") + "/" + i.node_name
+                for i in self.node.get_publishers_info_by_topic(topic)
+            }
+        )
