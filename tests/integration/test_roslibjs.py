@@ -222,7 +222,7 @@ def ros_graph(node_bin: str):
             goal_handle.succeed()
             return Fibonacci.Result(sequence=seq)
 
-        action_server = ActionServer(node, Fibonacci, ACTION, fibonacci)
+        server = ActionServer(node, Fibonacci, ACTION, fibonacci)
         backend = start_backend("--transport", "ros", "--no-sim", timeout=30)
         plan = {
             "node": "/arbiter_js_peer",
@@ -281,8 +281,7 @@ def ros_graph(node_bin: str):
         }
         out = run_helpers(node_bin, f"ws://127.0.0.1:{backend.bridge_port}/", plan)
         got_on_ros = list(received)
-        del action_server
-        yield {"out": out, "expected": want, "received": got_on_ros}
+        yield {"out": out, "expected": want, "received": got_on_ros, "server": server}
     finally:
         if backend is not None:
             backend.stop()

@@ -5,6 +5,11 @@ type is the IDL's (``double``, ``boolean``, ``string``, or ``pkg/Name``), its ``
 (no array), 0 (a sequence) or N (``T[N]``); the typedefs are the type's and then, depth first, each
 field type's not yet listed; atomic types have none.
 
+Field names are the message's (``get_fields_and_field_types``): rosapi 2.1.0 reads ``__slots__``,
+which gives ``_x`` on Humble's classes and a ``KeyError('check_fields')`` on Jazzy's and later
+(rosbridge_suite issue 976; its PR 854 reads the field names instead), so the TypeDef of a working
+rosapi, ROS 1's, and what roslibjs's ``decodeTypeDefs`` needs, is what is expected here.
+
 Compared: ``type``, ``fieldnames``, ``fieldtypes``, ``fieldarraylen``. Not compared: ``examples`` and
 ``constnames``/``constvalues``, where rosapi 2.1.0 shows Python's ``repr`` of a default and, on the
 ROS 2 message classes, lists ``SLOT_TYPES`` and each field's accessor as constants.
