@@ -38,6 +38,8 @@ HELPERS = [
     "getTopicsAndRawTypes",
     "getActionServers",
     "Topic.getPublishers",
+    "Param.set",
+    "Param.get",
 ]
 # helper -> (the rosapi service it calls, its request, the part of the response its callback gets)
 CALLS: dict[str, tuple[str, str, Any]] = {
@@ -56,6 +58,8 @@ CALLS: dict[str, tuple[str, str, Any]] = {
     "getTopicsAndRawTypes": ("topics_and_raw_types", "", None),
     "getActionServers": ("action_servers", "", "action_servers"),
     "Topic.getPublishers": ("publishers", "topic", "publishers"),
+    "Param.set": ("set_param", "", None),
+    "Param.get": ("get_param", "", None),
 }
 REQUEST_FIELD = {"node": "node", "topic": "topic", "service": "service"}  # else the field is "type"
 
@@ -82,6 +86,8 @@ async def _absolute(port: int, plan: dict[str, Any]) -> dict[str, dict[str, Any]
     out: dict[str, dict[str, Any]] = {}
     async with aiohttp.ClientSession() as session, session.ws_connect(f"ws://127.0.0.1:{port}/") as ws:
         for helper in HELPERS:
+            if helper.startswith("Param."):  # a set and a get of one parameter: the test knows the answers
+                continue
             service = "/rosapi/" + CALLS[helper][0]
             await ws.send_str(
                 json.dumps(
@@ -138,6 +144,7 @@ def embedded(node_bin: str):
             "service": SERVICE,
             "service_type": "std_srvs/srv/SetBool",
             "message_type": DETAILS_TYPE,
+            "param": {"name": "/arbiter_js:speed", "value": 2.5},
             "pubsub": {
                 "topic": ROUND_TOPIC,
                 "type": "std_msgs/msg/String",
@@ -159,16 +166,22 @@ def embedded(node_bin: str):
     want: dict[str, Any] = {
         "getTopicType": {"ok": "nav_msgs/msg/Odometry"},
         "getTopicsForType": {"ok": ["/odom"]},
-        "getParams": {"ok": []},
+        "getParams": {"ok": []},  # asked before Param.set
+        "Param.get": {"ok": 2.5},  # after Param.set: the value set, as JSON, parsed by roslibjs
     }
     # the rest: what the same service answers under its absolute name (today "does not exist")
     for helper in HELPERS:
-        want.setdefault(helper, as_roslibjs(helper, absolute[helper]))
+        if helper in absolute:
+            want.setdefault(helper, as_roslibjs(helper, absolute[helper]))
     return {"out": out, "expected": want}
 
 
 @pytest.mark.parametrize("helper", HELPERS)
 def test_embedded_helper(embedded, helper):
+    if helper == "Param.set":  # rosapi's SetParam response (empty, or "successful": true in later rosapi)
+        got = embedded["out"]["helpers"][helper]
+        assert "ok" in got, got
+        return
     if helper == "getTopics":  # rosapi lists in the graph's order: compare topic -> type
         got = embedded["out"]["helpers"][helper]
         assert "ok" in got, got
@@ -231,6 +244,7 @@ def ros_graph(node_bin: str):
             "service": SERVICE,
             "service_type": SERVICE_DETAILS_TYPE,
             "message_type": DETAILS_TYPE,
+            "param": {"name": "/arbiter_js_peer:speed", "value": 2.5},
             "pubsub": {"topic": ROUND_TOPIC, "type": "std_msgs/msg/String", "msg": {"data": "hello ROS"}},
             "service_call": {"name": SERVICE, "type": "std_srvs/srv/SetBool", "args": {"data": True}},
             "action": {"name": ACTION, "type": FIBONACCI, "goal": {"order": 5}},
@@ -278,9 +292,12 @@ def ros_graph(node_bin: str):
             "getTopicsAndRawTypes": truth.topics(),
             "getActionServers": {"ok": expected.action_servers(list(truth.topics(include_hidden=True)))},
             "Topic.getPublishers": {"ok": truth.publishers("/arbiter_js/chatter")},
+            "Param.set": None,  # "ok": the node took it (checked below on the node itself)
+            "Param.get": {"ok": 2.5},
         }
         out = run_helpers(node_bin, f"ws://127.0.0.1:{backend.bridge_port}/", plan)
         got_on_ros = list(received)
+        want["speed_on_the_node"] = node.get_parameter("speed").value
         yield {"out": out, "expected": want, "received": got_on_ros, "server": server}
     finally:
         if backend is not None:
@@ -298,6 +315,9 @@ def test_ros_helper(ros_graph, helper):
     want = ros_graph["expected"][helper]
     assert "ok" in got, f"{helper}: {got}"
     answer = got["ok"]
+    if helper == "Param.set":
+        assert ros_graph["expected"]["speed_on_the_node"] == 2.5  # set on the rclpy node itself
+        return
     if helper in ("getTopics", "getTopicsAndRawTypes"):  # the graph's order: compare topic -> type
         assert dict(zip(answer["topics"], answer["types"], strict=True)) == want
         if helper == "getTopicsAndRawTypes":

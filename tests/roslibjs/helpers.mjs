@@ -7,7 +7,7 @@
 //   node helpers.mjs ws://127.0.0.1:9090 '<plan as JSON>'
 //
 // The plan names what to ask about (the test knows the graph):
-//   node, topic, topic_type, service, service_type, message_type,
+//   node, topic, topic_type, service, service_type, message_type, param: {name, value},
 //   pubsub: {topic, type, msg},                     a roslibjs publisher and a roslibjs subscriber
 //   service_call: {name, type, args, provide},      provide: {response, echo_into}: a second roslibjs
 //                                                   client serves it (the request as JSON text in echo_into)
@@ -69,6 +69,12 @@ async function helpers(ros) {
     "Topic.getPublishers": (ok, err) =>
       new ROSLIB.Topic({ ros, name: plan.topic, messageType: plan.topic_type }).getPublishers(ok, err),
   };
+  if (plan.param) {
+    // Param: roslibjs's other rosapi calls (rosapi/set_param, rosapi/get_param), in this order
+    const param = new ROSLIB.Param({ ros, name: plan.param.name });
+    calls["Param.set"] = (ok, err) => param.set(plan.param.value, ok, err);
+    calls["Param.get"] = (ok, err) => param.get(ok, err);
+  }
   const out = {};
   for (const [name, call] of Object.entries(calls)) {
     out[name] = await ask(call);
