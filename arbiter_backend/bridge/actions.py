@@ -33,7 +33,7 @@ class ActionRoom:
     def __init__(self, interfaces: Any, exposure: Exposure) -> None:
         self.interfaces = interfaces  # ROS mode: ros.interfaces.RosInterfaces; None on the embedded bus
         self.exposure = exposure
-        self.provided: Providers[ProvidedAction] = Providers("action")
+        self.provided: Providers[ProvidedAction] = Providers("action", exposure.name)
 
     # -- goals clients send ----------------------------------------------------------------------------
     def send_action_goal(self, client: Client, frame: Frame) -> None:
@@ -128,7 +128,7 @@ class ActionRoom:
             self._goal_ended(client, action, req_id, status, values, True)
 
     def cancel_action_goal(self, client: Client, frame: Frame) -> None:
-        frames.name(frame, "action")
+        self.exposure.name(frame, "action")
         if "id" not in frame:
             raise BadFrame("missing field 'id' (the id of the goal to cancel)")
         req_id = frame["id"]

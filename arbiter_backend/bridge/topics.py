@@ -97,7 +97,7 @@ class TopicRoom:
             client.advertised[topic] = self.bus.advertise(topic, type_name, latch=latch)
 
     def unadvertise(self, client: Client, frame: Frame) -> None:
-        topic = frames.name(frame)
+        topic = self.exposure.name(frame)
         if client.advertised.pop(topic, None) is not None:
             self.bus.unadvertise(topic)
 
@@ -148,7 +148,7 @@ class TopicRoom:
         client.outbox(topic, sub.outbox_limit)
 
     def unsubscribe(self, client: Client, frame: Frame) -> None:
-        topic = frames.name(frame)
+        topic = self.exposure.name(frame)
         sub = client.subs.get(topic)
         if sub is None:
             return
