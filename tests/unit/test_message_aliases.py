@@ -35,7 +35,8 @@ ACCEPTED = [
     ("builtin_interfaces/msg/Time", {"secs": 12}, {"sec": 12, "nanosec": 0}),
     ("builtin_interfaces/msg/Time", {"nsecs": 3}, {"sec": 0, "nanosec": 3}),
     # both spellings: the ROS 2 name wins (message_conversion tries sec first)
-    ("builtin_interfaces/msg/Time", {"sec": 1, "secs": 9, "nanosec": 2, "nsecs": 8}, {"sec": 1, "nanosec": 2}),
+    ("builtin_interfaces/msg/Time", {"sec": 1, "secs": 9, "nanosec": 2, "nsecs": 8},
+     {"sec": 1, "nanosec": 2}),
     ("builtin_interfaces/msg/Time", "now", NOW),
     ("std_msgs/msg/Header", {"stamp": "now"}, {"stamp": NOW, "frame_id": ""}),
     # a header given without a stamp is stamped now; a message without a header keeps a zero stamp
@@ -69,7 +70,8 @@ def same(got, expected, before_ns: int, after_ns: int) -> bool:
         ns = got["sec"] * 1_000_000_000 + got["nanosec"]
         return before_ns <= ns <= after_ns
     if isinstance(expected, dict):
-        return set(got) == set(expected) and all(same(got[k], v, before_ns, after_ns) for k, v in expected.items())
+        keys_same = set(got) == set(expected)
+        return keys_same and all(same(got[k], v, before_ns, after_ns) for k, v in expected.items())
     return got == expected and type(got) is type(expected)
 
 
