@@ -121,7 +121,7 @@ def _check(spec: Any, value: Any, path: str, clock: Clock) -> Any:
         unknown = set(value) - set(spec)
         if unknown:
             raise MessageError(f"{path or 'msg'} has unknown field {sorted(unknown)[0]!r}")
-        out = {}
+        out: dict[str, Any] = {}
         for key, sub in spec.items():
             sub_path = f"{path}.{key}" if path else key
             if spec is _HEADER and key == "stamp":  # as rosbridge: a header given is stamped now

@@ -182,7 +182,7 @@ def typedef_text(type_name: str) -> str:
 # -- JSON -> ROS ----------------------------------------------------------------------------------
 def _time_of(t: Any) -> str | None:
     """``Time`` or ``Duration`` for a ``builtin_interfaces`` time field, else None."""
-    if isinstance(t, rd.NamespacedType) and t.namespaces[0] == "builtin_interfaces":
+    if isinstance(t, rd.NamespacedType) and list(t.namespaces)[:1] == ["builtin_interfaces"]:
         return t.name if t.name in ("Time", "Duration") else None
     return None
 
