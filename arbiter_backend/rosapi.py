@@ -5,7 +5,9 @@ the action servers, the message types and the parameters: the 24 services of ros
 
 - ``bus_handlers`` (both transports, from the endpoint's bus): ``topics`` → ``topics``, ``types``;
   ``topic_type`` (``topic``) → ``type`` (``""`` for a topic that is not there);
-  ``topics_for_type`` (``type``) → ``topics``; ``get_ros_version`` → ``version`` (2), ``distro``.
+  ``topics_for_type`` (``type``) → ``topics``; ``get_ros_version`` → ``version`` (2), ``distro``;
+  ``message_details`` (``type``) → ``typedefs`` for the types the embedded transport knows
+  (``arbiter_core.msgtypes``; in ROS mode the graph's, below, for every installed type).
 - ``handlers`` (``--transport ros``, from the live ROS graph), as rosbridge_suite's rosapi node
   answers: ``nodes`` → ``nodes``; ``node_details`` (``node``) → ``subscribing``, ``publishing``,
   ``services``; ``publishers`` / ``subscribers`` (``topic``) → ``publishers`` / ``subscribers`` (node
@@ -38,6 +40,7 @@ import time
 from collections.abc import Callable
 from typing import Any, Protocol
 
+from arbiter_core import msgtypes
 from arbiter_core.msgtypes import MessageError, normalize_type
 from arbiter_core.topics import is_hidden
 from arbiter_core.topics import stamp as ros_stamp
@@ -118,8 +121,9 @@ def bus_handlers(
     resolve: Resolve = in_root,
     distro: str = "",
 ) -> dict[str, Handler]:
-    """``/rosapi/topics``, ``topic_type``, ``topics_for_type`` and ``get_ros_version`` from the
-    endpoint's bus (either transport); nothing outside ``topic_ok`` (--topics-glob) appears."""
+    """``/rosapi/topics``, ``topic_type``, ``topics_for_type``, ``get_ros_version`` and
+    ``message_details`` from the endpoint's bus (either transport); nothing outside ``topic_ok``
+    (--topics-glob) appears."""
 
     def topics(args: Any) -> dict[str, Any]:
         listed = [(t, ty) for t, ty in bus.topics() if topic_ok(t) and not is_hidden(t)]
@@ -138,6 +142,8 @@ def bus_handlers(
         "/rosapi/topic_type": topic_type,
         "/rosapi/topics_for_type": topics_for_type,
         "/rosapi/get_ros_version": lambda args: ros_version(distro),
+        # the types the embedded transport knows (in ROS mode the graph's handler, every installed type)
+        "/rosapi/message_details": lambda args: {"typedefs": msgtypes.typedefs(arg(args, "type"))},
     }
 
 

@@ -26,7 +26,10 @@ _VECTOR3: Spec = {"x": "float64", "y": "float64", "z": "float64"}
 _HEADER: Spec = {"stamp": _TIME, "frame_id": "string"}
 _QUAT: Spec = {"x": "float64", "y": "float64", "z": "float64", "w": "float64"}
 _TWIST: Spec = {"linear": _VECTOR3, "angular": _VECTOR3}
-_POSE: Spec = {"position": _VECTOR3, "orientation": _QUAT}
+_POINT: Spec = {"x": "float64", "y": "float64", "z": "float64"}
+_POSE: Spec = {"position": _POINT, "orientation": _QUAT}
+_POSE_COV: Spec = {"pose": _POSE, "covariance": ("float64", 36)}
+_TWIST_COV: Spec = {"twist": _TWIST, "covariance": ("float64", 36)}
 
 TYPES: dict[str, Spec] = {
     "std_msgs/msg/String": {"data": "string"},
@@ -36,14 +39,19 @@ TYPES: dict[str, Spec] = {
     "geometry_msgs/msg/Twist": _TWIST,
     "geometry_msgs/msg/TwistStamped": {"header": _HEADER, "twist": _TWIST},
     "geometry_msgs/msg/Quaternion": _QUAT,
+    "geometry_msgs/msg/Point": _POINT,
     "geometry_msgs/msg/Pose": _POSE,
+    "geometry_msgs/msg/PoseWithCovariance": _POSE_COV,
+    "geometry_msgs/msg/TwistWithCovariance": _TWIST_COV,
     "nav_msgs/msg/Odometry": {
         "header": _HEADER,
         "child_frame_id": "string",
-        "pose": {"pose": _POSE, "covariance": ("float64", 36)},
-        "twist": {"twist": _TWIST, "covariance": ("float64", 36)},
+        "pose": _POSE_COV,
+        "twist": _TWIST_COV,
     },
 }
+_NAMES = {id(spec): name for name, spec in TYPES.items()}  # a nested spec's type
+_ROSIDL = {"float64": "double"}  # the basic types as rosidl (and rosapi's TypeDef) spell them
 
 _TYPE_RE = re.compile(r"^([A-Za-z][A-Za-z0-9_]*)/(?:(msg)/)?([A-Za-z][A-Za-z0-9_]*)$")
 _INT_RANGES = {"int32": (-(2**31), 2**31 - 1), "uint32": (0, 2**32 - 1)}
@@ -176,3 +184,46 @@ def check_message(type_name: str, msg: Any, clock: Clock = time.time_ns) -> dict
 
 def known(type_name: str) -> bool:
     return type_name in TYPES
+
+
+def typedefs(type_name: str) -> list[dict[str, Any]]:
+    """rosapi's ``message_details`` for a type this module knows (the embedded transport's): its
+    ``TypeDef`` and those of the types it holds, depth first, each once, as the ROS transport gives them
+    from the installed classes (``arbiter_backend/ros/typedefs.py``); [] for any other type."""
+    try:
+        spec = TYPES.get(normalize_type(type_name))
+    except MessageError:
+        return []
+    out: list[dict[str, Any]] = []
+    if spec is not None:
+        _typedefs(spec, out, set())
+    return out
+
+
+def _typedefs(spec: Spec, out: list[dict[str, Any]], seen: set[str]) -> None:
+    pkg, _, name = _NAMES[id(spec)].split("/")
+    seen.add(f"{pkg}/{name}")
+    default = _default(spec)
+    fields: list[tuple[str, str, int, str]] = []  # name, type, array length, example
+    for key, sub in spec.items():
+        elem, size = sub if isinstance(sub, tuple) else (sub, -1)
+        if isinstance(elem, dict):
+            ty, _, short = _NAMES[id(elem)].split("/")
+            fields.append((key, f"{ty}/{short}", size, "{}" if size < 0 else "[]"))
+        else:
+            fields.append((key, _ROSIDL.get(elem, str(elem)), size, str(default[key]) if size < 0 else "[]"))
+    out.append(
+        {
+            "type": f"{pkg}/{name}",
+            "fieldnames": [f[0] for f in fields],
+            "fieldtypes": [f[1] for f in fields],
+            "fieldarraylen": [f[2] for f in fields],
+            "examples": [f[3] for f in fields],
+            "constnames": [],
+            "constvalues": [],
+        }
+    )
+    for sub in spec.values():
+        elem = sub[0] if isinstance(sub, tuple) else sub
+        if isinstance(elem, dict) and _NAMES[id(elem)].replace("/msg/", "/") not in seen:
+            _typedefs(elem, out, seen)

@@ -38,8 +38,8 @@ ROSAPI = [
     "topics_and_raw_types", "topics_for_type",
 ]  # fmt: skip
 # what the embedded transport answers (no ROS graph: the rest "does not exist")
-EMBEDDED = {"topics", "topic_type", "topics_for_type", "get_ros_version", "get_param", "set_param",
-            "has_param", "delete_param", "get_param_names"}  # fmt: skip
+EMBEDDED = {"topics", "topic_type", "topics_for_type", "get_ros_version", "message_details", "get_param",
+            "set_param", "has_param", "delete_param", "get_param_names"}  # fmt: skip
 PEER = "/arbiter_rosapi_peer"
 
 # The stock node's message_details for geometry_msgs/msg/Twist and service_request_details for
@@ -344,6 +344,8 @@ def test_the_embedded_transport_answers_what_has_a_meaning_there_and_resolves_na
         "topics": ["/robot2/odom"]
     }
     assert call(embedded, "/rosapi/get_ros_version")["version"] == 2
+    details = call(embedded, "/rosapi/message_details", {"type": "geometry_msgs/msg/Twist"})
+    assert details == {"typedefs": TWIST}  # the stock node's answer, as on the ROS transport
 
     odom: list = []
     roslibpy.Topic(embedded, "odom", "nav_msgs/msg/Odometry").subscribe(odom.append)  # /robot2/odom

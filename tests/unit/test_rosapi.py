@@ -2,7 +2,9 @@
 
 import pytest
 
-from arbiter_backend.rosapi import handlers
+from arbiter_backend.bus import TopicBus
+from arbiter_backend.rosapi import bus_handlers, handlers
+from arbiter_core.msgtypes import TYPES
 from arbiter_core.topics import resolve
 
 
@@ -113,3 +115,15 @@ def test_nothing_outside_what_the_server_exposes_appears():
     assert api["/rosapi/publishers"]({"topic": "/cmd_vel"}) == {"publishers": []}
     assert api["/rosapi/service_type"]({"service": "/reset"}) == {"type": ""}
     assert api["/rosapi/service_node"]({"service": "/reset"}) == {"node": ""}
+
+
+@pytest.mark.parametrize("type_name", sorted(TYPES))
+def test_the_embedded_transports_message_details_are_the_ros_transports(type_name):
+    """message_details on the embedded transport (the types it knows, from its own specs) gives what the
+    ROS transport gives from the installed classes: the same TypeDefs, field by field."""
+    ros_typedefs = pytest.importorskip("arbiter_backend.ros.typedefs")
+    api = bus_handlers(TopicBus())
+    assert api["/rosapi/message_details"]({"type": type_name}) == {
+        "typedefs": ros_typedefs.message_typedefs(type_name)
+    }
+    assert api["/rosapi/message_details"]({"type": "sensor_msgs/msg/Image"}) == {"typedefs": []}
