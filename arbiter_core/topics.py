@@ -6,6 +6,7 @@ with ``ros.convert``, so each message is defined once for both transports.
 
 from __future__ import annotations
 
+import functools
 import re
 from typing import Any
 
@@ -100,6 +101,7 @@ def namespace(text: str | None) -> str:
 _SUBSTITUTION = re.compile(r"\{([^{}]*)\}")
 
 
+@functools.lru_cache(maxsize=4096)  # on every frame a client sends: a name resolves once
 def resolve(name: str, ns: str = "", what: str = "topic", node: str | None = None) -> str:
     """A topic, service, action or node name resolved the ROS way, as rcl's ``rcl_expand_topic_name``
     does it for a node ``node`` in namespace ``ns`` (what rosbridge_suite's node does with every name a
