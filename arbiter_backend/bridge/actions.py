@@ -147,7 +147,7 @@ class ActionRoom:
     def advertise_action(self, client: Client, frame: Frame) -> None:
         name = self.exposure.action(frame)
         type_name = frames.interface_type(frame, "type", "action", self.interfaces)
-        act = ProvidedAction(name, type_name, client, type_given=frame["type"])
+        act = ProvidedAction(name, type_name, client, type_given=frame["type"], given=frame["action"])
         if self.interfaces is not None:
             act.withdraw = self.interfaces.advertise_action(name, type_name, act.start, act.cancel)
         self.provided.install(client, frame, act)

@@ -152,7 +152,7 @@ class ServiceRoom:
         if not self.exposure.service_ok(name):
             raise BadFrame(f"service {name} is not exposed by this server (--services-glob)")
         type_name = frames.interface_type(frame, "type", "srv", self.interfaces)
-        svc = ProvidedService(name, type_name, client)
+        svc = ProvidedService(name, type_name, client, given=frame["service"])
         if self.interfaces is not None:  # on the graph first: if that fails, the old provider stays
             svc.withdraw = self.interfaces.advertise_service(name, type_name, svc.call)
         self.provided.install(client, frame, svc)

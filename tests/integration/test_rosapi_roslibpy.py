@@ -286,6 +286,21 @@ def test_every_op_resolves_a_relative_name_as_rosbridge(graph, ros):
     trigger = roslibpy.Service(ros, "arbiter_rosapi/trigger", "std_srvs/srv/Trigger")
     assert dict(trigger.call(roslibpy.ServiceRequest({}), timeout=15)) == {"success": True, "message": "done"}
 
+    # a service the client provides under a relative name: on the graph at /arbiter_rosapi/provided, and
+    # its call_service frames carry the name as the client gave it (roslibpy dispatches by that name)
+    def provide(request, response):
+        response.update(success=True, message="from roslibpy")
+        return True
+
+    provided = roslibpy.Service(ros, "arbiter_rosapi/provided", "std_srvs/srv/Trigger")
+    provided.advertise(provide)
+    caller = graph.peer.node.create_client(Trigger, "/arbiter_rosapi/provided")
+    assert caller.wait_for_service(timeout_sec=15)
+    answer = caller.call_async(Trigger.Request())
+    assert wait_for(answer.done, 15) and answer.result().message == "from roslibpy"
+    provided.unadvertise()
+    graph.peer.node.destroy_client(caller)
+
     results: list = []
     client = roslibpy.ActionClient(ros, "arbiter_rosapi/fib", "test_msgs/action/Fibonacci")
     client.send_goal(roslibpy.Goal({"order": 5}), lambda r: (results.append(r), done.set()), lambda f: None,
