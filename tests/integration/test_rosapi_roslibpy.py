@@ -161,7 +161,16 @@ def test_every_rosapi_service_answers_as_the_stock_node_by_relative_and_absolute
         lambda: backend_nodes <= graph.nodes() and graph.nodes() == set(both(ros, "nodes")["nodes"]), 20
     )
     assert wait_for(lambda: "/robot2/reset" in both(ros, "services")["services"], 15)
-    assert set(both(ros, "services")["services"]) == set(graph.services())
+    assert wait_for(lambda: set(both(ros, "services")["services"]) == set(graph.services()), 15)
+    peer = graph.peer.node
+    details = {
+        "subscribing": sorted(t for t, _ in peer.get_subscriber_names_and_types_by_node(PEER[1:], "/")
+                              if "/_" not in t),
+        "publishing": sorted(t for t, _ in peer.get_publisher_names_and_types_by_node(PEER[1:], "/")
+                             if "/_" not in t),
+        "services": sorted(s for s in graph.node_services(PEER) if "/_" not in s),
+    }  # fmt: skip
+    assert wait_for(lambda: both(ros, "node_details", {"node": PEER}) == details, 15)
     assert wait_for(lambda: "/arbiter_rosapi/fib" in both(ros, "action_servers")["action_servers"], 15)
 
     answers = {
@@ -210,14 +219,7 @@ def test_every_rosapi_service_answers_as_the_stock_node_by_relative_and_absolute
         == {"publishers": [PEER]}
     )
     assert PEER in answers["subscribers"]["subscribers"]
-    peer = graph.peer.node
-    assert answers["node_details"] == {
-        "subscribing": sorted(t for t, _ in peer.get_subscriber_names_and_types_by_node(PEER[1:], "/")
-                              if "/_" not in t),
-        "publishing": sorted(t for t, _ in peer.get_publisher_names_and_types_by_node(PEER[1:], "/")
-                             if "/_" not in t),
-        "services": sorted(s for s in graph.node_services(PEER) if "/_" not in s),
-    }  # fmt: skip
+    assert answers["node_details"] == details
     assert answers["service_type"] == {"type": "std_srvs/srv/Trigger"}
     triggers = sorted(s for s, ts in graph.services().items() if ts == ["std_srvs/srv/Trigger"])
     assert (
