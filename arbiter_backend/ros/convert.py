@@ -187,17 +187,33 @@ def _time_of(t: Any) -> str | None:
     return None
 
 
-def _time(kind: str, value: Any, base: Any, path: str) -> Any:
-    """A ``builtin_interfaces`` Time or Duration from rosbridge JSON (``msgtypes.time_fields``: ROS 1's
-    ``secs``/``nsecs`` too, a Time may be ``"now"``); a field not given keeps ``base``'s value."""
+@lru_cache(maxsize=256)
+def _layout(cls: type[Any]) -> tuple[str | None, dict[str, Any], dict[str, str]]:
+    """What ``to_ros`` needs of a class, once: ``Time``/``Duration``/``Header`` for those (else None),
+    its fields' rosidl types by name, and which fields are a Time or Duration."""
+    special = None
+    if cls.__module__.startswith("builtin_interfaces.") and cls.__name__ in ("Time", "Duration"):
+        special = cls.__name__
+    elif cls is _header_class():
+        special = "Header"
+    fields = dict(_fields(cls))  # type: ignore[arg-type]  # a class hashes: python/mypy#11470
+    times = {name: kind for name, t in fields.items() if (kind := _time_of(t)) is not None}
+    return special, fields, times
+
+
+def _time(kind: str, value: Any, inst: Any, path: str, now_base: bool = False) -> Any:
+    """``inst`` (a ``builtin_interfaces`` Time or Duration) set from rosbridge JSON
+    (``msgtypes.time_fields``: ROS 1's ``secs``/``nsecs`` too, a Time may be ``"now"``); a field not
+    given keeps ``inst``'s value, or now's where ``now_base`` (a Header's stamp, as rosbridge)."""
     given = msgtypes.time_fields(value, path, now_ok=kind == "Time")
     if given is None:
         given = stamp(time.time_ns())
-    out = type(base)(sec=base.sec, nanosec=base.nanosec)
+    elif now_base and len(given) < 2:
+        given = {**stamp(time.time_ns()), **given}
     for field, typename in (("sec", "int32"), ("nanosec", "uint32")):
         if field in given:
-            setattr(out, field, _basic(typename, given[field], f"{path}.{field}"))
-    return out
+            setattr(inst, field, _basic(typename, given[field], f"{path}.{field}"))
+    return inst
 
 
 def to_ros(cls: type, data: Any, path: str = "msg", depth: int = 0) -> Any:
@@ -205,23 +221,23 @@ def to_ros(cls: type, data: Any, path: str = "msg", depth: int = 0) -> Any:
     As rosbridge: a ``std_msgs/Header`` given without a stamp is stamped now."""
     if depth > MAX_DEPTH:
         raise MessageError(f"{path}: nested too deeply")
-    if cls.__module__.startswith("builtin_interfaces.") and cls.__name__ in ("Time", "Duration"):
+    special, fields, times = _layout(cls)
+    if special in ("Time", "Duration"):
         return _time(cls.__name__, data, cls(), path)  # a Time or Duration published as it is
     if not isinstance(data, dict):
         raise MessageError(f"{path} must be an object, got {_kind(data)}")
     msg = cls()
-    if cls is _header_class():
-        msg.stamp = _time("Time", "now", msg.stamp, path)
-    fields = dict(_fields(cls))
+    if special == "Header" and "stamp" not in data:
+        _time("Time", "now", msg.stamp, path)
     for key, value in data.items():
         slot = fields.get(key)
         if slot is None:
             raise MessageError(f"{path} has unknown field {str(key)[:40]!r}")
-        kind = _time_of(slot)
-        if kind is not None:
-            converted = _time(kind, value, getattr(msg, key), f"{path}.{key}")
-        else:
-            converted = _to_ros_value(slot, value, f"{path}.{key}", depth)
+        kind = times.get(key)
+        if kind is not None:  # set in place on the default instance
+            _time(kind, value, getattr(msg, key), f"{path}.{key}", now_base=special == "Header")
+            continue
+        converted = _to_ros_value(slot, value, f"{path}.{key}", depth)
         try:
             setattr(msg, key, converted)
         except (AssertionError, TypeError, ValueError, OverflowError) as exc:
