@@ -4,8 +4,9 @@ to each subscription's outbox.
 
 Several subscriptions of one client to one topic (requests with several ids) are merged, as rosbridge
 does: the smallest ``throttle_rate`` and ``queue_length``, the strongest ``compression``, the smallest
-``fragment_size``. Topic names must be fully qualified ROS 2 names; ``throttle_rate`` ≤ 1 h,
-``queue_length`` ≤ 10⁶.
+``fragment_size``. A topic name is resolved as rosbridge's node resolves it (``exposure.py``: ``odom``
+under the bridge's namespace); a subscription is kept under the name as the client gave it, which its
+frames carry back. ``throttle_rate`` ≤ 1 h, ``queue_length`` ≤ 10⁶.
 """
 
 from __future__ import annotations
