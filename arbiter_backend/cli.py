@@ -66,7 +66,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--namespace",
         default="",
         help="put every node and topic under this namespace, e.g. /robot1 (as --ros-args -r __ns:=/robot1; "
-        "names stay relative, so --ros-args -r remaps work)",
+        "names stay relative, so --ros-args -r remaps work; a rosbridge client's relative names resolve "
+        "under it, as rosbridge's)",
     )
     p.add_argument(
         "--tls-cert",

@@ -61,9 +61,10 @@ def _dumps(obj: Any) -> str:
 
 @dataclass
 class ProvidedService:
-    name: str
+    name: str  # resolved: /arm/home
     type_name: str
     provider: Sender
+    given: str = ""  # the name as the provider wrote it (arm/home): its frames carry it back, as rosbridge's
     withdraw: Callable[[], None] | None = None  # takes the ROS service off the graph (ROS mode)
     pending: dict[str, asyncio.Future[tuple[bool, Any]]] = field(default_factory=dict)
     _ids: itertools.count[int] = field(default_factory=lambda: itertools.count(1))
@@ -71,10 +72,10 @@ class ProvidedService:
     async def call(self, args: Any, timeout: float = PROVIDER_TIMEOUT_S) -> tuple[bool, Any]:
         """(result, values) as the provider answered (``result: false`` passed through); CallFailed
         when it did not answer within ``timeout`` or went away meanwhile."""
-        req_id = f"service_request:{self.name}:{next(self._ids)}"
+        req_id = f"service_request:{self.given or self.name}:{next(self._ids)}"
         done: asyncio.Future[tuple[bool, Any]] = asyncio.get_running_loop().create_future()
         self.pending[req_id] = done
-        frame = {"op": "call_service", "id": req_id, "service": self.name, "args": args}
+        frame = {"op": "call_service", "id": req_id, "service": self.given or self.name, "args": args}
         self.provider.send(_dumps(frame))
         try:
             return await asyncio.wait_for(asyncio.shield(done), timeout)
@@ -116,6 +117,7 @@ class ProvidedAction:
     type_name: str
     provider: Sender
     type_given: str = ""  # the type as the provider wrote it: goals carry it back so (as rosbridge's do)
+    given: str = ""  # the name as the provider wrote it: its frames carry it back, as rosbridge's
     withdraw: Callable[[], None] | None = None
     goals: dict[str, Goal] = field(default_factory=dict)
     _ids: itertools.count[int] = field(default_factory=lambda: itertools.count(1))
@@ -123,7 +125,7 @@ class ProvidedAction:
     def start(self, args: Any, on_feedback: Callable[[Any], None] | None) -> Goal:
         """Send the goal to the provider; the returned goal's ``result`` completes when it ends."""
         goal = Goal(
-            f"action_goal:{self.name}:{next(self._ids)}",
+            f"action_goal:{self.given or self.name}:{next(self._ids)}",
             asyncio.get_running_loop().create_future(),
             on_feedback,
         )
@@ -132,7 +134,7 @@ class ProvidedAction:
         frame = {
             "op": "send_action_goal",
             "id": goal.id,
-            "action": self.name,
+            "action": self.given or self.name,
             "action_type": self.type_given or self.type_name,
             "args": args,
             "feedback": True,
@@ -150,7 +152,9 @@ class ProvidedAction:
         """Ask the provider to cancel; ended as cancelled for it if it does not within the grace time."""
         if goal.result.done() or goal.cancel_timer is not None:
             return
-        self.provider.send(_dumps({"op": "cancel_action_goal", "id": goal.id, "action": self.name}))
+        self.provider.send(
+            _dumps({"op": "cancel_action_goal", "id": goal.id, "action": self.given or self.name})
+        )
         goal.cancel_timer = asyncio.get_running_loop().call_later(
             CANCEL_GRACE_S,
             self._end,

@@ -71,9 +71,18 @@ class BackendConfig:
     params_glob: str | None = None  # ... and of the parameters rosapi reads and sets (names, no node)
     autonomy: bool = False  # the robot-side controller, driven through /api/autonomy (embedded transport)
 
-    def make_endpoint(self, bus: Bus) -> RosbridgeEndpoint:  # not bridge.…: the field `bridge` hides it
-        """The rosbridge endpoint of either transport (the embedded bus or the DDS relay)."""
-        topics = TopicFilter.parse(self.topics_glob, None) if self.topics_glob else None
+    def make_endpoint(
+        self, bus: Bus, namespace: str | None = None, node: str = topics.BRIDGE_NODE
+    ) -> RosbridgeEndpoint:  # not bridge.…: the field `bridge` hides it
+        """The rosbridge endpoint of either transport (the embedded bus or the DDS relay). A client's
+        relative names resolve under ``namespace`` (the bridge node's; default --namespace), ``~``
+        under ``node``, as rosbridge_suite's node resolves them."""
+        ns = self.namespace if namespace is None else namespace
+
+        def resolve(name: str, what: str) -> str:
+            return topics.resolve(name, ns, what=what, node=node)
+
+        expose = TopicFilter.parse(self.topics_glob, None) if self.topics_glob else None
         services = TopicFilter.parse(self.services_glob, None) if self.services_glob else None
         params = TopicFilter.parse(self.params_glob, None) if self.params_glob else None
         param_ok = params.wants if params else lambda name: True
@@ -83,9 +92,10 @@ class BackendConfig:
         if graph is not None:  # rosapi from the live graph where there is one (ROS mode)
             rosapi_services = rosapi.handlers(
                 graph,
-                topic_ok=topics.wants if topics else lambda name: True,
+                topic_ok=expose.wants if expose else lambda name: True,
                 service_ok=services.wants if services else lambda name: True,
                 param_ok=param_ok,
+                resolve=resolve,
             )
         return bridge.RosbridgeEndpoint(
             bus,
@@ -94,9 +104,11 @@ class BackendConfig:
             paced_wait=self.paced_wait or None,
             max_frame=self.max_frame,
             services=rosapi_services,
-            expose_topics=topics,
+            expose_topics=expose,
             expose_services=services,
             expose_actions=TopicFilter.parse(self.actions_glob, None) if self.actions_glob else None,
+            namespace=ns,
+            node=node,
         )
 
     def make_topic_watch(self) -> TopicWatch:

@@ -6,6 +6,7 @@ with ``ros.convert``, so each message is defined once for both transports.
 
 from __future__ import annotations
 
+import functools
 import re
 from typing import Any
 
@@ -15,6 +16,7 @@ STAMPED = "stamped_cmd_vel"
 MEASURED = "cmd_vel_measured"
 REPORT = "latency_report"
 ODOM = "odom"
+BRIDGE_NODE = "arbiter_bridge"  # the backend's rosbridge node: a client's ``~`` names resolve under it
 
 TYPE_STRING = "std_msgs/msg/String"
 TYPE_TWIST = "geometry_msgs/msg/Twist"
@@ -37,6 +39,12 @@ def is_command(topic: str, type_name: str) -> bool:
 
 def absolute(name: str) -> str:
     return name if name.startswith("/") else "/" + name
+
+
+def is_hidden(name: str) -> bool:
+    """A hidden topic or service (rclpy's ``topic_or_service_is_hidden``): a part starts with ``_``,
+    as an action's ``/fibonacci/_action/status`` does; ``ros2 topic list`` and rosapi leave them out."""
+    return any(part.startswith("_") for part in name.split("/"))
 
 
 def stamp(ns: int) -> dict[str, int]:
@@ -90,12 +98,40 @@ def namespace(text: str | None) -> str:
     return ns
 
 
-def resolve(name: str, ns: str = "", what: str = "topic") -> str:
-    """A topic name resolved the ROS way: absolute names as given, relative ones under ``ns``.
-    (``~`` private names are the node's business, not a client's: refused.)"""
-    if name.startswith("~"):
+_SUBSTITUTION = re.compile(r"\{([^{}]*)\}")
+
+
+@functools.lru_cache(maxsize=4096)  # on every frame a client sends: a name resolves once
+def resolve(name: str, ns: str = "", what: str = "topic", node: str | None = None) -> str:
+    """A topic, service, action or node name resolved the ROS way, as rcl's ``rcl_expand_topic_name``
+    does it for a node ``node`` in namespace ``ns`` (what rosbridge_suite's node does with every name a
+    client gives it): absolute names as given; relative ones under ``ns`` (``odom`` in ``/robot1``:
+    ``/robot1/odom``; in the root: ``/odom``); ``~`` is the node's own name (``~/x``: ``/ns/node/x``);
+    ``{node}``, ``{ns}`` and ``{namespace}`` are substituted. Without ``node`` (a command-line flag, not a
+    node's name) a ``~`` or ``{node}`` name is refused. TopicNameError says why a name is not one."""
+    if not name:
+        raise TopicNameError(f"a {what} name cannot be empty")
+    if "~" in name[1:]:
+        raise TopicNameError(f"{what} {name!r}: '~' may only be the first character")
+    if name.startswith("~") and node is None:
         raise TopicNameError(f"{what} {name!r}: a private (~) name belongs to a node; give the full name")
-    _check_tokens(name, what)
-    if not name.strip("/"):
-        raise TopicNameError("a topic name cannot be empty")
-    return name if name.startswith("/") else f"{ns}/{name}"
+    root = ns.rstrip("/")
+    values = {"ns": root or "/", "namespace": root or "/"}
+    if node is not None:
+        values["node"] = node
+
+    def substitute(m: re.Match[str]) -> str:
+        key = m.group(1)
+        if key not in values:
+            raise TopicNameError(f"{what} {name!r}: unknown substitution {{{key}}}")
+        return values[key]
+
+    expanded = _SUBSTITUTION.sub(substitute, name)
+    if expanded.startswith("~"):
+        expanded = f"{root}/{node}{expanded[1:]}"
+    elif not expanded.startswith("/"):
+        expanded = f"{root}/{expanded}"
+    _check_tokens(expanded, what)
+    if not expanded.strip("/"):
+        raise TopicNameError(f"a {what} name cannot be empty")
+    return expanded

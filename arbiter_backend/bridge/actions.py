@@ -33,7 +33,7 @@ class ActionRoom:
     def __init__(self, interfaces: Any, exposure: Exposure) -> None:
         self.interfaces = interfaces  # ROS mode: ros.interfaces.RosInterfaces; None on the embedded bus
         self.exposure = exposure
-        self.provided: Providers[ProvidedAction] = Providers("action")
+        self.provided: Providers[ProvidedAction] = Providers("action", exposure.name)
 
     # -- goals clients send ----------------------------------------------------------------------------
     def send_action_goal(self, client: Client, frame: Frame) -> None:
@@ -128,7 +128,7 @@ class ActionRoom:
             self._goal_ended(client, action, req_id, status, values, True)
 
     def cancel_action_goal(self, client: Client, frame: Frame) -> None:
-        frames.name(frame, "action")
+        self.exposure.name(frame, "action")
         if "id" not in frame:
             raise BadFrame("missing field 'id' (the id of the goal to cancel)")
         req_id = frame["id"]
@@ -147,7 +147,7 @@ class ActionRoom:
     def advertise_action(self, client: Client, frame: Frame) -> None:
         name = self.exposure.action(frame)
         type_name = frames.interface_type(frame, "type", "action", self.interfaces)
-        act = ProvidedAction(name, type_name, client, type_given=frame["type"])
+        act = ProvidedAction(name, type_name, client, type_given=frame["type"], given=frame["action"])
         if self.interfaces is not None:
             act.withdraw = self.interfaces.advertise_action(name, type_name, act.start, act.cancel)
         self.provided.install(client, frame, act)

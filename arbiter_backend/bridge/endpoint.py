@@ -30,7 +30,7 @@ from .actions import ActionRoom
 from .client import CLIENT_QUEUE, Client
 from .encoding import Encoder
 from .exposure import Exposure
-from .frames import DECODER, MAX_FRAME_BYTES, TRANSPORT_MAX_FRAME, BadFrame
+from .frames import BRIDGE_NODE_NAME, DECODER, MAX_FRAME_BYTES, TRANSPORT_MAX_FRAME, BadFrame
 from .services import ServiceRoom
 from .session import SessionRoom
 from .topics import TopicRoom
@@ -56,6 +56,8 @@ class RosbridgeEndpoint:
         heartbeat: float | None = WS_PING_S,
         token: str | None = None,
         paced_wait: float | None = pacing.WAIT_S,
+        namespace: str = "",
+        node: str = BRIDGE_NODE_NAME,
     ) -> None:
         self.bus = bus
         self.paced_wait = paced_wait  # seconds a slow client's big frame may hold a small one (pacing)
@@ -65,13 +67,15 @@ class RosbridgeEndpoint:
         self.clients: set[Client] = set()
         self.errors = 0
         # what a client may reach (rosbridge_server's topics_glob / services_glob); None: everything
-        exposure = Exposure(expose_topics, expose_services, expose_actions)
-        # the endpoint's own services (rosapi), by name
-        self.services = rosapi.bus_handlers(bus, exposure.topic_ok)
-        self.services.update(services or {})
+        # and where its relative names resolve: under the bridge node's namespace, as rosbridge's node
+        exposure = Exposure(expose_topics, expose_services, expose_actions, namespace, node)
         # ROS mode: the rest of the graph (rosapi, any service), and rclpy servers for what clients
         # provide and an action client for the goals they send (ros/graph.py, ros/interfaces.py)
         graph: rosapi.Graph | None = getattr(bus, "graph", None)
+        # the endpoint's own services (rosapi), by name
+        distro = graph.distro() if graph is not None else ""
+        self.services = rosapi.bus_handlers(bus, exposure.topic_ok, exposure.resolve, distro)
+        self.services.update(services or {})
         interfaces: Any = getattr(bus, "interfaces", None)
         self.topic_room = TopicRoom(bus, exposure, Encoder(bus), self.clients, client_queue)
         self.service_room = ServiceRoom(graph, interfaces, exposure, self.services)

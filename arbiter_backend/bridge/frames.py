@@ -10,11 +10,13 @@ import json
 import re
 from typing import Any, Literal, TypeVar, overload
 
+from arbiter_core import topics
+
 from .. import jsonframe
 
 MAX_FRAME_BYTES = 1024 * 1024  # answered with a status error above this
 TRANSPORT_MAX_FRAME = 16 * 1024 * 1024  # aiohttp closes the socket (1009) above this
-TOPIC_NAME = re.compile(r"(?:/[A-Za-z_][A-Za-z0-9_]*)+", re.ASCII)  # a fully qualified ROS 2 name
+BRIDGE_NODE_NAME = topics.BRIDGE_NODE  # the bridge's node (ROS mode); ``~`` names resolve under it
 INTERFACE_TYPE = re.compile(r"([A-Za-z][A-Za-z0-9_]*)/(?:(srv|action)/)?([A-Za-z][A-Za-z0-9_]*)", re.ASCII)
 
 Frame = dict[str, Any]
@@ -57,19 +59,17 @@ def field(frame: Frame, name: str, kind: type | tuple[type, ...], required: bool
     return value
 
 
-def name(frame: Frame, key: str = "topic") -> str:
-    """A topic, service or action name (``key``), fully qualified (a leading / added)."""
+def name(frame: Frame, key: str = "topic", ns: str = "", node: str = BRIDGE_NODE_NAME) -> str:
+    """A topic, service or action name (``key``) resolved as rosbridge_suite's node resolves it (rclpy:
+    relative names under the bridge node's namespace ``ns``, ``~`` its own name ``node``), with
+    ``arbiter_core.topics.resolve``: the one resolver."""
     given = field(frame, key, str)
     if not given or len(given) > 256:
         raise BadFrame(f"{key} must be a non-empty string of at most 256 characters")
-    given = given if given.startswith("/") else "/" + given
-    if not TOPIC_NAME.fullmatch(given):
-        shown = json.dumps(given[:60])
-        raise BadFrame(
-            f"invalid {key} name {shown}: tokens of letters, digits and _ separated by /, "
-            "none starting with a digit"
-        )
-    return given
+    try:
+        return topics.resolve(given, ns, what=key, node=node)
+    except topics.TopicNameError as exc:
+        raise BadFrame(f"invalid {key} name {json.dumps(given[:60])}: {exc}") from None
 
 
 def interface_type(frame: Frame, key: str, kind: str, interfaces: Any) -> str:

@@ -37,8 +37,9 @@ P = TypeVar("P", bound=Provision)
 
 
 class Providers(Generic[P]):
-    def __init__(self, kind: str) -> None:
+    def __init__(self, kind: str, name: Callable[[Frame, str], str] = frames.name) -> None:
         self.kind = kind  # "service" or "action": the frames' key for the name
+        self.name = name  # the frame's name resolved (``Exposure.name``)
         self.noun = kind.capitalize()
         self.by_name: dict[str, P] = {}
 
@@ -73,7 +74,7 @@ class Providers(Generic[P]):
 
     def owned(self, client: Client, frame: Frame) -> P:
         """What the frame names (its ``service`` or ``action``), if ``client`` provides it."""
-        name = frames.name(frame, self.kind)
+        name = self.name(frame, self.kind)
         entry = self.by_name.get(name)
         if entry is None or entry.provider is not client:
             raise BadFrame(f"{self.kind} {name} is not advertised by this client")

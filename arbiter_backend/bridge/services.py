@@ -50,16 +50,22 @@ class ServiceRoom:
         self.interfaces = interfaces  # ROS mode: ros.interfaces.RosInterfaces; None on the embedded bus
         self.exposure = exposure
         self.own = own  # the endpoint's own services (rosapi), by name
-        self.provided: Providers[ProvidedService] = Providers("service")
+        self.provided: Providers[ProvidedService] = Providers("service", exposure.name)
 
     # -- calls ---------------------------------------------------------------------------------------
     def call_service(self, client: Client, frame: Frame) -> None:
         client.room_for_call()
-        service = frames.field(frame, "service", str)
+        given = frames.field(frame, "service", str)
         req_id = frame.get("id")
-        reply: dict[str, Any] = {"op": "service_response", "service": service}
+        reply: dict[str, Any] = {"op": "service_response", "service": given}  # the name as given, as stock
         if req_id is not None:
             reply["id"] = req_id
+        try:  # relative names under the bridge's namespace: rosapi/topics is /rosapi/topics in the root
+            service = self.exposure.name(frame, "service")
+        except BadFrame as exc:
+            reply.update(result=False, values=str(exc))
+            client.send(dumps(reply))
+            return
         if not service.startswith("/rosapi/") and not self.exposure.service_ok(service):
             reply.update(
                 result=False, values=f"Service {service} is not exposed by this server (--services-glob)"
@@ -140,13 +146,13 @@ class ServiceRoom:
 
     # -- services clients provide --------------------------------------------------------------------
     def advertise_service(self, client: Client, frame: Frame) -> None:
-        name = frames.name(frame, "service")
+        name = self.exposure.name(frame, "service")
         if name.startswith("/rosapi/") or name in self.own:
             raise BadFrame(f"service {name} is the server's own")
         if not self.exposure.service_ok(name):
             raise BadFrame(f"service {name} is not exposed by this server (--services-glob)")
         type_name = frames.interface_type(frame, "type", "srv", self.interfaces)
-        svc = ProvidedService(name, type_name, client)
+        svc = ProvidedService(name, type_name, client, given=frame["service"])
         if self.interfaces is not None:  # on the graph first: if that fails, the old provider stays
             svc.withdraw = self.interfaces.advertise_service(name, type_name, svc.call)
         self.provided.install(client, frame, svc)

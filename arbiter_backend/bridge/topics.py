@@ -4,8 +4,9 @@ to each subscription's outbox.
 
 Several subscriptions of one client to one topic (requests with several ids) are merged, as rosbridge
 does: the smallest ``throttle_rate`` and ``queue_length``, the strongest ``compression``, the smallest
-``fragment_size``. Topic names must be fully qualified ROS 2 names; ``throttle_rate`` ≤ 1 h,
-``queue_length`` ≤ 10⁶.
+``fragment_size``. A topic name is resolved as rosbridge's node resolves it (``exposure.py``: ``odom``
+under the bridge's namespace); a subscription is kept under the name as the client gave it, which its
+frames carry back. ``throttle_rate`` ≤ 1 h, ``queue_length`` ≤ 10⁶.
 """
 
 from __future__ import annotations
@@ -34,7 +35,8 @@ MAX_QUEUE_LENGTH = 1_000_000
 class Subscription:
     """One client's subscription to one topic (requests with several ids are merged, as rosbridge does)."""
 
-    topic: str
+    topic: str  # resolved: /odom
+    name: str  # as the client gave it (odom): the key of its subscriptions, and its frames' topic
     # id -> (throttle_ms, queue_length, compression, fragment_size or 0)
     requests: dict[Any, tuple[int, int, str, int]] = field(default_factory=dict)
     type_name: str | None = None
@@ -97,7 +99,7 @@ class TopicRoom:
             client.advertised[topic] = self.bus.advertise(topic, type_name, latch=latch)
 
     def unadvertise(self, client: Client, frame: Frame) -> None:
-        topic = frames.name(frame)
+        topic = self.exposure.name(frame)
         if client.advertised.pop(topic, None) is not None:
             self.bus.unadvertise(topic)
 
@@ -133,10 +135,13 @@ class TopicRoom:
             self.bus.declare(topic, type_name)
         elif self.bus.type_of(topic) is None:
             raise BadFrame(f"cannot subscribe to {topic}: type unknown; give 'type'")
-        sub = client.subs.get(topic)
+        # keyed by the name as given, which its frames carry back (rosbridge's: a client that subscribes
+        # "odom" gets frames of "odom", and roslibpy and roslibjs dispatch them by that name)
+        name = frames.field(frame, "topic", str)
+        sub = client.subs.get(name)
         if sub is None:
-            sub = Subscription(topic)
-            client.subs[topic] = sub
+            sub = Subscription(topic, name)
+            client.subs[name] = sub
             sub.unsubscribe = self.bus.subscribe(topic, partial(self._deliver, client, sub))
         sub.requests[frame.get("id", f"_anon{len(sub.requests)}")] = (
             throttle,
@@ -145,10 +150,11 @@ class TopicRoom:
             fragment_size,
         )
         sub.type_name = self.bus.type_of(topic)
-        client.outbox(topic, sub.outbox_limit)
+        client.outbox(name, sub.outbox_limit)
 
     def unsubscribe(self, client: Client, frame: Frame) -> None:
-        topic = frames.name(frame)
+        self.exposure.name(frame)  # a valid name
+        topic = frames.field(frame, "topic", str)  # as given when subscribing (the subscription's key)
         sub = client.subs.get(topic)
         if sub is None:
             return
@@ -185,17 +191,17 @@ class TopicRoom:
             self.encoder.forget(topic)
 
     def _deliver(self, client: Client, sub: Subscription, msg: dict[str, Any]) -> None:
-        if client.subs.get(sub.topic) is not sub:
+        if client.subs.get(sub.name) is not sub:
             return  # unsubscribed while the bus was fanning this message out: no outbox to refill
-        frame = self.encoder.encode(sub.topic, sub.compression, sub.type_name, msg, sub.fragment_size)
+        frame = self.encoder.encode(sub.name, sub.compression, sub.type_name, msg, sub.fragment_size)
         throttle = sub.throttle_s
         if throttle <= 0:
-            client.enqueue(sub.topic, frame)
+            client.enqueue(sub.name, frame)
             return
         now = time.monotonic()
         if now - sub.last_sent >= throttle and not sub.pending:
             sub.last_sent = now
-            client.enqueue(sub.topic, frame)
+            client.enqueue(sub.name, frame)
             return
         qlen = sub.queue_length
         if qlen <= 0:
@@ -212,6 +218,6 @@ class TopicRoom:
         if client.closed or not sub.pending:
             return
         sub.last_sent = time.monotonic()
-        client.enqueue(sub.topic, sub.pending.popleft())
+        client.enqueue(sub.name, sub.pending.popleft())
         if sub.pending:
             sub.timer = asyncio.get_running_loop().call_later(sub.throttle_s, self._flush, client, sub)

@@ -20,6 +20,8 @@ from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 
+from arbiter_core import topics
+
 from .. import bridge
 from ..server import BackendConfig, Servers
 from . import topicwatch
@@ -31,7 +33,7 @@ from .spin import spin_in_thread
 
 log = logging.getLogger(__name__)
 
-BRIDGE_NODE_NAME = "arbiter_bridge"
+BRIDGE_NODE_NAME = topics.BRIDGE_NODE
 
 
 def _init(context: Context, args: list[str]) -> None:
@@ -64,7 +66,8 @@ class RosBackend(Servers):
             self.sim_enabled = config.sim
             self.bridge_node: Node | None = None
             if config.bridge:
-                self.bridge_node = Node(BRIDGE_NODE_NAME, context=self.context)
+                # under --namespace as the other nodes: a client's relative names resolve there
+                self.bridge_node = Node(BRIDGE_NODE_NAME, namespace=config.namespace, context=self.context)
                 port = int(self.bridge_node.declare_parameter("port", config.bridge_port).value)
                 self.config.bridge_port = port
                 self.nodes.append(self.bridge_node)
@@ -94,7 +97,9 @@ class RosBackend(Servers):
             self.tracker_node.local_report = self.bus.deliver_local
             stamped = self.tracker_node.stamped_sub.topic_name
             self.bus.local_handlers[stamped] = self.tracker_node.on_local_command
-            self.endpoint = self.config.make_endpoint(self.bus)
+            # names resolve as rclpy resolves them for the bridge node (remaps of __ns, __node included)
+            node = self.bridge_node
+            self.endpoint = self.config.make_endpoint(self.bus, node.get_namespace(), node.get_name())
             self._watch = asyncio.create_task(self.bus.watch_publishers())  # QoS follows the publishers
         autonomy = self.autonomy_node.service if self.autonomy_node is not None else None
         await self.start_servers(self.endpoint, self.tracker, self.topics, autonomy)

@@ -4,7 +4,8 @@ A message class says what it holds: ``get_fields_and_field_types()`` names the
 fields and ``SLOT_TYPES`` gives each one's rosidl type (basic, string, nested
 message, array, bounded or unbounded sequence). Both directions walk those, so
 there is no table per type. The conventions are rosbridge's: missing fields keep
-their defaults, unknown fields are errors, ints are accepted for floats,
+their defaults, unknown fields are errors, ints are accepted for floats (not floats for ints), a
+Time takes ROS 1's ``secs``/``nsecs`` or ``"now"``, a Header given without a stamp is stamped now,
 ``uint8[]``/``char[]``/``byte[]`` travel as base64 strings (lists of ints are
 accepted on the way in), non-finite floats leave as ``null`` (JSON has no NaN).
 ``to_cbor`` gives rosbridge's CBOR form (``cborenc``).
@@ -18,12 +19,15 @@ import importlib
 import math
 import os
 import sys
+import time
 from functools import lru_cache
 from typing import Any
 
 from rosidl_parser import definition as rd
 
+from arbiter_core import msgtypes
 from arbiter_core.msgtypes import MessageError, normalize_type
+from arbiter_core.topics import stamp
 
 from .. import cborenc
 from ..jsonframe import Base64Text
@@ -125,6 +129,14 @@ def _nested_class(t: rd.NamespacedType) -> type[Any]:
     return message_class("/".join([*t.namespaces, t.name]))
 
 
+@lru_cache(maxsize=1)
+def _header_class() -> type[Any] | None:
+    try:
+        return message_class("std_msgs/msg/Header")
+    except MessageError:
+        return None
+
+
 def _share_dir(pkg: str) -> str:
     """A package's share directory: from the ament index (a sourced ROS 2), else beside this Python's
     prefix (the PyPI wheels install ``share/<pkg>`` there and set no AMENT_PREFIX_PATH)."""
@@ -168,18 +180,63 @@ def typedef_text(type_name: str) -> str:
 
 
 # -- JSON -> ROS ----------------------------------------------------------------------------------
+def _time_of(t: Any) -> str | None:
+    """``Time`` or ``Duration`` for a ``builtin_interfaces`` time field, else None."""
+    if isinstance(t, rd.NamespacedType) and list(t.namespaces)[:1] == ["builtin_interfaces"]:
+        return t.name if t.name in ("Time", "Duration") else None
+    return None
+
+
+@lru_cache(maxsize=256)
+def _layout(cls: type[Any]) -> tuple[str | None, dict[str, Any], dict[str, str]]:
+    """What ``to_ros`` needs of a class, once: ``Time``/``Duration``/``Header`` for those (else None),
+    its fields' rosidl types by name, and which fields are a Time or Duration."""
+    special = None
+    if cls.__module__.startswith("builtin_interfaces.") and cls.__name__ in ("Time", "Duration"):
+        special = cls.__name__
+    elif cls is _header_class():
+        special = "Header"
+    fields = dict(_fields(cls))  # type: ignore[arg-type]  # a class hashes: python/mypy#11470
+    times = {name: kind for name, t in fields.items() if (kind := _time_of(t)) is not None}
+    return special, fields, times
+
+
+def _time(kind: str, value: Any, inst: Any, path: str, now_base: bool = False) -> Any:
+    """``inst`` (a ``builtin_interfaces`` Time or Duration) set from rosbridge JSON
+    (``msgtypes.time_fields``: ROS 1's ``secs``/``nsecs`` too, a Time may be ``"now"``); a field not
+    given keeps ``inst``'s value, or now's where ``now_base`` (a Header's stamp, as rosbridge)."""
+    given = msgtypes.time_fields(value, path, now_ok=kind == "Time")
+    if given is None:
+        given = stamp(time.time_ns())
+    elif now_base and len(given) < 2:
+        given = {**stamp(time.time_ns()), **given}
+    for field, typename in (("sec", "int32"), ("nanosec", "uint32")):
+        if field in given:
+            setattr(inst, field, _basic(typename, given[field], f"{path}.{field}"))
+    return inst
+
+
 def to_ros(cls: type, data: Any, path: str = "msg", depth: int = 0) -> Any:
-    """Build an instance of ``cls`` from rosbridge JSON; MessageError naming the field on any mismatch."""
+    """Build an instance of ``cls`` from rosbridge JSON; MessageError naming the field on any mismatch.
+    As rosbridge: a ``std_msgs/Header`` given without a stamp is stamped now."""
     if depth > MAX_DEPTH:
         raise MessageError(f"{path}: nested too deeply")
+    special, fields, times = _layout(cls)
+    if special in ("Time", "Duration"):
+        return _time(cls.__name__, data, cls(), path)  # a Time or Duration published as it is
     if not isinstance(data, dict):
         raise MessageError(f"{path} must be an object, got {_kind(data)}")
     msg = cls()
-    fields = dict(_fields(cls))
+    if special == "Header" and "stamp" not in data:
+        _time("Time", "now", msg.stamp, path)
     for key, value in data.items():
         slot = fields.get(key)
         if slot is None:
             raise MessageError(f"{path} has unknown field {str(key)[:40]!r}")
+        kind = times.get(key)
+        if kind is not None:  # set in place on the default instance
+            _time(kind, value, getattr(msg, key), f"{path}.{key}", now_base=special == "Header")
+            continue
         converted = _to_ros_value(slot, value, f"{path}.{key}", depth)
         try:
             setattr(msg, key, converted)
@@ -196,6 +253,9 @@ def _to_ros_value(t: Any, value: Any, path: str, depth: int) -> Any:
             raise MessageError(f"{path} must be a string, got {_kind(value)}")
         return value
     if isinstance(t, rd.NamespacedType):
+        kind = _time_of(t)
+        if kind is not None:
+            return _time(kind, value, _nested_class(t)(), path)
         return to_ros(_nested_class(t), value, path, depth + 1)
     if isinstance(t, rd.AbstractNestedType):
         elem = t.value_type
@@ -233,10 +293,8 @@ def _basic(typename: str, value: Any, path: str) -> Any:
         if not math.isfinite(f):
             raise MessageError(f"{path} must be finite")
         return f
-    if isinstance(value, float):
-        if not value.is_integer():
-            raise MessageError(f"{path} must be an integer, got {value!r}")
-        value = int(value)
+    if isinstance(value, float):  # as rosbridge and the embedded transport: 2.0 is not an integer
+        raise MessageError(f"{path} must be an integer, got {value!r}")
     lo, hi = _INT_RANGES.get(typename, (-(2**63), 2**64 - 1))
     if not lo <= value <= hi:
         raise MessageError(f"{path} is out of range for {typename}")

@@ -5,15 +5,33 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import functools
 from collections.abc import Callable
+from importlib import metadata
 from typing import Any
 
 from rclpy.node import Node
 
 from arbiter_core.msgtypes import MessageError
 
+from . import typedefs
 from .convert import service_class, to_json, to_ros, typedef_text
 from .futures import on_loop
+
+# rclpy's major version -> its ROS 2 distribution (get_ros_version where ROS_DISTRO is not set, as with
+# the PyPI wheels, which set no environment)
+RCLPY_DISTROS = {3: "humble", 4: "iron", 7: "jazzy", 9: "kilted", 10: "rolling"}
+
+
+@functools.lru_cache(maxsize=1)
+def rclpy_distro() -> str:
+    """The distribution of the installed rclpy, by its version; "" when it cannot be told."""
+    for dist in ("rclpy", "ros-rclpy"):
+        try:
+            return RCLPY_DISTROS.get(int(metadata.version(dist).split(".")[0]), "")
+        except (metadata.PackageNotFoundError, ValueError):
+            continue
+    return ""
 
 
 def _full(name: str, namespace: str) -> str:
@@ -49,12 +67,35 @@ class RosGraph:
             [s for s, _ in self.node.get_service_names_and_types_by_node(name, ns)],
         )
 
+    def node_services(self, node: str) -> list[tuple[str, list[str]]]:
+        ns, _, name = node.rpartition("/")
+        try:
+            found = self.node.get_service_names_and_types_by_node(name, ns or "/")
+        except Exception:  # rclpy's NodeNameNonExistentError: the node left since it was listed
+            return []
+        return [(service, list(types)) for service, types in found]
+
     def service_names_and_types(self) -> list[tuple[str, list[str]]]:
         return [(name, list(types)) for name, types in self.node.get_service_names_and_types()]
+
+    def topic_names(self) -> list[str]:
+        return [name for name, _types in self.node.get_topic_names_and_types()]
 
     @staticmethod
     def typedef_text(type_name: str) -> str:
         return typedef_text(type_name)
+
+    @staticmethod
+    def message_typedefs(type_name: str) -> list[dict[str, Any]]:
+        return typedefs.message_typedefs(type_name)
+
+    @staticmethod
+    def service_typedefs(type_name: str, part: str) -> list[dict[str, Any]]:
+        return typedefs.service_typedefs(type_name, part)
+
+    @staticmethod
+    def distro() -> str:
+        return rclpy_distro()
 
     async def call_service(self, service: str, args: Any) -> dict[str, Any]:  # asyncio loop
         """Call ``service`` (any on the graph; its type from the graph) with rosbridge ``args`` (an object

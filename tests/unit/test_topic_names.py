@@ -33,7 +33,7 @@ def test_bad_namespaces(bad):
         namespace(bad)
 
 
-@pytest.mark.parametrize("bad", ["", "/", "~/odom", "odom/", "a//b", "odom.x"])
+@pytest.mark.parametrize("bad", ["", "/", "~/odom", "odom/", "a//b", "odom.x", "{foo}/x"])
 def test_bad_topic_names(bad):
     with pytest.raises(TopicNameError) as err:
         resolve(bad, "/robot1", what="odom-topic")
@@ -54,3 +54,45 @@ def test_bad_topic_names(bad):
 )
 def test_velocity_commands_are_known_by_name_or_type(topic, type_name, command):
     assert is_command(topic, type_name) is command
+
+
+# -- the names a rosbridge client gives: rosbridge_suite's node hands each to rclpy, which expands it with
+# rcl_expand_topic_name for the node's name and namespace; ours must give the same name or refuse it
+CLIENT_NAMES = [
+    "odom", "/odom", "rosapi/topics", "/rosapi/topics", "diff_drive_controller/odom", "~", "~/x",
+    "~x", "{node}/x", "{ns}/x", "{namespace}/x", "x{node}", "_hidden/x", "a__b", "a/_b",
+    # refused by both
+    "", "/", "a/", "1a", "/a/1b", "a-b", "a/~", "{foo}", "a//b", "/a//b", "a b", "{node",
+]  # fmt: skip
+
+
+def rclpy_resolves(name: str, node: str, ns: str) -> str | None:
+    """What a node ``node`` in ``ns`` (rclpy's form: ``/`` for the root) makes of ``name`` when it
+    creates a publisher, service or action (expanded, then validated as a full name); None: refused."""
+    expand = pytest.importorskip("rclpy.expand_topic_name").expand_topic_name
+    from rclpy.validate_full_topic_name import validate_full_topic_name
+
+    try:
+        full = expand(name, node, ns)
+        validate_full_topic_name(full)
+    except Exception:
+        return None
+    return str(full)
+
+
+@pytest.mark.parametrize("ns", ["", "/robot1", "/fleet/robot_2"])
+@pytest.mark.parametrize("name", CLIENT_NAMES)
+def test_a_clients_name_resolves_as_rclpy_resolves_it_for_the_bridge_node(name, ns):
+    expected = rclpy_resolves(name, "arbiter_bridge", ns or "/")
+    if expected is None:
+        with pytest.raises(TopicNameError) as err:
+            resolve(name, ns, node="arbiter_bridge")
+        assert "\n" not in str(err.value)
+    else:
+        assert resolve(name, ns, node="arbiter_bridge") == expected
+
+
+@pytest.mark.parametrize("name", ["~", "~/x", "{node}/x"])
+def test_without_a_node_a_private_name_is_refused(name):
+    with pytest.raises(TopicNameError, match="node"):
+        resolve(name, "/robot1")
