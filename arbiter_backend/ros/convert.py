@@ -271,10 +271,7 @@ def _to_ros_value(t: Any, value: Any, path: str, depth: int) -> Any:
             raise MessageError(f"{path} must have exactly {t.size} elements, got {len(value)}")
         if isinstance(t, rd.BoundedSequence) and len(value) > t.maximum_size:
             raise MessageError(f"{path} may have at most {t.maximum_size} elements, got {len(value)}")
-        out = [_to_ros_value(elem, v, f"{path}[{i}]", depth + 1) for i, v in enumerate(value)]
-        if isinstance(elem, rd.BasicType) and elem.typename == "octet":
-            return [bytes([b]) for b in out]
-        return out
+        return [_to_ros_value(elem, v, f"{path}[{i}]", depth + 1) for i, v in enumerate(value)]
     raise MessageError(f"{path}: unsupported field type {type(t).__name__}")
 
 
@@ -298,7 +295,9 @@ def _basic(typename: str, value: Any, path: str) -> Any:
     lo, hi = _INT_RANGES.get(typename, (-(2**63), 2**64 - 1))
     if not lo <= value <= hi:
         raise MessageError(f"{path} is out of range for {typename}")
-    return value
+    # rclpy holds an octet as one byte; given an int its setter keeps something else (7 reached a
+    # subscriber as 223), with no error
+    return bytes([value]) if typename == "octet" else value
 
 
 # -- ROS -> JSON ----------------------------------------------------------------------------------
