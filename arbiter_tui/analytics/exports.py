@@ -293,7 +293,8 @@ class McapChannels:
 
     def flush(self) -> None:
         """The chunk in progress ends and goes to the stream, and the stream is flushed (not synced)."""
-        self.writer._writer.flush()  # mcap_ros2's Writer wraps mcap's, whose flush() is public (mcap>=1.2)
+        # mcap_ros2's Writer wraps mcap's, whose flush() is public (mcap>=1.2) but not annotated
+        self.writer._writer.flush()  # type: ignore[no-untyped-call]
 
     def finish(self) -> None:
         """The summary and the footer: the file is complete."""
@@ -570,11 +571,10 @@ def recover_journal(data: bytes) -> tuple[list[tuple[str, Any]], str] | None:
                 channel = channels.get(record.channel_id)
                 if channel is None or channel.topic not in _READ_TOPICS:
                     continue
-                decoder = decoders.get(record.channel_id)
-                if decoder is None:
-                    decoder = factory.decoder_for(channel.message_encoding, schemas[channel.schema_id])
-                    decoders[record.channel_id] = decoder
-                out.append((channel.topic, decoder(record.data)))
+                if record.channel_id not in decoders:
+                    schema = schemas[channel.schema_id]
+                    decoders[record.channel_id] = factory.decoder_for(channel.message_encoding, schema)
+                out.append((channel.topic, decoders[record.channel_id](record.data)))
     except Exception:  # where the file stops: inside a record, a chunk cut short
         pass
     if not journal:

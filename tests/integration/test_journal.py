@@ -155,7 +155,8 @@ def test_a_killed_or_hung_up_console_loses_nothing_and_the_next_start_offers_it(
 # -- the journal alone ---------------------------------------------------------------------------------
 def _point(i: int, run: int | None) -> DataPoint:
     x, y, e_d = 0.05 * i, 0.01 * i * i, 0.02 * (i % 7)
-    return DataPoint(1.8e12 + 100 * i, x, y, 0.1, 0.5, 0.2, e_d, 0.01, "pure_pursuit", 12.0 + i % 3, run, i == 25)
+    latency = 12.0 + i % 3
+    return DataPoint(1.8e12 + 100 * i, x, y, 0.1, 0.5, 0.2, e_d, 0.01, "pure_pursuit", latency, run, i == 25)
 
 
 def test_a_journal_cut_anywhere_reads_up_to_its_last_whole_chunk(tmp_path):
