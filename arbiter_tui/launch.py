@@ -209,7 +209,9 @@ def build_parser() -> argparse.ArgumentParser:
         "--key-timeout",
         type=bounded_float(*KEY_TIMEOUT_S, "s"),
         default=D.key_timeout,
-        help=f"stop this long after the last key, s ({KEY_TIMEOUT_S[0]:g}-{KEY_TIMEOUT_S[1]:g}; "
+        help=f"the longest a held key moves the robot after its last repeat arrived, s: a fresh press holds "
+        f"this long, a repeating key twice the longest gap between its recent repeats, at least 0.15 s "
+        f"or this (docs/drive.md, 'Over a jittery link'; {KEY_TIMEOUT_S[0]:g}-{KEY_TIMEOUT_S[1]:g}; "
         f"{D.key_timeout:g})",
     )
     p.add_argument(

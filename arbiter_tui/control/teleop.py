@@ -128,7 +128,8 @@ class Teleop:
         """How long a steady hold outlasts its last repeat: from the gaps seen lately."""
         if not self.gaps:
             return self.key_timeout
-        return bounded(GRACE_GAPS * max(self.gaps), MIN_GRACE_S, max(MIN_GRACE_S, self.key_timeout))
+        ceiling = self.key_timeout  # the user's: never more, even where it is under MIN_GRACE_S
+        return bounded(GRACE_GAPS * max(self.gaps), min(MIN_GRACE_S, ceiling), ceiling)
 
     def press(self, key: str, now: float) -> str | None:
         """Handle one key; returns "move", "scale", "stop" or None (not a teleop key)."""
