@@ -146,7 +146,7 @@ class Journal:
                 self._channels.metadata(JOURNAL_END_METADATA, {"ended": ended})
                 self._channels.finish()
                 self._sync()
-            except (OSError, ValueError) as exc:
+            except Exception as exc:  # the file stays as it is: read up to its last chunk
                 log.warning("journal: could not finish %s: %s", self.path, exc)
             self._shut()
 
@@ -179,8 +179,10 @@ class Journal:
                 try:
                     self._step()
                     self._sync()
-                except OSError as exc:
-                    why = exc.strerror or exc
+                except Exception as exc:  # a full disk (OSError), or anything else: said, never raised
+                    if not isinstance(exc, OSError):
+                        log.exception("journal: a step failed")
+                    why = exc.strerror if isinstance(exc, OSError) and exc.strerror else exc
                     self._fail(f"journal stopped ({why}): {self.path}; export to keep the rest")
                     self._shut()
                     return

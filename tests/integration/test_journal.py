@@ -224,3 +224,33 @@ def test_a_clear_starts_a_new_file_and_an_unwritable_directory_is_one_line(tmp_p
     wait_for(lambda: said, timeout=5)
     journal.close()
     assert len(said) == 1 and said[0].startswith("no journal this session: ") and "\n" not in said[0]
+
+
+def test_a_disk_that_takes_no_more_is_one_line_and_the_session_goes_on(tmp_path):
+    """Writes that fail mid-session (here the kernel's file size limit, EFBIG, standing in for a full disk's
+    ENOSPC: the same OSError from the same write): one line, the journal stops, the store records on, and
+    what was journaled before still reads."""
+    import resource
+
+    store = AnalyticsStore(10_000)
+    store.start_collection()
+    said: list[str] = []
+    journal = Journal(Sources(store), tmp_path, 10**8, warn=said.append, flush_s=0.05)
+    journal.start()
+    for i in range(20):
+        store.record(_point(i, None))
+    wait_for(lambda: journal.written == 20, timeout=5)
+    soft, hard = resource.getrlimit(resource.RLIMIT_FSIZE)
+    old = signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # a write past the limit fails instead of killing
+    try:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (journal.path.stat().st_size + 4096, hard))
+        for i in range(20, 2000):
+            store.record(_point(i, None))
+        wait_for(lambda: said, timeout=5)
+    finally:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (soft, hard))
+        signal.signal(signal.SIGXFSZ, old)
+    journal.close()
+    assert len(said) == 1 and said[0].startswith("journal stopped (File too large)"), said
+    assert len(store) == 2000  # the session went on
+    assert len(load_export(journal.path).points) >= 20  # cut where the disk stopped: read to its last chunk
