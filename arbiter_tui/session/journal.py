@@ -44,7 +44,6 @@ from . import journal_files as F
 log = logging.getLogger(__name__)
 
 FLUSH_S = 0.5  # a chunk handed to the kernel (and synced) at least this often
-DEFAULT_MAX_MB = 256.0  # the journal directory's bound: ~7 MB an hour at 10 samples/s (docs/analytics.md)
 LATENCY_TOPIC = "/arbiter/latency"
 LATENCY_TYPE = "arbiter_msgs/msg/Latency"
 LATENCY_DEF = "float64 timestamp  # when the tracker received the command, epoch s\nfloat64 latency_ms"
