@@ -44,6 +44,10 @@ from . import journal_files as F
 log = logging.getLogger(__name__)
 
 FLUSH_S = 0.5  # a chunk handed to the kernel (and synced) at least this often
+# The run summaries: at once when a run begins or ends, else this often. A running run's summary is
+# computed over all its samples under the store's lock (2-8 ms for an hour's run on the dev box, several
+# times that on a Pi), which the session's thread waits for to record its next sample: not every chunk.
+RUNS_EVERY_S = 5.0
 LATENCY_TOPIC = "/arbiter/latency"
 LATENCY_TYPE = "arbiter_msgs/msg/Latency"
 LATENCY_DEF = "float64 timestamp  # when the tracker received the command, epoch s\nfloat64 latency_ms"
@@ -117,6 +121,8 @@ class Journal:
         self._total = 0
         self._clears = 0
         self._runs: dict[int, RunSummary] = {}
+        self._active: int | None = None  # the store's active run when the summaries were last written
+        self._runs_at = -math.inf
         self._rows: dict[tuple[str, str], AlgorithmSummary] = {}
         self._latency: deque[tuple[float, float]] = deque()  # the poller's thread appends, the step takes
         self._latency_t = -math.inf  # the poller's thread alone
@@ -141,7 +147,7 @@ class Journal:
             if self._channels is None:
                 return
             try:
-                self._step()
+                self._step(force=True)
                 self._channels.metadata(JOURNAL_END_METADATA, {"ended": ended})
                 self._channels.finish()
                 self._sync()
@@ -244,7 +250,7 @@ class Journal:
             os.fsync(self._file.fileno())
 
     # -- one chunk (under self._lock) ----------------------------------------------------------
-    def _step(self) -> None:
+    def _step(self, force: bool = False) -> None:
         channels = self._channels
         assert channels is not None
         store = self.sources.store
@@ -256,15 +262,10 @@ class Journal:
         for p in points:
             channels.point(p)
         self.written += len(points)
-        last_ns = int(points[-1].timestamp * 1e6) if points else time.time_ns()
-        for r in store.runs():
-            if self._runs.get(r.id) != r:
-                channels.run(r)
-                self._runs[r.id] = r
-        for a in store.runs_by_algorithm():
-            if self._rows.get((a.mission, a.algorithm)) != a:
-                channels.algorithm(a, last_ns)
-                self._rows[(a.mission, a.algorithm)] = a
+        active, now = store.active_run, time.monotonic()
+        if force or active != self._active or now - self._runs_at >= RUNS_EVERY_S:
+            self._active, self._runs_at = active, now
+            self._summaries(channels, int(points[-1].timestamp * 1e6) if points else time.time_ns())
         w = channels.writer
         schema = self._schemas[LATENCY_TOPIC]
         while self._latency:
@@ -274,6 +275,18 @@ class Journal:
             w.write_message(LATENCY_TOPIC, schema, row, log_time=t_ns, publish_time=t_ns)
         self._link(w)
         channels.flush()
+
+    def _summaries(self, channels: McapChannels, t_ns: int) -> None:
+        """The runs and per-(mission, algorithm) rows that changed since they were last written."""
+        store = self.sources.store
+        for r in store.runs():
+            if self._runs.get(r.id) != r:
+                channels.run(r)
+                self._runs[r.id] = r
+        for a in store.runs_by_algorithm():
+            if self._rows.get((a.mission, a.algorithm)) != a:
+                channels.algorithm(a, t_ns)
+                self._rows[(a.mission, a.algorithm)] = a
 
     def _link(self, w: Any) -> None:
         read = self.sources.link_samples
@@ -298,6 +311,7 @@ class Journal:
         self._shut()
         self._runs.clear()
         self._rows.clear()
+        self._runs_at = -math.inf  # the summaries again, in the new file
         self._open()
 
 

@@ -171,7 +171,7 @@ def test_a_journal_cut_anywhere_reads_up_to_its_last_whole_chunk(tmp_path):
         for i in range(10 * chunk, 10 * chunk + 10):
             store.record(_point(i, run))
         with journal._lock:
-            journal._step()
+            journal._step(force=True)  # the run's summary too (else at most every RUNS_EVERY_S)
         sizes.append(journal.path.stat().st_size)
     data = journal.path.read_bytes()
     journal.close()
