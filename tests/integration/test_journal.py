@@ -254,3 +254,18 @@ def test_a_disk_that_takes_no_more_is_one_line_and_the_session_goes_on(tmp_path)
     assert len(said) == 1 and said[0].startswith("journal stopped (File too large)"), said
     assert len(store) == 2000  # the session went on
     assert len(load_export(journal.path).points) >= 20  # cut where the disk stopped: read to its last chunk
+
+
+def test_a_running_consoles_journal_is_never_offered_and_a_hung_up_one_once(tmp_path):
+    store = AnalyticsStore(1000)
+    store.start_collection()
+    journal = Journal(Sources(store), tmp_path, 10**8, flush_s=0.05)
+    journal.start()
+    store.record(_point(0, None))
+    wait_for(lambda: journal.written == 1, timeout=5)
+    assert F.held(journal.path) and F.offerable(tmp_path) is None  # its console writes it: not lost
+    journal.close("signal SIGHUP")
+    found = F.offerable(tmp_path)
+    assert found is not None and found.how == "signal SIGHUP" and found.path.name.endswith(".offered.mcap")
+    assert F.offerable(tmp_path) is None  # once
+    assert len(load_export(found.path).points) == 1
