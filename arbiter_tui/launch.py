@@ -40,11 +40,12 @@ from arbiter_core.urls import (
 
 from .control.stop import NAV2_ACTIONS
 from .control.teleop import cap_setting
-from .session import config
+from .session import config, journal_files
 from .session.settings import (
     COLLECTION_RATE_HZ,
     CONNECT,
     EMBEDDED,
+    JOURNAL_MAX_MB,
     KEY_TIMEOUT_S,
     OFFSET_WARN_MS,
     REPEAT_RATE_HZ,
@@ -159,6 +160,16 @@ def build_parser() -> argparse.ArgumentParser:
         help="where exports are written: an existing directory you can write to (default: .)",
     )
     p.add_argument(
+        "--journal-max-mb",
+        type=bounded_float(*JOURNAL_MAX_MB, "MB"),
+        default=D.journal_max_mb,
+        help=f"the journal: what the console records, written to {journal_files.default_dir()} as it goes "
+        "(a dropped link, kill -9 or a power cut loses at most the last second; the next start offers a "
+        "session that did not end cleanly, R opens it on screen 2; `arbiter-tui stats FILE` reads it); its "
+        "files are kept under this many MB, oldest deleted first (%(default)g)",
+    )
+    p.add_argument("--no-journal", action="store_true", help="write no journal")
+    p.add_argument(
         "--collection-rate",
         type=bounded_float(*COLLECTION_RATE_HZ, "Hz", low_open=True),
         default=D.collection_rate,
@@ -198,7 +209,9 @@ def build_parser() -> argparse.ArgumentParser:
         "--key-timeout",
         type=bounded_float(*KEY_TIMEOUT_S, "s"),
         default=D.key_timeout,
-        help=f"stop this long after the last key, s ({KEY_TIMEOUT_S[0]:g}-{KEY_TIMEOUT_S[1]:g}; "
+        help=f"the longest a held key moves the robot after its last repeat arrived, s: a fresh press holds "
+        f"this long, a repeating key twice the longest gap between its recent repeats, at least 0.15 s "
+        f"or this (docs/drive.md, 'Over a jittery link'; {KEY_TIMEOUT_S[0]:g}-{KEY_TIMEOUT_S[1]:g}; "
         f"{D.key_timeout:g})",
     )
     p.add_argument(
@@ -330,6 +343,8 @@ def run_app(argv: list[str]) -> int:
         namespace=ns,
         odom_topic=args.odom_topic,
         stop_actions=args.stop_actions,
+        journal_dir=None if args.no_journal else journal_files.default_dir(),
+        journal_max_mb=args.journal_max_mb,
     )
     if mode == CONNECT:
         settings.rosbridge_url, settings.tracker_url = bridge.url, tracker.url

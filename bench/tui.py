@@ -21,6 +21,9 @@ medians. Last line: JSON with both apps' figures and the ratios.
     python bench/tui.py --seconds 10 --repeat 3
     python bench/tui.py --seconds 10 --repeat 3 --pythonpath /path/to/another/checkout
     python bench/tui.py --first-frame-only --repeat 5      # only the first frames
+    python bench/tui.py --tui-args=--no-journal            # the console without its journal
+
+The console's user data directory (its journal) is a temporary one: a run never writes a developer's.
 """
 
 from __future__ import annotations
@@ -124,6 +127,7 @@ def main() -> int:
     p.add_argument("--repeat", type=int, default=3, help="runs of each app, alternating; medians reported")
     p.add_argument("--pythonpath", help="measure the code of another checkout (its root)")
     p.add_argument("--first-frame-only", action="store_true", help="time the first frames, no phases")
+    p.add_argument("--tui-args", default="", help="more flags for arbiter-tui, e.g. --no-journal")
     a = p.parse_args()
     if shutil.which("tmux") is None:
         print("tui: tmux is not installed", file=sys.stderr)
@@ -132,10 +136,11 @@ def main() -> int:
     size = tuple(int(n) for n in a.size.split("x"))
     tmp = Path(tempfile.mkdtemp())
     s = a.seconds
-    exe = str(Path(sys.executable).with_name("arbiter-tui"))
+    exe = f"env XDG_DATA_HOME={tmp} {Path(sys.executable).with_name('arbiter-tui')}"
     if a.pythonpath:  # the same console, imported from another checkout
-        exe = f"env PYTHONPATH={a.pythonpath} {sys.executable} -m arbiter_tui.cli"
+        exe = f"env XDG_DATA_HOME={tmp} PYTHONPATH={a.pythonpath} {sys.executable} -m arbiter_tui.cli"
     tui_cmd = f"{exe} --bridge-port 0 --api-port 0 --export-dir {tmp} --log-file {tmp / 'tui.log'}"
+    tui_cmd += f" {a.tui_args}"
     steps = [
         ("control_key_held", [], "i", s),
         ("latency_screen", ["3"], None, s),
@@ -162,7 +167,8 @@ def main() -> int:
     first = None
     if tui.get("first_frame_s") is not None and bare.get("first_frame_s") is not None:
         first = round(tui["first_frame_s"] - bare["first_frame_s"], 3)
-    emit({"bench": "tui", "size": a.size, "seconds_per_phase": s, "repeat": a.repeat, "arbiter_tui": tui,
+    emit({"bench": "tui", "size": a.size, "seconds_per_phase": s, "repeat": a.repeat, "tui_args": a.tui_args,
+          "arbiter_tui": tui,
           "bare_textual": bare,
           "ratios": ratios, "first_frame_minus_bare_s": first})  # fmt: skip
     return 0

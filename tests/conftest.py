@@ -9,9 +9,11 @@ from .support.backend import start_backend
 
 @pytest.fixture(autouse=True)
 def _own_cache_dir(tmp_path_factory, monkeypatch):
-    """Every test its own user cache directory (XDG): the analytics sweep keeps its curves there, and a
-    test must neither read a developer's nor leave its own."""
+    """Every test its own user cache and data directories (XDG): the analytics sweep keeps its curves in
+    the one, the console its journal in the other, and a test must neither read a developer's nor leave
+    its own."""
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.mktemp("cache")))
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path_factory.mktemp("data")))
 
 
 @pytest.fixture

@@ -17,9 +17,9 @@ import csv
 import io
 import json
 import math
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import IO, Any
 
 from .model import EXTRA_FIELDS, FIELDS, NUMERIC, STATS_FIELDS, AnalyticsStats, DataPoint, stats_of_points
 from .runs import OUTCOMES, AlgorithmSummary, RunSummary
@@ -224,8 +224,6 @@ def to_mcap(
     runs: Sequence[RunSummary] | None = None,
     algorithms: Sequence[AlgorithmSummary] | None = None,
 ) -> bytes:
-    from mcap_ros2.writer import Writer
-
     if stats is None:
         stats = stats_of_points(points)
     rows = [_mcap_point(p) for p in points]  # validate everything before writing a byte
@@ -233,35 +231,74 @@ def to_mcap(
     run_rows = [_mcap_run(r) for r in runs or ()]
     algorithm_rows = [_mcap_algorithm(a) for a in algorithms or ()]
     buf = io.BytesIO()
-    writer = Writer(buf)
-    point_schema = writer.register_msgdef(MCAP_POINT_TYPE, MCAP_POINT_DEF)
-    odom_schema = writer.register_msgdef(MCAP_ODOM_TYPE, MCAP_ODOM_DEF)
-    stats_schema = writer.register_msgdef(MCAP_STATS_TYPE, MCAP_STATS_DEF)
     # the summary channels exist when the summaries were given (even none): "no runs", not "unknown"
-    run_schema = writer.register_msgdef(MCAP_RUN_TYPE, MCAP_RUN_DEF) if runs is not None else None
-    algorithm_schema = (
-        writer.register_msgdef(MCAP_ALGORITHM_TYPE, MCAP_ALGORITHM_DEF) if algorithms is not None else None
-    )
+    channels = McapChannels(buf, runs=runs is not None, algorithms=algorithms is not None)
     last_ns = 0
     for p, row in zip(points, rows, strict=False):
-        t_ns = max(0, int(p.timestamp * 1_000_000))
-        last_ns = max(last_ns, t_ns)
-        writer.write_message(MCAP_POINT_TOPIC, point_schema, row, log_time=t_ns, publish_time=t_ns)
-        writer.write_message(
-            MCAP_ODOM_TOPIC, odom_schema, _odometry(p, t_ns), log_time=t_ns, publish_time=t_ns
-        )
-    if run_schema is not None:  # else no runs, no rows
-        for r, row in zip(runs or (), run_rows, strict=True):
-            t_ns = max(0, int((r.end_ms if r.end_ms is not None else r.last_ms or r.start_ms) * 1_000_000))
-            writer.write_message(MCAP_RUNS_TOPIC, run_schema, row, log_time=t_ns, publish_time=t_ns)
-    if algorithm_schema is not None:  # else no rows
-        for row in algorithm_rows:
-            writer.write_message(
-                MCAP_ALGORITHMS_TOPIC, algorithm_schema, row, log_time=last_ns, publish_time=last_ns
-            )
-    writer.write_message(MCAP_STATS_TOPIC, stats_schema, stats_row, log_time=last_ns, publish_time=last_ns)
-    writer.finish()  # type: ignore[no-untyped-call]  # mcap_ros2's Writer.finish is not annotated
+        last_ns = max(last_ns, channels.point(p, row))
+    for r, row in zip(runs or (), run_rows, strict=True):
+        channels.run(r, row)
+    for row in algorithm_rows:
+        channels.algorithm(row, last_ns)
+    channels.stats(stats_row, last_ns)
+    channels.finish()
     return buf.getvalue()
+
+
+class McapChannels:
+    """An export's channels on an MCAP stream (chunked, zstd): one definition of what each channel holds,
+    for an export written at once (:func:`to_mcap`) and for the session's journal, written as it goes
+    (``session/journal.py``: :meth:`flush` ends the chunk in progress and hands it to the stream)."""
+
+    def __init__(self, stream: IO[bytes], runs: bool = True, algorithms: bool = True) -> None:
+        from mcap_ros2.writer import Writer
+
+        self.writer = Writer(stream)
+        self._point = self.writer.register_msgdef(MCAP_POINT_TYPE, MCAP_POINT_DEF)
+        self._odom = self.writer.register_msgdef(MCAP_ODOM_TYPE, MCAP_ODOM_DEF)
+        self._stats = self.writer.register_msgdef(MCAP_STATS_TYPE, MCAP_STATS_DEF)
+        self._run = self.writer.register_msgdef(MCAP_RUN_TYPE, MCAP_RUN_DEF) if runs else None
+        self._algorithm = (
+            self.writer.register_msgdef(MCAP_ALGORITHM_TYPE, MCAP_ALGORITHM_DEF) if algorithms else None
+        )
+
+    def point(self, p: DataPoint, row: dict[str, Any] | None = None) -> int:
+        """A sample on the data point and odometry channels; its log time (ns)."""
+        t_ns = max(0, int(p.timestamp * 1_000_000))
+        w, row = self.writer, row or _mcap_point(p)
+        w.write_message(MCAP_POINT_TOPIC, self._point, row, log_time=t_ns, publish_time=t_ns)
+        w.write_message(MCAP_ODOM_TOPIC, self._odom, _odometry(p, t_ns), log_time=t_ns, publish_time=t_ns)
+        return t_ns
+
+    def run(self, r: RunSummary, row: dict[str, Any] | None = None) -> None:
+        """A run's summary (a reader keeps the last one of each run id)."""
+        if self._run is not None:
+            t_ns = max(0, int((r.end_ms if r.end_ms is not None else r.last_ms or r.start_ms) * 1_000_000))
+            row = row or _mcap_run(r)
+            self.writer.write_message(MCAP_RUNS_TOPIC, self._run, row, log_time=t_ns, publish_time=t_ns)
+
+    def algorithm(self, a: AlgorithmSummary | dict[str, Any], t_ns: int) -> None:
+        """A per-(mission, algorithm) row (a reader keeps the last one of each)."""
+        if self._algorithm is not None:
+            row = a if isinstance(a, dict) else _mcap_algorithm(a)
+            topic, schema = MCAP_ALGORITHMS_TOPIC, self._algorithm
+            self.writer.write_message(topic, schema, row, log_time=t_ns, publish_time=t_ns)
+
+    def stats(self, s: AnalyticsStats | dict[str, Any], t_ns: int) -> None:
+        row = s if isinstance(s, dict) else _mcap_stats(s)
+        self.writer.write_message(MCAP_STATS_TOPIC, self._stats, row, log_time=t_ns, publish_time=t_ns)
+
+    def metadata(self, name: str, data: dict[str, str]) -> None:
+        self.writer.add_metadata(name, data)
+
+    def flush(self) -> None:
+        """The chunk in progress ends and goes to the stream, and the stream is flushed (not synced)."""
+        # mcap_ros2's Writer wraps mcap's, whose flush() is public (mcap>=1.2) but not annotated
+        self.writer._writer.flush()  # type: ignore[no-untyped-call]
+
+    def finish(self) -> None:
+        """The summary and the footer: the file is complete."""
+        self.writer.finish()  # type: ignore[no-untyped-call]  # mcap_ros2's Writer.finish is not annotated
 
 
 def _odometry(p: DataPoint, t_ns: int) -> dict[str, Any]:
@@ -357,6 +394,7 @@ class Export:
     points: list[DataPoint]
     runs: tuple[RunSummary, ...] | None = None
     algorithms: tuple[AlgorithmSummary, ...] | None = None
+    notes: tuple[str, ...] = ()  # what the figures cannot vouch for (a journal cut short)
 
 
 def _opt_number(raw: Any, where: str) -> float | None:
@@ -469,74 +507,124 @@ def parse_mcap(data: bytes) -> list[DataPoint]:
 NOT_ARBITER_MCAP = "MCAP, but not an arbiter analytics export"
 
 
+JOURNAL_METADATA = "arbiter_journal"  # the metadata record that makes an MCAP a session's journal
+JOURNAL_END_METADATA = "arbiter_journal_end"  # written when the session ends: how it ended
+
+
 def read_mcap(data: bytes) -> Export:
-    """An MCAP export: its DataPoints, and the run and algorithm summaries where it has those channels.
-    A damaged or foreign file is an ``ExportFormatError`` that says which: ``truncated MCAP: …``,
-    ``corrupt MCAP: …``, ``MCAP, but not an arbiter analytics export: …``, ``bad arbiter MCAP export: …``."""
+    """An MCAP export: its DataPoints, and the run and algorithm summaries where it has those channels
+    (a run or a row written more than once, as a journal writes them while they change: the last one).
+    A session's journal cut short (the console killed, the power lost: no summary, no footer) is read up
+    to where it stops, and says so in ``notes``. A damaged or foreign file is an ``ExportFormatError``
+    that says which: ``truncated MCAP: …``, ``corrupt MCAP: …``, ``MCAP, but not an arbiter analytics
+    export: …``, ``bad arbiter MCAP export: …``."""
     from mcap.reader import make_reader
     from mcap_ros2.decoder import DecoderFactory
 
     if not data.startswith(MCAP_MAGIC):
         raise ExportFormatError("not an MCAP file")
     if len(data) < 2 * len(MCAP_MAGIC) or not data.endswith(MCAP_MAGIC):
-        # a finished MCAP ends with its magic after the footer; the reader would report some length it
-        # read from wherever the file stops
-        raise ExportFormatError(
-            f"truncated MCAP: {len(data)} bytes and no end marker (cut short, or its writer never finished)"
-        )
+        recovered = recover_journal(data)
+        if recovered is None:
+            # a finished MCAP ends with its magic after the footer; the reader would report some length it
+            # read from wherever the file stops
+            what = "no end marker (cut short, or its writer never finished)"
+            raise ExportFormatError(f"truncated MCAP: {len(data)} bytes and {what}")
+        messages, note = recovered
+        return _collect(messages, lambda: None, notes=(note,))
+    try:
+        reader = make_reader(io.BytesIO(data), decoder_factories=[DecoderFactory()])
+        decoded = ((c.topic, m) for _s, c, _msg, m in reader.iter_decoded_messages(topics=list(_READ_TOPICS)))
+        return _collect(decoded, reader.get_summary)
+    except ExportFormatError:
+        raise
+    except Exception as exc:  # the reader raises McapError, struct.error, KeyError, EOFError,
+        # ValueError... on a damaged file: every one of them means "damaged", none a traceback
+        raise ExportFormatError(f"corrupt MCAP: {str(exc) or type(exc).__name__}") from None
+
+
+_READ_TOPICS = (MCAP_POINT_TOPIC, MCAP_RUNS_TOPIC, MCAP_ALGORITHMS_TOPIC)
+
+
+def recover_journal(data: bytes) -> tuple[list[tuple[str, Any]], str] | None:
+    """A session's journal without its end (``JOURNAL_METADATA`` in it): its messages on the topics read,
+    decoded, up to the last whole chunk, and a note saying so; None when ``data`` is not a journal."""
+    from mcap.records import Channel, Message, Metadata, Schema
+    from mcap.stream_reader import StreamReader
+    from mcap_ros2.decoder import DecoderFactory
+
+    factory = DecoderFactory()
+    schemas: dict[int, Schema] = {}
+    channels: dict[int, Channel] = {}
+    decoders: dict[int, Any] = {}
+    out: list[tuple[str, Any]] = []
+    journal = False
+    try:
+        for record in StreamReader(io.BytesIO(data), skip_magic=False).records:
+            if isinstance(record, Metadata) and record.name == JOURNAL_METADATA:
+                journal = True
+            elif isinstance(record, Schema):
+                schemas[record.id] = record
+            elif isinstance(record, Channel):
+                channels[record.id] = record
+            elif isinstance(record, Message):
+                channel = channels.get(record.channel_id)
+                if channel is None or channel.topic not in _READ_TOPICS:
+                    continue
+                if record.channel_id not in decoders:
+                    schema = schemas[channel.schema_id]
+                    decoders[record.channel_id] = factory.decoder_for(channel.message_encoding, schema)
+                out.append((channel.topic, decoders[record.channel_id](record.data)))
+    except Exception:  # where the file stops: inside a record, a chunk cut short
+        pass
+    if not journal:
+        return None
+    samples = sum(topic == MCAP_POINT_TOPIC for topic, _ in out)
+    note = (
+        f"a journal cut short ({len(data)} bytes, no end: the console was killed or lost power): "
+        f"{samples} samples read, up to its last flush"
+    )
+    return out, note
+
+
+def _collect(messages: Iterable[tuple[str, Any]], summary: Any, notes: tuple[str, ...] = ()) -> Export:
+    """The points, runs and per-algorithm rows of an MCAP's decoded ``(topic, message)`` pairs."""
     points: list[DataPoint] = []
-    runs: list[dict[str, Any]] = []
-    algorithms: list[dict[str, Any]] = []
-    topics = {MCAP_POINT_TOPIC, MCAP_RUNS_TOPIC, MCAP_ALGORITHMS_TOPIC}
+    runs: dict[int, dict[str, Any]] = {}
+    algorithms: dict[tuple[str, str], dict[str, Any]] = {}
     seen: set[str] = set()
     topic = ""
     try:
-        reader = make_reader(io.BytesIO(data), decoder_factories=[DecoderFactory()])
-        for _schema, channel, _message, m in reader.iter_decoded_messages(topics=list(topics)):
-            topic = channel.topic
+        for topic, m in messages:
             seen.add(topic)
-            if channel.topic == MCAP_RUNS_TOPIC:
-                runs.append({
+            if topic == MCAP_RUNS_TOPIC:
+                runs[m.id] = {
                     "id": m.id, "algorithm": m.algorithm, "mission": m.mission, "outcome": m.outcome,
                     "start_ms": m.start_ms, "end_ms": m.end_ms, "time_s": m.time_s,
                     "final_error_m": m.final_error_m, "stats": _mcap_stats_dict(m.stats),
                     "tracking": _mcap_tracking_dict(m),
-                })  # fmt: skip
+                }  # fmt: skip
                 continue
-            if channel.topic == MCAP_ALGORITHMS_TOPIC:
-                algorithms.append({
+            if topic == MCAP_ALGORITHMS_TOPIC:
+                algorithms[(m.mission, m.algorithm)] = {
                     "algorithm": m.algorithm, "mission": m.mission, "runs": m.runs, "completed": m.completed,
                     "time_s": m.time_s, "final_error_m": m.final_error_m, "stats": _mcap_stats_dict(m.stats),
                     "tracking": _mcap_tracking_dict(m),
-                })  # fmt: skip
+                }  # fmt: skip
                 continue
-            where = f"MCAP message {len(points) + 1}"
-            row = {
-                "timestamp": m.timestamp,
-                "x": m.x,
-                "y": m.y,
-                "theta": m.theta,
-                "linearVel": m.linear_vel,
-                "angularVel": m.angular_vel,
-                "distanceError": m.distance_error,
-                "headingError": m.heading_error,
-                "algorithm": m.algorithm,
-                "latencyMs": m.latency_ms if m.has_latency else None,
-                "runId": getattr(m, "run_id", 0) or None,  # exports before runs had none
-                "gap": bool(getattr(m, "gap", False)),  # nor before gaps
-            }
-            points.append(_point_from_mapping(row, where))
+            points.append(_point_from_message(m, f"MCAP message {len(points) + 1}"))
         if not seen:
-            summary = reader.get_summary()
-            channels = sorted({c.topic for c in summary.channels.values()}) if summary else []
+            found = summary()
+            channels = sorted({c.topic for c in found.channels.values()}) if found else []
             if not any(t.startswith("/arbiter/") for t in channels):
                 named = ", ".join(channels[:5]) + (", …" if len(channels) > 5 else "")
                 has = f"its topics: {named}" if channels else "it has no channels"
                 raise ExportFormatError(f"{NOT_ARBITER_MCAP}: no {MCAP_POINT_TOPIC} channel ({has})")
         return Export(
             points,
-            runs_from(runs, samples_per_run(points)) if MCAP_RUNS_TOPIC in seen else None,
-            algorithms_from(algorithms) if MCAP_ALGORITHMS_TOPIC in seen else None,
+            runs_from(list(runs.values()), samples_per_run(points)) if MCAP_RUNS_TOPIC in seen else None,
+            algorithms_from(list(algorithms.values())) if MCAP_ALGORITHMS_TOPIC in seen else None,
+            notes,
         )
     except ExportFormatError as exc:
         if str(exc).startswith(NOT_ARBITER_MCAP):
@@ -545,9 +633,24 @@ def read_mcap(data: bytes) -> Export:
     except AttributeError as exc:  # a message on one of our topics without our fields
         field = f" {exc.name!r}" if getattr(exc, "name", None) else ""
         raise ExportFormatError(f"{NOT_ARBITER_MCAP}: its {topic} messages have no field{field}") from None
-    except Exception as exc:  # the reader raises McapError, struct.error, KeyError, EOFError,
-        # ValueError... on a damaged file: every one of them means "damaged", none a traceback
-        raise ExportFormatError(f"corrupt MCAP: {str(exc) or type(exc).__name__}") from None
+
+
+def _point_from_message(m: Any, where: str) -> DataPoint:
+    row = {
+        "timestamp": m.timestamp,
+        "x": m.x,
+        "y": m.y,
+        "theta": m.theta,
+        "linearVel": m.linear_vel,
+        "angularVel": m.angular_vel,
+        "distanceError": m.distance_error,
+        "headingError": m.heading_error,
+        "algorithm": m.algorithm,
+        "latencyMs": m.latency_ms if m.has_latency else None,
+        "runId": getattr(m, "run_id", 0) or None,  # exports before runs had none
+        "gap": bool(getattr(m, "gap", False)),  # nor before gaps
+    }
+    return _point_from_mapping(row, where)
 
 
 def _mcap_point(p: DataPoint) -> dict[str, Any]:

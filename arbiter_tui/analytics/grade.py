@@ -61,6 +61,7 @@ def grade(path: Path, topics: BagTopics = DEFAULT_TOPICS, config: ObserveConfig 
         scans = recording.scans
     else:
         export = load_export(path)
+        notes.extend(export.notes)
         recording, what, scans = None, "arbiter analytics export", None
         no_scan = "an export holds no scans: grade the ros2 bag with its /scan"
     by_run: dict[int | None, list[DataPoint]] = {}

@@ -76,7 +76,8 @@ class AnalyticsStore:
         self._algo_index: dict[str, int] = {}
         self._runs = RunLog()
         self._reset_buffers(0)
-        self._total_recorded = 0
+        self.total_recorded = 0  # points recorded since start, including those the ring has dropped
+        self.clears = 0  # times :meth:`clear` forgot everything (a journal starts a new file then)
         self.collection_rate = collection_rate
         self.max_data_points = max_data_points
 
@@ -172,6 +173,7 @@ class AnalyticsStore:
         with self._lock:
             self._reset_buffers(0)
             self._runs.clear()
+            self.clears += 1
             self._version += 1
 
     # -- runs ----------------------------------------------------------------------------------
@@ -284,18 +286,13 @@ class AnalyticsStore:
             self._next = (i + 1) % self._num.shape[1] if self._num.shape[1] == self._max else i + 1
             if self._size < self._num.shape[1]:
                 self._size += 1
-            self._total_recorded += 1
+            self.total_recorded += 1
             self._version += 1
         return True
 
     # -- reading ---------------------------------------------------------------
     def __len__(self) -> int:
         return self._size
-
-    @property
-    def total_recorded(self) -> int:
-        """Points recorded since start, including those the ring buffer has dropped."""
-        return self._total_recorded
 
     def column(self, name: str, last: int | None = None) -> np.ndarray:
         """A copy of one numeric column, oldest first (optionally only the ``last`` points)."""
@@ -319,13 +316,20 @@ class AnalyticsStore:
         return [names[c] for c in codes]
 
     def points(self) -> list[DataPoint]:
+        """Every point the ring holds, oldest first."""
+        return self.points_since(0)[0]
+
+    def points_since(self, total: int) -> tuple[list[DataPoint], int]:
+        """The points recorded after the first ``total`` (those the ring still holds), oldest first, and
+        how many have been recorded in all: a reader that keeps up (the journal) sees each point once."""
         with self._lock:
-            order = _order(self._size, self._max, self._next)
+            order = _last(self._size, self._max, self._next, max(0, self.total_recorded - total))
             num = self._num[:, order].copy()
             codes = self._alg[order].copy()
             runs = self._run[order].copy()
             gaps = self._gap[order].copy()
             names = list(self._algos)
+            recorded = self.total_recorded
         out = []
         for j in range(num.shape[1]):
             lat = float(num[8, j])
@@ -345,7 +349,7 @@ class AnalyticsStore:
                     bool(gaps[j]),
                 )
             )
-        return out
+        return out, recorded
 
     def stats(self) -> AnalyticsStats:
         """AnalyticsStats over every stored point, without copying the buffer."""

@@ -1,13 +1,28 @@
 """Keyboard teleop as a pure state machine (teleop_twist_keyboard's key map and factors).
 
-Terminals send no key releases, so "held" means "pressed again within
-``key_timeout``": each press refreshes a deadline; while it lasts the command
-is repeated; when it passes, exactly one zero goes out.
+Most terminals send no key releases, so "held" means "pressed again soon enough": each key arrival
+sets a deadline; while it lasts the command is repeated; when it passes, exactly one zero goes out.
+How soon is "soon enough" is judged from the repeats as they arrive (docs/drive.md, "Over a jittery
+link"), because over SSH on Wi-Fi they do not arrive at the terminal's pace:
+
+* a fresh press holds for ``key_timeout`` (the terminal's initial repeat delay, 250-600 ms, comes
+  before its first repeat); from then on a hold lasts ``GRACE_GAPS`` times the longest gap between the
+  repeats seen lately (``GAPS_KEPT``), at least ``MIN_GRACE_S`` and at most ``key_timeout``: repeats
+  bunched by a jittery link keep a steady hold without a gap, and when they really stop the zero goes
+  out within that grace, not a fixed 0.6 s later;
+* keys that arrive closer together than ``BUNCH_S`` came together (one read of the terminal, one burst
+  of TCP segments after a stall), not from a hand: they never start motion or extend a hold by their
+  number. A fresh hold whose next key comes bunched with it was replayed from a stall: it is cancelled
+  at once (one zero) and the rest of the burst ignored; the hold resumes only with a key that arrives
+  at a pace a terminal repeats at. So a stall's burst commands no motion after the person let go, and a
+  stop key in it acts when it arrives, whatever came before or after it in the burst;
+* where the terminal reports key releases (:meth:`Teleop.release`), a hold ends at its release.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections import deque
+from dataclasses import dataclass, field
 
 from arbiter_core.kinematics import DEFAULT_LIMITS, Limits
 
@@ -77,16 +92,29 @@ def cap_setting(name: str, value: float, limit: float, unit: str) -> tuple[float
     return value, None
 
 
+BUNCH_S = 0.01  # keys closer than this came together (no terminal repeats faster than 100 Hz)
+MIN_GRACE_S = 0.15  # a hold outlasts its last repeat at least this long (a paint, a GC pause on a Pi)
+GRACE_GAPS = 2.0  # ...and this many times the longest recent gap between its repeats
+GAPS_KEPT = 30  # recent gaps: a second of a 30 Hz auto-repeat
+
+FRESH, STEADY, STALE = "fresh", "steady", "stale"  # a hold's state: its first key, repeating, replayed
+
+
 @dataclass
 class Teleop:
     speed: float = 0.5
     turn: float = 1.0
-    key_timeout: float = 0.6
+    key_timeout: float = 0.6  # the longest a hold lasts after its last key (a fresh press: this long)
     limits: Limits = DEFAULT_LIMITS
     target: tuple[float, float] = (0.0, 0.0)
     deadline: float | None = None
     _zero_pending: bool = False
     _axes: tuple[int, int, int] = (0, 0, 0)
+    _key: str | None = None  # the movement key of the current (or the last) hold
+    _last_at: float = float("-inf")  # when it last arrived
+    _state: str = FRESH
+    gaps: deque[float] = field(default_factory=lambda: deque(maxlen=GAPS_KEPT))  # between steady repeats
+    bursts: int = 0  # bursts replayed after a stall and cancelled (the bench and tests read it)
 
     def __post_init__(self) -> None:
         self.speed = bounded(self.speed, MIN_SPEED, self.limits.max_linear)
@@ -96,15 +124,19 @@ class Teleop:
     def moving(self) -> bool:
         return self.deadline is not None
 
+    def grace(self) -> float:
+        """How long a steady hold outlasts its last repeat: from the gaps seen lately."""
+        if not self.gaps:
+            return self.key_timeout
+        ceiling = self.key_timeout  # the user's: never more, even where it is under MIN_GRACE_S
+        return bounded(GRACE_GAPS * max(self.gaps), min(MIN_GRACE_S, ceiling), ceiling)
+
     def press(self, key: str, now: float) -> str | None:
         """Handle one key; returns "move", "scale", "stop" or None (not a teleop key)."""
         if key in MODIFIER_KEYS:
             return None
         if key in MOVE_KEYS:
-            self._axes = MOVE_KEYS[key]
-            self._retarget()
-            self.deadline = now + self.key_timeout
-            self._zero_pending = False
+            self._move(key, now)
             return "move"
         if key in SCALE_KEYS:
             fs, ft = SCALE_KEYS[key]
@@ -117,6 +149,39 @@ class Teleop:
             self.stop()
             return "stop"
         return None
+
+    def _move(self, key: str, now: float) -> None:
+        gap, self._last_at = now - self._last_at, now
+        if key != self._key or (self.deadline is None and self._state != STALE) or gap > self.key_timeout:
+            self._hold(key, now, FRESH)  # a new key, or the same one pressed again after its hold ended
+        elif gap < BUNCH_S:  # it came with the key before it
+            if self._state == FRESH and self.deadline is not None:  # a fresh hold replayed from a stall
+                self.bursts += 1
+                self.stop()
+                self._state = STALE
+            elif self._state == STEADY and self.deadline is not None:
+                self.deadline = max(self.deadline, now + self.grace() - gap)  # no later than the first
+        elif self._state == STALE and gap > self.grace():
+            self._hold(key, now, FRESH)  # long after the burst: pressed again
+        else:  # a repeat at a terminal's pace (or the first after a burst: the key is still held)
+            if self._state == STEADY and self.deadline is not None:
+                self.gaps.append(gap)
+            self._hold(key, now, STEADY)
+
+    def _hold(self, key: str, now: float, state: str) -> None:
+        self._key, self._state = key, state
+        self._axes = MOVE_KEYS[key]
+        self._retarget()
+        self.deadline = now + (self.key_timeout if state == FRESH else self.grace())
+        self._zero_pending = False
+
+    def release(self, key: str, now: float) -> bool:
+        """The terminal reported ``key`` released (the kitty keyboard protocol's event types): its hold
+        ends now (one zero). True if it ended a hold."""
+        if key == self._key and self.deadline is not None:
+            self.stop()
+            return True
+        return False
 
     def _retarget(self) -> None:
         x, _y, th = self._axes

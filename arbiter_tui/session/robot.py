@@ -38,6 +38,7 @@ from ..control.teleop import MOVE_KEYS, SCALE_KEYS, STOP_KEYS, Teleop
 from ..latency.autonomy import AutonomyUnavailable, RobotSideView
 from ..link.base import DISCONNECTED, RECONNECTING, STARTING, Link, Observes, Stepped
 from .echo import TopicEcho
+from .journal import Journal, Sources
 from .remote_stop import RemoteStop
 from .schedule import Jobs, Schedule
 from .settings import SIM, Settings
@@ -62,6 +63,13 @@ class StopDone:
     """A stop's remote part ended (``remote_stop.py``): what it did, in words."""
 
     report: StopReport
+
+
+@dataclass(frozen=True)
+class JournalSaid:
+    """The journal could not go on (a full disk, an unwritable directory): one line."""
+
+    text: str
 
 
 @dataclass(frozen=True)
@@ -121,6 +129,8 @@ class RobotSession:
             lambda r: self.on_event(StopDone(r)),
         )  # fmt: skip
         self.last_export: ExportResult | None = None
+        # what it records, on disk as it goes (session/journal.py), where the command line asks
+        self.journal = self._journal() if config.journal_dir is not None and config.live else None
         self.too_small = False
         self.stop_reason: str | None = None
         self.on_event: Callable[[object], None] = lambda event: None
@@ -219,14 +229,32 @@ class RobotSession:
         return False
 
     def start(self) -> None:
-        """Run the clocked work on the session's own thread until :meth:`close`."""
+        """Run the clocked work on the session's own thread until :meth:`close`, and the journal on its."""
         self.schedule.start()
+        if self.journal is not None:
+            self.journal.start()
 
     def close(self) -> None:
-        """Stop the robot (one zero) and the clocked work."""
+        """Stop the robot (one zero) and the clocked work; the journal is finished (a clean end)."""
         self.stop("quit")
         self.remote_stop.close()
         self.schedule.stop()
+        if self.journal is not None:
+            self.journal.close()
+
+    def hang_up(self, reason: str) -> None:
+        """The terminal went away (SIGHUP, SIGTERM): stop, and finish the journal now, saying so (the
+        next start offers it: the person did not choose to end the session)."""
+        self.stop(reason)
+        if self.journal is not None:
+            self.journal.close(reason)
+
+    def _journal(self) -> Journal:
+        c = self.config
+        assert c.journal_dir is not None
+        sources = Sources(self.store, lambda: self.link.telemetry.meter.samples())
+        said = lambda text: self.on_event(JournalSaid(text))  # noqa: E731
+        return Journal(sources, c.journal_dir, int(c.journal_max_mb * 1e6), said, lambda f: self.on_event(f))
 
     # -- commands (any thread) -------------------------------------------------------------------------
     def stop(self, reason: str) -> None:

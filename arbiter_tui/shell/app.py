@@ -32,7 +32,7 @@ from ..latency.tracker_client import TrackerClient
 from ..link.base import Link, PendingLink
 from ..session.config import save_theme
 from ..session.frames import CONTROL, Frame, FrameClock, FrameSampler, Shown
-from ..session.robot import MissionFinished, RobotSession, StopDone
+from ..session.robot import RobotSession
 from ..session.settings import Settings
 from . import lifecycle, palette, perf, robot_side, sweep
 from .dialogs import Dialogs
@@ -43,9 +43,8 @@ from .messages import (
     FrameDue,
     GoalPicked,
     RecordingOpened,
-    RunFinished,
     Said,
-    StopReported,
+    session_said,
 )
 from .perf import give_way
 from .perf.heap import freeze_heap
@@ -120,10 +119,8 @@ class ArbiterApp(RegistryTheme):
         return self.sampler.frame
 
     def _session_event(self, event: object) -> None:
-        if isinstance(event, MissionFinished):
-            self.post_message(RunFinished(event.algorithm, event.mission))
-        elif isinstance(event, StopDone):
-            self.post_message(StopReported(event.report))
+        if (said := session_said(event)) is not None:
+            self.post_message(said)
 
     # -- lifecycle -------------------------------------------------------------------------------------
     def on_mount(self) -> None:
@@ -179,7 +176,7 @@ class ArbiterApp(RegistryTheme):
                 robot_side.poll(self)
 
     def _on_signal(self, sig: int) -> None:
-        self.session.stop(f"signal {signal.Signals(sig).name}")
+        self.session.hang_up(f"signal {signal.Signals(sig).name}")
         lifecycle.exit_within(EXIT_DEADLINE_S)
         self.exit()
 

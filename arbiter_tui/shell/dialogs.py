@@ -97,6 +97,13 @@ class Dialogs:
             return
         self.app.post_message(RecordingOpened(view))
 
+    def open_path(self, path: Path) -> None:
+        """A recording at a known path (the journal a start found) on the analytics screen, read on a
+        worker's thread as :meth:`open_recording` reads it."""
+        self.app.notify(f"reading {path}…", timeout=3, markup=False)
+        load = partial(self._load, path)
+        self.app.run_worker(load, thread=True, group="recording", exclusive=True, exit_on_error=False)
+
     def live_session(self) -> None:
         """The live session again, in place of a recording."""
         self.app.post_message(RecordingOpened(None))

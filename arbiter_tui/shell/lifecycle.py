@@ -17,7 +17,7 @@ from textual.app import App
 
 from ..latency.topics_client import PERIOD_S as TOPICS_PERIOD_S
 from ..latency.topics_client import TopicsPoller
-from ..latency.tracker_client import TrackerClient
+from ..latency.tracker_client import TrackerAnswer, TrackerClient
 from ..link.base import Link
 from ..session.cpu_share import SPARE_CORES, cores_available
 from ..session.frames import LATENCY, TOPICS, FrameClock, FrameSampler, Shown
@@ -53,7 +53,14 @@ def poll(app: App[Any], tracker: TrackerClient, sampler: FrameSampler, shown: Ca
     poll costs more than a bare Textual app's frame), topics while a screen shows them."""
     s = sampler.settings
     period = lambda: s.poll_period if shown().shows(LATENCY) else s.idle_poll_period  # noqa: E731
-    app.run_worker(poll_forever(tracker.poll, period, sampler.latency_polled), group="poll", exclusive=True)
+    journal = sampler.session.journal
+
+    def polled(answer: TrackerAnswer) -> None:
+        sampler.latency_polled(answer)
+        if journal is not None:  # the latency window, journaled as it comes
+            journal.latency(answer.window_t, answer.window)
+
+    app.run_worker(poll_forever(tracker.poll, period, polled), group="poll", exclusive=True)
     topics = poll_forever(
         TopicsPoller(tracker).poll, TOPICS_PERIOD_S, sampler.topics_polled, lambda: shown().shows(TOPICS)
     )

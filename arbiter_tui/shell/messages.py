@@ -17,6 +17,8 @@ from ..control.stop import StopReport
 from ..latency.tracker_client import TrackerClient
 from ..link.base import Link
 from ..session.frames import FrameClock
+from ..session.journal import Found
+from ..session.robot import JournalSaid, MissionFinished, StopDone
 from ..session.views import AnalyticsView
 
 Severity = Literal["information", "warning", "error"]
@@ -141,3 +143,38 @@ class RecordingFailed(Said):
 
     def notice(self) -> Notice:
         return Notice(f"cannot open {self.path}: {self.error}", "error", 10)
+
+
+class JournalFound(Said):
+    """The start found the journal of a session that did not end cleanly (``session/journal.py``)."""
+
+    def __init__(self, found: Found) -> None:
+        super().__init__()
+        self.found = found
+
+    def notice(self) -> Notice:
+        return Notice(self.found.text(), "warning", 30)
+
+
+class JournalStopped(Said):
+    """The journal could not go on: a full disk, an unwritable directory, its bound reached."""
+
+    def __init__(self, text: str) -> None:
+        super().__init__()
+        self.text = text
+
+    def notice(self) -> Notice:
+        return Notice(self.text, "warning", 10)
+
+
+def session_said(event: object) -> Said | None:
+    """The message for an event of the robot session (told from its threads), None for none."""
+    if isinstance(event, MissionFinished):
+        return RunFinished(event.algorithm, event.mission)
+    if isinstance(event, StopDone):
+        return StopReported(event.report)
+    if isinstance(event, Found):
+        return JournalFound(event)
+    if isinstance(event, JournalSaid):
+        return JournalStopped(event.text)
+    return None

@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING, ClassVar, Protocol, runtime_checkable
 from rich.text import Text
 from textual import events
 from textual.app import ComposeResult
+from textual.binding import Binding, BindingType
 from textual.containers import Container
 from textual.geometry import Size
 from textual.reactive import reactive
@@ -63,6 +64,8 @@ TOO_SMALL = (
 
 class BaseScreen(Screen[None]):
     CSS_PATH: ClassVar[CSSPathType | None] = "base.tcss"
+    # R, on every screen: the journal of a session that did not end cleanly (said at start), on screen 2
+    BINDINGS: ClassVar[list[BindingType]] = [Binding("R", "open_journal", "Journal", show=False)]
     # the latest frame: set by the app for the screens it shows, bound (data_bind) into every widget
     frame: reactive[Frame] = reactive(Frame, repaint=False, always_update=True)
     _console_app: Console | None = None  # not _console: Textual's Widget has one (the Rich console)
@@ -101,6 +104,15 @@ class BaseScreen(Screen[None]):
             banner = observe_banner(config.observe_label, watched, session.stop_scope)
             self.query_one("#observe-banner", Static).update(Text(banner))
             self.add_class("observing")
+
+    def action_open_journal(self) -> None:
+        journal = self.console.session.journal
+        found = None if journal is None else journal.offered
+        if found is None:
+            self.notify("no journal to open: the start found no session that ended uncleanly", timeout=4)
+            return
+        self.app.switch_mode("analytics")
+        self.console.dialogs.open_path(found.path)
 
     def on_screen_resume(self) -> None:
         self._check_size(self.app.size)

@@ -1,0 +1,147 @@
+"""Teleop over a jittery, stalling link (issue 55, "teleop that rides the link"), with a fake clock.
+
+Key arrivals come from a seeded model of a laptop's auto-repeat over SSH: a press, its first repeat
+after 250 ms, then 30 Hz; each key delayed 30 ms ± 20 (uniform, as netem's ``delay 30ms 20ms``) and
+delivered in order, as TCP delivers (a key held back holds back the ones behind it: bunched); during a
+stall nothing arrives, and at its end everything sent meanwhile arrives at once (10 µs apart, as one
+read of the terminal parses them). The console's cadence is the session's: a control tick every
+0.1 s (``--repeat-rate`` 10), and one at once when a key changes what is commanded."""
+
+import math
+import random
+
+import pytest
+
+from arbiter_tui.control.teleop import MIN_GRACE_S, Teleop
+
+REPEAT_HZ, INITIAL_S = 30.0, 0.25
+TICK_S = 0.1
+SPEED = 0.5
+
+
+def sends(start: float, hold_s: float) -> list[float]:
+    """When a key held from ``start`` for ``hold_s`` is sent: the press, then the auto-repeats."""
+    out = [start]
+    t = start + INITIAL_S
+    while t < start + hold_s:
+        out.append(t)
+        t += 1.0 / REPEAT_HZ
+    return out
+
+
+def arrive(keys: list[tuple[float, str]], rng: random.Random, delay=0.030, jitter=0.020, stall=None):
+    """(arrival time, key) for keys sent at the given times, in order, through the link."""
+    out: list[tuple[float, str]] = []
+    prev = -math.inf
+    for sent, key in keys:
+        t = sent + delay + rng.uniform(-jitter, jitter)
+        if stall is not None and stall[0] <= t < stall[1]:
+            t = stall[1]  # held by the stall: delivered when it ends
+        t = max(t, prev + 1e-5)  # in order, as TCP delivers
+        out.append((t, key))
+        prev = t
+    return out
+
+
+def drive(arrivals: list[tuple[float, str]], until: float, teleop: Teleop | None = None):
+    """The session's cadence over ``arrivals``: the commands sent, as (time, (v, w))."""
+    t = teleop or Teleop(speed=SPEED, turn=1.0)
+    sent: list[tuple[float, tuple[float, float]]] = []
+    i, tick = 0, 0.0
+    while tick <= until:
+        while i < len(arrivals) and arrivals[i][0] <= tick:
+            at, key = arrivals[i]
+            before = (t.moving, t.target)
+            changed = t.press(key, at) == "stop" or (t.moving, t.target) != before
+            if changed and (cmd := t.tick(at)) is not None:  # a stop's zero, a new key's command: at once
+                sent.append((at, cmd))
+            i += 1
+        if (cmd := t.tick(tick)) is not None:
+            sent.append((tick, cmd))
+        tick = round(tick + TICK_S, 9)
+    return sent
+
+
+def motion_after(sent, t0: float, t1: float) -> float:
+    """Metres commanded between ``t0`` and ``t1`` (each command in force until the next)."""
+    metres = 0.0
+    for (at, (v, _w)), nxt in zip(sent, [*sent[1:], (t1, (0.0, 0.0))], strict=True):
+        lo, hi = max(at, t0), min(nxt[0], t1)
+        if hi > lo:
+            metres += abs(v) * (hi - lo)
+    return metres
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_a_steady_hold_over_lab_wifi_has_no_gap_and_stops_soon_after_the_last_key(seed):
+    rng = random.Random(seed)
+    keys = arrive([(s, "i") for s in sends(0.0, 5.0)], rng)
+    sent = drive(keys, until=7.0)
+    first, last = keys[0][0], keys[-1][0]
+    during = [cmd for at, cmd in sent if first <= at <= last]
+    assert during and all(cmd == (SPEED, 0.0) for cmd in during), "the deadman cut in during the hold"
+    stops = [at for at, cmd in sent if at > last and cmd == (0.0, 0.0)]
+    # the zero within the grace the repeats' spacing gave (0.15 s here), not 0.6 s: plus a tick
+    assert stops and stops[0] - last <= MIN_GRACE_S + TICK_S + 1e-9, stops[0] - last
+    assert [cmd for at, cmd in sent if at > stops[0]] == []  # exactly one zero
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_a_burst_after_a_stall_drives_no_further_than_the_key_was_held(seed):
+    """Held from 0 to 2 s; the link stalls from 1 s to 4 s, then delivers the second's repeats at once."""
+    rng = random.Random(seed)
+    keys = arrive([(s, "i") for s in sends(0.0, 2.0)], rng, stall=(1.0, 4.0))
+    assert sum(1 for at, _ in keys if at == 4.0 or 4.0 < at < 4.01) > 20  # the burst
+    sent = drive(keys, until=6.0)
+    assert motion_after(sent, 2.0, 6.0) <= 0.05
+    # the deadman stopped the robot during the stall, within its bound of the last key before it
+    before = max(at for at, _ in keys if at < 1.0)
+    stop = min(at for at, cmd in sent if at > before and cmd == (0.0, 0.0))
+    assert stop - before <= MIN_GRACE_S + TICK_S + 1e-9
+    assert sent[-1][1] == (0.0, 0.0)
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_a_stop_in_a_burst_gives_zero_in_the_same_tick_whatever_surrounds_it(seed):
+    """Held, the link stalls; during the stall the person hits space, then presses i again (typed into
+    a frozen screen): at the stall's end it all comes at once. Nothing moves after the burst."""
+    rng = random.Random(seed)
+    typed = [(s, "i") for s in sends(0.0, 1.5)] + [(1.5, "space")] + [(s, "i") for s in sends(1.6, 0.4)]
+    keys = arrive(typed, rng, stall=(1.0, 4.0))
+    sent = drive(keys, until=6.0)
+    burst_end = keys[-1][0]
+    assert burst_end - 4.0 < 0.01
+    after = [(at, cmd) for at, cmd in sent if at >= 4.0]
+    assert after and after[-1][1] == (0.0, 0.0)
+    assert all(cmd == (0.0, 0.0) for at, cmd in after if at >= burst_end)  # zero from the burst on
+    assert motion_after(sent, 4.0, 6.0) <= 1e-3  # at most the first key's command, for microseconds
+
+
+def test_a_key_held_on_after_the_stall_resumes_with_its_next_repeat():
+    """Not released: after the burst is dropped the hold resumes with the first repeat at a hand's pace."""
+    rng = random.Random(7)
+    keys = arrive([(s, "i") for s in sends(0.0, 6.0)], rng, stall=(1.0, 4.0))
+    sent = drive(keys, until=7.0)
+    resumed = [at for at, cmd in sent if at > 4.0 and cmd == (SPEED, 0.0)]
+    assert resumed and resumed[0] < 4.2
+    assert motion_after(sent, 4.2, 6.0) == pytest.approx(SPEED * 1.8, rel=0.05)
+
+
+def test_a_release_ends_the_hold_where_the_terminal_reports_it():
+    t = Teleop(speed=SPEED)
+    t.press("i", 0.0)
+    assert t.tick(0.05) == (SPEED, 0.0)
+    assert t.release("j", 0.08) is False  # another key's release ends nothing
+    assert t.release("i", 0.1) is True
+    assert t.tick(0.1) == (0.0, 0.0) and t.tick(0.2) is None
+
+
+def test_a_tap_still_moves_for_the_key_timeout_and_a_slow_terminal_keeps_its_hold():
+    t = Teleop(speed=SPEED, key_timeout=0.6)
+    t.press("i", 0.0)  # a fresh press: the terminal's initial delay is unknown
+    assert t.tick(0.55) == (SPEED, 0.0) and t.tick(0.65) == (0.0, 0.0)
+    slow = Teleop(speed=SPEED, key_timeout=0.6)  # a terminal repeating at 10 Hz
+    for k in range(20):
+        slow.press("i", 0.5 + 0.1 * k if k else 0.0)
+        assert slow.moving
+    assert slow.grace() == pytest.approx(0.2)
