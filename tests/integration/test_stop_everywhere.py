@@ -25,6 +25,7 @@ from arbiter_tui.shell.screens.confirm import ConfirmClear
 from arbiter_tui.shell.screens.export import ExportChooser
 from arbiter_tui.shell.screens.goal import GoalPrompt
 from arbiter_tui.shell.screens.help import HelpScreen
+from arbiter_tui.shell.screens.open_file import OpenRecording
 
 from ..support.backend import start_backend
 from ..support.foreign import FakeNav2
@@ -46,6 +47,7 @@ CONTEXTS = [
     ("2", CommandPalette, ("ctrl+p",), "ctrl+k"),
     ("2", ExportChooser, ("ctrl+s",), "space"),
     ("2", ConfirmClear, ("delete",), "k"),
+    ("2", OpenRecording, ("f",), "ctrl+k"),  # a path: space and k are text there
     ("3", None, (), "space"),
     ("3", HelpScreen, ("question_mark",), "ctrl+k"),
     ("3", CommandPalette, ("ctrl+p",), "ctrl+k"),
