@@ -263,6 +263,7 @@ class AnalyticsView:
     goal: tuple[float, float] | None = None
     source: str = ""  # a recording shown instead of the live session: what it is ("" = live)
     notes: tuple[str, ...] = ()  # what the recording's figures cannot vouch for
+    no_reference: str = ""  # why the recording's error stats have no reference ("" where they have one)
 
     @property
     def dropped_runs(self) -> tuple[RunSummary, ...]:

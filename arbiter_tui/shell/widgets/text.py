@@ -248,11 +248,11 @@ class StatsCards(Bound[AnalyticsView]):
     def draw(self) -> Text:
         if self.has_class(FIT):
             return self.draw_fitted()
-        stats = self.view.stats
+        stats, why = self.view.stats, self.view.no_reference
         t = Text()
         for i, name in enumerate(STATS_FIELDS):
             t.append(f"{STAT_LABELS[name].short:>10} ", "bold")
-            t.append(f"{format_stat(name, getattr(stats, name)):<16}")
+            t.append(f"{format_stat(name, getattr(stats, name), no_reference=why):<16}")
             if i % 3 == 2 and i < len(STATS_FIELDS) - 1:
                 t.append("\n")
         return t
@@ -261,8 +261,10 @@ class StatsCards(Bound[AnalyticsView]):
         """The dashboard's cards: as many to a row as fit the width (rows balanced), each label on the row
         of its value, columns as wide as the longest label and value need (values: at least ``VALUE``, so
         the cards do not move as the figures grow)."""
-        stats = self.view.stats
-        cards = [(STAT_LABELS[n].short, format_stat(n, getattr(stats, n))) for n in STATS_FIELDS]
+        stats, why = self.view.stats, self.view.no_reference
+        cards = [
+            (STAT_LABELS[n].short, format_stat(n, getattr(stats, n), no_reference=why)) for n in STATS_FIELDS
+        ]
         label = max(cell_len(k) for k, _v in cards)
         value = max(self.VALUE, *(cell_len(v) for _k, v in cards))
         card = label + 1 + value + 2
