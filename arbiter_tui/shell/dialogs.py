@@ -5,6 +5,7 @@ screen imports a dialog."""
 
 from __future__ import annotations
 
+import logging
 from functools import partial
 from pathlib import Path
 from typing import Any
@@ -16,12 +17,14 @@ from arbiter_core.controllers import goal_driver
 from ..analytics.exports import ExportFormatError
 from ..session.recording import open_recording
 from ..session.robot import ExportResult
-from .messages import GoalPicked, RecordingFailed, RecordingOpened
+from .messages import GoalPicked, RecordingFailed, RecordingOpened, unexpected
 from .screens.base import Console
 from .screens.confirm import ConfirmClear
 from .screens.export import ExportChooser
 from .screens.goal import GoalPrompt
 from .screens.open_file import OpenRecording
+
+log = logging.getLogger(__name__)
 
 
 class Dialogs:
@@ -94,6 +97,10 @@ class Dialogs:
             return
         except MemoryError:
             self.app.post_message(RecordingFailed(str(path), "out of memory reading it"))
+            return
+        except Exception as exc:  # a fault of ours: said as well (the live session stays), and logged
+            log.exception("opening %s failed", path)
+            self.app.post_message(RecordingFailed(str(path), unexpected(exc)))
             return
         self.app.post_message(RecordingOpened(view))
 
