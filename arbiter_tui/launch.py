@@ -53,6 +53,8 @@ from .session.settings import (
 )
 
 D = Settings()  # the defaults: one place, read by the parser, the help texts and the app
+# the observe group's flags only observe mode reads (--stop-actions serves every mode)
+OBSERVE_ONLY = ("label", "cmd_topic", "cmd_stamped", "plan_topic", "goal_topic", "status_topic")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -64,7 +66,9 @@ def build_parser() -> argparse.ArgumentParser:
         "simulated time (behind a modelled link with --latency) and ranks them per mission; 'arbiter-tui "
         "stats FILE|BAG_DIR [--help]' prints the statistics of an export or of a ros2 bag recorded on the "
         "robot; 'arbiter-tui topics [--help]' prints every topic's rate, bandwidth, delay and age as the "
-        "backend measures them.",
+        "backend measures them; 'arbiter-tui autonomy start|stop|status [--help]' starts, stops or asks "
+        "about the controller the backend runs on the robot; 'arbiter-tui fleet [--help]' lists every "
+        "robot announcing itself on Zenoh and opens the console on one.",
     )
     m = p.add_mutually_exclusive_group()
     m.add_argument(
@@ -269,7 +273,11 @@ def run_app(argv: list[str]) -> int:
     parsed = parse(argv)
     if isinstance(parsed, int):
         return parsed
-    args, loaded, _cli = parsed
+    args, loaded, cli = parsed
+    observing = [f"--{dest.replace('_', '-')}" for dest in OBSERVE_ONLY if dest in cli]
+    if observing and not args.observe:  # given on the command line and silently ignored: say so
+        print(f"arbiter-tui: {', '.join(observing)}: only with --observe (observe mode)", file=sys.stderr)
+        return 2
     # roslibpy/twisted/autobahn must never write to the terminal the TUI owns.
     try:
         log_file = str(log_to_file(args.log_file or default_log_path("arbiter-tui"), args.log_level))
