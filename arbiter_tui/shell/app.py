@@ -252,12 +252,10 @@ class ArbiterApp(RegistryTheme):
         await super().on_event(event)
 
     def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
-        """space and k stop everywhere but in a text input, where they are text: there ctrl+k stops, and
-        the footer names it (its ``TYPING`` binding)."""
-        if action == "stop" and parameters:
-            typing = isinstance(self.focused, (Input, TextArea))
-            return typing if parameters == (TYPING,) else not typing
-        return True
+        """space and k stop but in a text input, where ctrl+k stops and the footer names it (``TYPING``)."""
+        if action != "stop" or not parameters:
+            return True
+        return isinstance(self.focused, (Input, TextArea)) == (parameters == (TYPING,))
 
     def action_command_palette(self) -> None:
         """The palette, saying in its prompt and its footer how to stop the robot while typing in it."""
