@@ -35,13 +35,16 @@ class Dialogs:
     def ask_goal(self) -> None:
         """``t``: type a go-to-goal target; the app drives there (``GoalPicked``)."""
         session = self.console.session
-        pose = session.link.telemetry.snapshot()[0]
+
+        def where() -> tuple[float, float]:  # the link's pose now (the prompt says it live)
+            pose = session.link.telemetry.snapshot()[0]
+            return pose.x, pose.y
 
         def chosen(goal: tuple[float, float] | None) -> None:
             if goal is not None:
                 self.app.post_message(GoalPicked(*goal))
 
-        self.app.push_screen(GoalPrompt((pose.x, pose.y), goal_driver(session.loop.algorithm)), chosen)
+        self.app.push_screen(GoalPrompt(where, goal_driver(session.loop.algorithm)), chosen)
 
     def ask_clear(self) -> None:
         """Clearing the collected samples asks first (nothing else in the console destroys data)."""
