@@ -15,6 +15,7 @@ from textual.app import App
 from arbiter_core.controllers import goal_driver
 
 from ..analytics.exports import ExportFormatError
+from ..analytics.files import Collected
 from ..session.recording import open_recording
 from ..session.robot import ExportResult
 from .messages import GoalPicked, RecordingFailed, RecordingOpened, unexpected
@@ -59,16 +60,20 @@ class Dialogs:
     def ask_export(self) -> None:
         """The export chooser, then the export."""
 
+        data = self.console.session.collected()  # what it says it exports is what the file gets
+
         def chosen(formats: tuple[str, ...] | None) -> None:
             if formats:
-                self.export(*formats)
+                self.export(*formats, data=data)
 
-        self.app.push_screen(ExportChooser(len(self.console.session.store)), chosen)
+        self.app.push_screen(ExportChooser(len(data.points)), chosen)
+        self.console.refresh_frame(force=True)  # the status line's count, taken at the same moment
 
-    def export(self, *formats: str) -> list[ExportResult]:
-        """Write the collected data in each format, all under one file stem, and say what became of it:
-        the whole path written, nothing to write, or the failure (the collected data is kept)."""
-        results = self.console.session.export(*formats)
+    def export(self, *formats: str, data: Collected | None = None) -> list[ExportResult]:
+        """Write the collected data (``data``: as the chooser took it) in each format, all under one
+        file stem, and say what became of it: the whole path written, nothing to write, or the failure
+        (the collected data is kept)."""
+        results = self.console.session.export(*formats, data=data)
         for r in results:
             if r.path is not None:
                 where = Path(r.path).resolve()  # the whole path: no guessing where
