@@ -297,9 +297,10 @@ class FrameSampler:
         simulated = self.settings.mode == SIM
         observing = self.settings.observe_label if self.settings.observe else None
         shown_file = None if self.recording is None else self.recording.source
+        side = self.robot_side  # observe mode: the robot-side controller, while it drives, not "manual"
         return status_view(
             s.link, self.target(), s.loop, s.store, self.tracker_view(), simulated, self.start_error,
-            observing=observing, recording=shown_file,
+            observing=observing, recording=shown_file, driving=None if side is None else side.driving,
         )  # fmt: skip
 
     def _status(self, shown: StatusView, now: float, slow: bool, force: bool) -> StatusView:

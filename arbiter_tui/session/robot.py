@@ -329,7 +329,10 @@ class RobotSession:
             text = "off (the backend runs without --autonomy)" if exc.disabled else f"cannot ask: {exc}"
             return RobotSideView(known=True, enabled=False, text=text)
         run = "" if status.algorithm is None else status.run()
-        return RobotSideView(known=True, enabled=True, running=status.running, text=status.state, run=run)
+        return RobotSideView(
+            known=True, enabled=True, running=status.running, text=status.state, run=run,
+            algorithm=status.algorithm or "",
+        )  # fmt: skip
 
     def start_robot_side(self) -> str:
         """``g`` in observe mode: the selected controller (go_to_goal when manual is selected) on the

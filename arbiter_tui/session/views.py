@@ -314,7 +314,10 @@ def status_view(
     now: float | None = None,
     observing: str | None = None,
     recording: str | None = None,
+    driving: str | None = None,
 ) -> StatusView:
+    """``driving``: what drives the robot when the console's loop does not (observe mode's robot-side
+    controller), shown instead of the loop's algorithm."""
     api = deploy = None
     if not simulated and tracker is not None:
         reach = tracker.reachable
@@ -326,7 +329,7 @@ def status_view(
         link=link.state,
         target=target,
         deploy=deploy,
-        algorithm=loop.algorithm,
+        algorithm=driving or loop.algorithm,
         collecting=store.is_collecting,
         points=len(store),
         api=api,

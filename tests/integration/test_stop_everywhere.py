@@ -175,6 +175,10 @@ async def test_observe_mode_stops_the_robot_side_controller_from_everywhere(back
             # the panel learns the backend runs one: a, n and g are offered
             side = lambda: app.sampler.robot_side  # noqa: E731
             assert await until(pilot, lambda: side() is not None and side().enabled)
+            # the status line names what drives: the robot-side stanley, not the console's "manual"
+            autonomy.start("stanley", "corner", 0.5, 1.0)
+            status = lambda: app.sampler.frame.status.text()  # noqa: E731
+            assert await until(pilot, lambda: "robot-side stanley" in status(), timeout=10), status()
 
             async def start(pilot):
                 app.session.remote_stop.wait_idle(5)  # the last stop's zeros are over
