@@ -10,7 +10,7 @@ from textual.widgets import Static
 from arbiter_core import fleet
 from arbiter_core.timesync import TimeSync
 from arbiter_tui.fleet.app import FleetApp, FleetList
-from arbiter_tui.fleet.rows import FleetModel
+from arbiter_tui.fleet.rows import FleetModel, detail_lines
 
 W = 1_800_000_000.0  # 2027-01-15 08:00:00 UTC
 MONO = 1000.0
@@ -235,3 +235,32 @@ async def test_a_view_that_shows_the_same_text_repaints_nothing(monkeypatch):
         app.screen.sample()
         await pilot.pause()
         assert renders[0] > before[0]
+
+
+async def test_at_80_columns_the_head_and_every_detail_line_are_whole():
+    """Issue 54, item 7: at 80 columns the head's "connecting: client of ..." and the detail's longer
+    lines were cut (an ellipsis, the rest lost): now each breaks between its parts, then indented."""
+    from rich.cells import cell_len
+
+    model = fleet_model()
+    session = "connecting: client of tcp/192.168.100.200:7447,tcp/192.168.100.201:7447"
+    app = FleetApp(source=lambda p: model.view(W, MONO, p, session), opener=lambda argv: 0)
+    async with app.run_test(size=(80, 24)) as pilot:
+        await pilot.press("slash", *"lab-0[12]", "enter")
+        rows = app.screen.query_one(FleetList)
+        for name in ("lab-01", "lab-02"):
+            while rows.current().name != name:
+                await pilot.press("down")
+            await pilot.pause()
+            for selector in ("#fleet-head", "#fleet-detail"):
+                static = app.screen.query_one(selector, Static)
+                shown = static.render().plain.splitlines()
+                assert all(cell_len(line) <= static.content_size.width for line in shown), shown
+                assert not any(line.endswith("…") for line in shown), shown
+            head = " ".join(str(app.screen.query_one("#fleet-head", Static).render()).split())
+            assert head.startswith("fleet · 2 of 8 robots") and session in head, head
+            detail = str(app.screen.query_one("#fleet-detail", Static).render())
+            row = rows.current()
+            words = lambda text: " ".join(w for w in text.split() if w != "·")  # noqa: E731
+            for line in detail_lines(row, W):  # every word of every line is on the screen, in order
+                assert words(line) in words(detail), (line, detail)
