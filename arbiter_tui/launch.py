@@ -8,7 +8,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from arbiter_core import topics
+from arbiter_core import fleet, topics
 from arbiter_core.auth import AuthConfigError, load_token
 from arbiter_core.cliargs import (
     OneLineParser,
@@ -55,6 +55,14 @@ from .session.settings import (
 D = Settings()  # the defaults: one place, read by the parser, the help texts and the app
 # the observe group's flags only observe mode reads (--stop-actions serves every mode)
 OBSERVE_ONLY = ("label", "cmd_topic", "cmd_stamped", "plan_topic", "goal_topic", "status_topic")
+
+
+def robot_name(text: str) -> str:
+    """A robot's name as the fleet spells it (``arbiter_core.fleet.robot_name``)."""
+    try:
+        return fleet.robot_name(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -138,6 +146,14 @@ def build_parser() -> argparse.ArgumentParser:
         help="action servers whose goals a stop key cancels, comma-separated (relative names resolve "
         f"under --namespace; '' none; default in observe mode Nav2's: {', '.join(NAV2_ACTIONS)}; "
         "otherwise none)",
+    )
+    p.add_argument(
+        "--robot-name",
+        type=robot_name,
+        default=None,
+        metavar="NAME",
+        help="the robot's name, said first in the status line (arbiter-tui fleet passes the name the "
+        "robot announces)",
     )
     p.add_argument(
         "--ca-file",
@@ -330,6 +346,7 @@ def run_app(argv: list[str]) -> int:
         notes=tuple(n for n in (speed_note, turn_note) if n),
         observe=args.observe,
         observe_label=args.label,
+        robot_name=args.robot_name or "",
         cmd_topic=args.cmd_topic,
         cmd_stamped=args.cmd_stamped,
         plan_topic=args.plan_topic,

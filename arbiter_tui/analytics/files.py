@@ -133,8 +133,8 @@ def export_store(
     Refuses (``NothingToExport``) when there are no samples."""
     if fmt not in FORMATS:
         raise ValueError(f"unknown export format {fmt!r}; choose from {', '.join(FORMATS)}")
-    data = store if isinstance(store, Collected) else collected(store)
-    points, stats, runs, algorithms = data.points, data.stats, data.runs, data.algorithms
+    got = store if isinstance(store, Collected) else collected(store)
+    points, stats, runs, algorithms = got.points, got.stats, got.runs, got.algorithms
     if not points:
         raise NothingToExport("nothing to export: 0 samples (drive, or start a mission with g, first)")
     if fmt == "csv":

@@ -301,6 +301,7 @@ class FrameSampler:
         return status_view(
             s.link, self.target(), s.loop, s.store, self.tracker_view(), simulated, self.start_error,
             observing=observing, recording=shown_file, driving=None if side is None else side.driving,
+            robot=self.settings.robot_name,
         )  # fmt: skip
 
     def _status(self, shown: StatusView, now: float, slow: bool, force: bool) -> StatusView:

@@ -172,6 +172,8 @@ async def test_enter_opens_the_console_on_the_advertised_urls_and_comes_back():
         await pilot.pause()
         assert opened == [
             [
+                "--robot-name",
+                "lab-01",
                 "--rosbridge",
                 "ws://lab-01.lab:9090",
                 "--tracker",
@@ -264,3 +266,27 @@ async def test_at_80_columns_the_head_and_every_detail_line_are_whole():
             words = lambda text: " ".join(w for w in text.split() if w != "·")  # noqa: E731
             for line in detail_lines(row, W):  # every word of every line is on the screen, in order
                 assert words(line) in words(detail), (line, detail)
+
+
+async def test_the_console_opened_from_the_fleet_says_which_robot_it_drives(tmp_path):
+    """Issue 54, item 7: the console the fleet opened never showed the robot's name; the fleet passes it
+    (--robot-name) and the status line says it first, at 80 columns too."""
+    from arbiter_tui.launch import parse
+
+    from ..support.tui import still_app
+
+    opened: list[list[str]] = []
+    app = fleet_app(opened)
+    async with app.run_test(size=(80, 24)) as pilot:
+        app.screen.query_one(FleetList).selected = "lab-01"
+        await pilot.pause()
+        await pilot.press("enter")
+        await pilot.pause()
+    (tmp_path / "empty.toml").write_text("")
+    args, _loaded, _cli = parse([*opened[0], "--config", str(tmp_path / "empty.toml")])
+    assert args.robot_name == "lab-01"
+    console = still_app(tmp_path, robot_name=args.robot_name)
+    async with console.run_test(size=(80, 24)) as pilot:
+        await pilot.pause()
+        status = str(console.screen.query_one("#status").render())
+        assert status.startswith("CONNECTED · lab-01 · "), status

@@ -79,6 +79,7 @@ def test_backend_help_mentions_every_flag(capsys):
         ["--bogus"],
         ["stats"],
         ["stats", "a.csv", "b.csv"],
+        ["--robot-name", "lab 01"],  # not a name the fleet could announce
         ["--label", "x"],  # observe mode's flags without --observe: said, not silently ignored
         ["--sim", "--plan-topic", "/plan2", "--cmd-stamped"],
     ],
