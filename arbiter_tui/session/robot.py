@@ -371,9 +371,9 @@ class RobotSession:
         return n
 
     def collected(self) -> Collected:
-        """The collected data now, as an export writes it: what the export chooser counts and writes."""
-        with self.lock:
-            return collected(self.store)
+        """The collected data now, as an export writes it: what the export chooser counts and writes.
+        (The store's own lock, not the session's: a long copy never holds up a control tick or a stop.)"""
+        return collected(self.store)
 
     def export(self, *formats: str, data: Collected | None = None) -> list[ExportResult]:
         """Write the collected data (``data``: as it was collected when asked, else now) in each format
