@@ -8,7 +8,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from arbiter_core import topics
+from arbiter_core import fleet, topics
 from arbiter_core.auth import AuthConfigError, load_token
 from arbiter_core.cliargs import (
     OneLineParser,
@@ -54,6 +54,16 @@ from .session.settings import (
 )
 
 D = Settings()  # the defaults: one place, read by the parser, the help texts and the app
+# the observe group's flags only observe mode reads (--stop-actions serves every mode)
+OBSERVE_ONLY = ("label", "cmd_topic", "cmd_stamped", "plan_topic", "goal_topic", "status_topic")
+
+
+def robot_name(text: str) -> str:
+    """A robot's name as the fleet spells it (``arbiter_core.fleet.robot_name``)."""
+    try:
+        return fleet.robot_name(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -65,7 +75,9 @@ def build_parser() -> argparse.ArgumentParser:
         "simulated time (behind a modelled link with --latency) and ranks them per mission; 'arbiter-tui "
         "stats FILE|BAG_DIR [--help]' prints the statistics of an export or of a ros2 bag recorded on the "
         "robot; 'arbiter-tui topics [--help]' prints every topic's rate, bandwidth, delay and age as the "
-        "backend measures them.",
+        "backend measures them; 'arbiter-tui autonomy start|stop|status [--help]' starts, stops or asks "
+        "about the controller the backend runs on the robot; 'arbiter-tui fleet [--help]' lists every "
+        "robot announcing itself on Zenoh and opens the console on one.",
     )
     m = p.add_mutually_exclusive_group()
     m.add_argument(
@@ -135,6 +147,14 @@ def build_parser() -> argparse.ArgumentParser:
         help="action servers whose goals a stop key cancels, comma-separated (relative names resolve "
         f"under --namespace; '' none; default in observe mode Nav2's: {', '.join(NAV2_ACTIONS)}; "
         "otherwise none)",
+    )
+    p.add_argument(
+        "--robot-name",
+        type=robot_name,
+        default=None,
+        metavar="NAME",
+        help="the robot's name, said first in the status line (arbiter-tui fleet passes the name the "
+        "robot announces)",
     )
     p.add_argument(
         "--ca-file",
@@ -282,7 +302,11 @@ def run_app(argv: list[str]) -> int:
     parsed = parse(argv)
     if isinstance(parsed, int):
         return parsed
-    args, loaded, _cli = parsed
+    args, loaded, cli = parsed
+    observing = [f"--{dest.replace('_', '-')}" for dest in OBSERVE_ONLY if dest in cli]
+    if observing and not args.observe:  # given on the command line and silently ignored: say so
+        print(f"arbiter-tui: {', '.join(observing)}: only with --observe (observe mode)", file=sys.stderr)
+        return 2
     # roslibpy/twisted/autobahn must never write to the terminal the TUI owns.
     try:
         log_file = str(log_to_file(args.log_file or default_log_path("arbiter-tui"), args.log_level))
@@ -335,6 +359,7 @@ def run_app(argv: list[str]) -> int:
         notes=tuple(n for n in (speed_note, turn_note) if n),
         observe=args.observe,
         observe_label=args.label,
+        robot_name=args.robot_name or "",
         cmd_topic=args.cmd_topic,
         cmd_stamped=args.cmd_stamped,
         plan_topic=args.plan_topic,

@@ -9,6 +9,7 @@ import stat
 import tempfile
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 
 from .exports import (
@@ -22,6 +23,8 @@ from .exports import (
     to_json,
     to_mcap,
 )
+from .model import AnalyticsStats
+from .runs import AlgorithmSummary, RunSummary
 from .store import AnalyticsStore, DataPoint
 
 FORMATS = ("csv", "json", "mcap")
@@ -102,24 +105,38 @@ def export_stem(clock_ms: Callable[[], int] = lambda: time.time_ns() // 1_000_00
     return f"arbiter_analytics_{clock_ms()}"
 
 
+@dataclass(frozen=True, slots=True)
+class Collected:
+    """What an export writes, taken from the store at one moment (the chooser says its count, and the
+    file then holds exactly those samples, however many were recorded since)."""
+
+    points: list[DataPoint]
+    stats: AnalyticsStats
+    runs: tuple[RunSummary, ...]
+    algorithms: tuple[AlgorithmSummary, ...]
+
+
+def collected(store: AnalyticsStore) -> Collected:
+    """The store's samples, stats, runs and algorithms now (the caller holds off the recorder)."""
+    return Collected(store.points(), store.stats(), store.runs(), store.runs_by_algorithm())
+
+
 def export_store(
-    store: AnalyticsStore,
+    store: AnalyticsStore | Collected,
     fmt: str,
     directory: Path,
     clock_ms: Callable[[], int] = lambda: time.time_ns() // 1_000_000,
     stem: str | None = None,
 ) -> Path:
-    """Export the store's points as ``arbiter_analytics_<epoch ms>.<fmt>`` (or ``stem.<fmt>``: one stem
-    for the formats written together); the store is untouched. Refuses (``NothingToExport``) when the
-    store holds no samples."""
+    """Export the store's points (or what was ``collected`` from it) as ``arbiter_analytics_<epoch
+    ms>.<fmt>`` (or ``stem.<fmt>``: one stem for the formats written together); the store is untouched.
+    Refuses (``NothingToExport``) when there are no samples."""
     if fmt not in FORMATS:
         raise ValueError(f"unknown export format {fmt!r}; choose from {', '.join(FORMATS)}")
-    points = store.points()
+    got = store if isinstance(store, Collected) else collected(store)
+    points, stats, runs, algorithms = got.points, got.stats, got.runs, got.algorithms
     if not points:
         raise NothingToExport("nothing to export: 0 samples (drive, or start a mission with g, first)")
-    stats = store.stats()
-    runs = store.runs()
-    algorithms = store.runs_by_algorithm()
     if fmt == "csv":
         data = to_csv(points).encode()
     elif fmt == "json":

@@ -22,6 +22,8 @@ from .observe import ObserveConfig
 from .ranking import Entry, Ranking, rank
 from .runs import RunSummary
 
+NO_REFERENCE = "no reference: no goal or plan in the recording, so no error to measure"
+
 
 @dataclass(frozen=True, slots=True)
 class Graded:
@@ -42,6 +44,12 @@ class Graded:
         """As the analytics screen ranks its rows: per mission, then overall (``ranking``)."""
         rows: Sequence[Entry] = self.export.algorithms or self.runs
         return rank(rows)
+
+    @property
+    def no_reference(self) -> str:
+        """Why the file's error stats have no reference ("" where they have one): a recording in which
+        no goal or plan came (no run) has no error to measure; its samples' errors, 0, are no figure."""
+        return NO_REFERENCE if self.is_bag and not self.export.runs else ""
 
     def card(self, run_id: int) -> SC.RunCard | None:
         return next((c for c in self.cards if c.run == run_id), None)

@@ -28,9 +28,20 @@ STAT_LABELS: dict[str, StatLabel] = {
 assert tuple(STAT_LABELS) == STATS_FIELDS, "one label per AnalyticsStats field, in the seed's order"
 
 
-def format_stat(name: str, value: float, decimals: int | None = None, unit: bool = True) -> str:
-    """``value`` of stat ``name`` as text: a count as an integer, anything else with its unit."""
+# The stats measured against a reference (the goal, as the seed's errors are): with none, there is no
+# error to measure, and they are shown "—" with why (``no_reference``), null in JSON, never 0
+ERROR_FIELDS = ("avgDistanceError", "avgHeadingError", "stdDevError", "p95Error")
+NO_VALUE = "—"
+
+
+def format_stat(
+    name: str, value: float, decimals: int | None = None, unit: bool = True, no_reference: str = ""
+) -> str:
+    """``value`` of stat ``name`` as text: a count as an integer, anything else with its unit; an error
+    stat "—" where ``no_reference`` says why there is no reference to measure it against."""
     label = STAT_LABELS[name]
+    if no_reference and name in ERROR_FIELDS:
+        return NO_VALUE
     if name == "sampleCount":
         return str(int(value))
     text = f"{value:.{label.decimals if decimals is None else decimals}f}"

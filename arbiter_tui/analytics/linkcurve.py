@@ -21,6 +21,7 @@ from arbiter_core import stats as S
 
 SWEEP_LATENCIES_MS = (0.0, 50.0, 100.0, 200.0, 300.0, 500.0)
 IDLE, RUNNING, READY, FAILED = "idle", "running", "ready", "failed"
+SWEEP_RETRY_S = 30.0  # a failed sweep is tried again this long after, while the analytics screen shows
 
 
 class CurveError(ValueError):
@@ -99,7 +100,7 @@ class LinkSweepView:
         if self.state == RUNNING:
             return f"sweeping latency {_range()} for {self.mission} in the background (arbiter-tui compare)…"
         if self.state == FAILED:
-            return f"latency sweep failed: {self.error}"
+            return f"latency sweep failed: {self.error} (tried again in {SWEEP_RETRY_S:g} s)"
         if self.curve is None:
             return "error vs latency: shown once the sweep has run (it starts when this screen opens)"
         if self.p95_ms is None:

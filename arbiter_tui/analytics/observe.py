@@ -10,7 +10,10 @@ ranking and the exports treat them as driven runs.
 
 Rules (docs/analytics.md, "Grade any controller"):
 - a **sample** is taken from odometry at ``rate_hz`` (the console's collection rate), with the latest
-  command as ``linearVel``/``angularVel`` (the odometry's measured velocity before any command came);
+  command as ``linearVel``/``angularVel`` (the odometry's measured velocity before any command came); a
+  robot standing still outside any run (no run, the latest command zero or none, the odometry's
+  velocity below ``runs.STILL_V``/``STILL_W``) gives one sample, where it stopped, and then none until it
+  moves: the console's own rule (``runs.IdleSamples``);
 - a **goal** comes from ``goal_pose`` or from a plan whose last pose is more than ``tolerance_m`` from
   the goal in force (a replanned path to the same goal is the same run: Nav2 replans about once a
   second); a new goal ends the active run as aborted and starts one;
@@ -51,7 +54,7 @@ import numpy as np
 from arbiter_core.kinematics import Pose, distance_error, heading_error
 
 from .model import DataPoint
-from .runs import ABORTED, COMPLETED
+from .runs import ABORTED, COMPLETED, IdleSamples
 from .store import AnalyticsStore
 from .tracking import reference_path
 
@@ -105,6 +108,7 @@ class Observer:
         self._finished: set[str] = set()  # action goals seen ended (never adopted again)
         self._last_ms = 0.0
         self._gap = False  # the next sample follows a gap (the link was lost)
+        self._idle = IdleSamples()  # a robot standing still outside any run: one sample, then none
         self.samples = 0
         self.foreign_stamps = 0  # stamped commands whose stamp is from another clock (no latency taken)
 
@@ -156,7 +160,8 @@ class Observer:
             runId=self._run,
             gap=self._gap,
         )
-        if self.store.record(point):
+        commanding = self._cmd is not None and self._cmd != (0.0, 0.0)
+        if self._idle.wanted(self._run is not None, commanding, v, w) and self.store.record(point):
             self.samples += 1
             self._gap = False
         if self._cmd is None:  # no command recorded (yet): the robot's own motion says whether it stopped

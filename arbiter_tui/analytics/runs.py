@@ -33,6 +33,8 @@ OVERRIDDEN = "overridden"  # a movement key took over from the controller
 ENDED = "ended"  # a manual run: 2 s without a movement key
 OUTCOMES = (RUNNING, COMPLETED, ABORTED, OVERRIDDEN, ENDED)
 MANUAL_IDLE_S = 2.0
+STILL_V = 0.005  # m/s: odometry slower than this (and STILL_W) with no command is a robot standing still
+STILL_W = 0.01  # rad/s
 
 # Columns where lower is better and a "best" mark means something; the others (samples, speeds, path)
 # have no better direction and are never marked.
@@ -40,6 +42,26 @@ LOWER_IS_BETTER = (
     "time_s", "final_error_m", "xte_mean_m", "xte_p95_m", "avgDistanceError", "stdDevError", "p95Error",
     "avgHeadingError", "mean_abs_dw_dt",
 )  # fmt: skip
+
+
+class IdleSamples:
+    """Whether a sample is taken, for a robot standing still outside every run (no run, no command,
+    odometry below ``STILL_V``/``STILL_W``): the first, where it stopped, and then none until it moves,
+    so idle time never pushes run samples out of the ring buffer nor dilutes the whole-buffer figures.
+    One rule for every way of sampling: the console's control loop and observe mode (live or a bag)."""
+
+    __slots__ = ("_taken",)
+
+    def __init__(self) -> None:
+        self._taken = False  # the standing robot's one sample was taken
+
+    def wanted(self, in_run: bool, commanding: bool, v: float, w: float) -> bool:
+        """A sample now? ``commanding``: a nonzero command is in force; ``v``, ``w``: the odometry's."""
+        still = not in_run and not commanding and abs(v) < STILL_V and abs(w) < STILL_W
+        if still and self._taken:
+            return False
+        self._taken = still
+        return True
 
 
 @dataclass(frozen=True, slots=True)

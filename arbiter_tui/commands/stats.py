@@ -18,7 +18,7 @@ from ..analytics import scorecards as SC
 from ..analytics.bags import DEFAULT_TOPICS, BagTopics
 from ..analytics.exports import Export, ExportFormatError
 from ..analytics.grade import Graded, grade
-from ..analytics.labels import format_stat
+from ..analytics.labels import ERROR_FIELDS, NO_VALUE, format_stat
 from ..analytics.model import (
     STATS_FIELDS,
     AnalyticsStats,
@@ -194,12 +194,13 @@ def run(argv: list[str]) -> int:
         if not groups:
             print(f"arbiter-tui stats: {args.file}: {_no_runs(args, graded)}", file=sys.stderr)
             return 1
+    why = graded.no_reference  # a recording with no goal or plan: its error stats are none, not 0
     if args.json:
         if args.by is None:
-            body: Mapping[str, object] = groups[""][0].as_dict()
+            body: Mapping[str, object] = _stats_json(groups[""][0], why)
         else:
             body = {
-                k: v.as_dict()
+                k: _stats_json(v, why)
                 | _in_file(part)
                 | (labels[k].as_dict() if k in labels else {})
                 | _outcome(runs.get(k), json_form=True)
@@ -214,13 +215,22 @@ def run(argv: list[str]) -> int:
             note = "" if part is None else f"  in file {part}/{stats.sampleCount} (stats: all its samples)"
             print(f"[{labels[group].title() if group in labels else group}]{note}")
         for name in STATS_FIELDS:
-            print(f"{name:<{width}}  {format_stat(name, getattr(stats, name), decimals=6)}")
+            text = format_stat(name, getattr(stats, name), decimals=6, no_reference=why)
+            print(f"{name:<{width}}  {text if text != NO_VALUE else f'{NO_VALUE} ({why})'}")
         for name, value in _outcome(runs.get(group) if args.by == "run" else None).items():
             print(f"{name:<{width}}  {value}")
         if args.by == "run" and group in cards:
             for name, value in _run_card_lines(cards[group]).items():
                 print(f"{name:<{width}}  {value}")
     return 0
+
+
+def _stats_json(stats: AnalyticsStats, no_reference: str) -> dict[str, object]:
+    """The seed's nine keys; where there is no reference, the error stats null and ``noReference`` why."""
+    body: dict[str, object] = dict(stats.as_dict())
+    if no_reference:
+        body |= dict.fromkeys(ERROR_FIELDS) | {"noReference": no_reference}
+    return body
 
 
 def _graded(args: argparse.Namespace) -> Graded | None:

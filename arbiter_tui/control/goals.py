@@ -6,6 +6,7 @@ import math
 import re
 
 GOAL_LIMIT_M = 1000.0  # further than any indoor robot drives on a mission from a console
+GOAL_CONFIRM_M = 20.0  # a typed goal further than this from the robot is asked about before it drives
 _SPLIT = re.compile(r"[\s,;]+")
 
 
@@ -27,3 +28,12 @@ def parse_goal(text: str) -> tuple[float, float]:
     if max(abs(x), abs(y)) > GOAL_LIMIT_M:
         raise GoalError(f"the goal is more than {GOAL_LIMIT_M:g} m away from the origin")
     return x, y
+
+
+def far_goal(goal: tuple[float, float], robot: tuple[float, float]) -> str | None:
+    """What to ask before driving to a ``goal`` more than ``GOAL_CONFIRM_M`` from the ``robot`` (a typo,
+    a goal in another frame); None for a goal within it."""
+    d = math.hypot(goal[0] - robot[0], goal[1] - robot[1])
+    if d <= GOAL_CONFIRM_M:
+        return None
+    return f"({goal[0]:+.2f}, {goal[1]:+.2f}) is {d:.0f} m from the robot: enter again to drive there"

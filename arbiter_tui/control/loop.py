@@ -20,7 +20,7 @@ from arbiter_core.controllers import ALGORITHMS, MANUAL, MISSIONS, goal_driver, 
 from arbiter_core.kinematics import Limits, Pose, clamp_twist, distance_error, heading_error
 from arbiter_core.mission import Mission, Phase
 
-from ..analytics.runs import ABORTED, COMPLETED, ENDED, MANUAL_IDLE_S, OVERRIDDEN
+from ..analytics.runs import ABORTED, COMPLETED, ENDED, MANUAL_IDLE_S, OVERRIDDEN, IdleSamples
 from ..analytics.store import AnalyticsStore, DataPoint
 from ..analytics.tracking import reference_path
 from ..link.base import CONNECTING, DISCONNECTED, RECONNECTING, STARTING, Link
@@ -30,8 +30,6 @@ from .teleop import Teleop
 
 TRAIL_POINTS = 2000
 TRAIL_STEP_M = 0.01  # the trail gets a point when the robot has moved this far: standing still adds nothing
-STILL_V = 0.005  # m/s: odometry slower than this (and STILL_W) with no command is a robot standing still
-STILL_W = 0.01  # rad/s
 BURST = 2.0  # commands the rate ceiling lets through at once (a key press answered between two ticks)
 NO_ODOMETRY = frozenset({STARTING, CONNECTING, DISCONNECTED, RECONNECTING})  # link states with no live pose
 
@@ -100,7 +98,7 @@ class ControlLoop:
         self.unsent = 0  # commands refused by the link (disconnected)
         self.trail = Trail()
         self.ceiling = RateCeiling(max_rate)
-        self._still_sampled = False  # one sample of a robot standing still outside a run, then none
+        self._idle = IdleSamples()  # one sample of a robot standing still outside a run, then none
         # the odometry life followed (arbiter_core.mission): a new one forgets the missions of the last
         self._telemetry = link.telemetry
         self._life = link.telemetry.life
@@ -345,9 +343,9 @@ class ControlLoop:
         """Record one DataPoint if collecting (at the collection rate, driven by the caller).
 
         A sample joins the active run while a controller drives, or while a manual key moves the robot.
-        A robot standing still outside every run (no command, odometry below ``STILL_V``/``STILL_W``)
-        is sampled once, where it stopped, and then not again until it moves: idle time never pushes
-        run samples out of the ring buffer, and adds nothing to any statistic."""
+        A robot standing still outside every run is sampled once, where it stopped, and then not again
+        until it moves (``runs.IdleSamples``, observe mode's rule too): idle time never pushes run
+        samples out of the ring buffer, and adds nothing to any statistic."""
         if not self.store.is_collecting:
             return None
         self.follow_life()
@@ -361,16 +359,9 @@ class ControlLoop:
         run = self.store.active_run
         if run is not None and not self.running and self.command == (0.0, 0.0):
             run = None
-        still = (
-            run is None
-            and not self.running
-            and self.command == (0.0, 0.0)
-            and abs(v_odom) < STILL_V
-            and abs(w_odom) < STILL_W
-        )
-        if still and self._still_sampled:
+        commanding = self.running or self.command != (0.0, 0.0)
+        if not self._idle.wanted(run is not None, commanding, v_odom, w_odom):
             return None
-        self._still_sampled = still
         point = DataPoint(
             timestamp=float(int(self._wall_ms())),
             x=pose.x,

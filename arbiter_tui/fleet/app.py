@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+from rich.cells import cell_len
 from rich.text import Text
 from textual import on, work
 from textual.app import App, ComposeResult, SuspendNotSupported
@@ -23,9 +24,12 @@ from textual.widgets import Footer, Input, Static
 
 from arbiter_core import fleet
 
+from ..session.views import fit_fields
 from .rows import COLUMNS, FleetView, Row, cells, console_argv, detail_lines, history_words
 
 REFRESH_S = 0.5
+PARTS = ("  ·  ", " · ")  # where a head or detail line breaks to fit its width (then between words)
+GO_ON = "  "  # a broken line's continuation
 SEP = 1  # space between columns
 # column -> width; shown in PRIORITY order while they fit, "note" takes the rest (at least NOTE_MIN)
 WIDTHS = {"robot": 12, "state": 20, "driver": 8, "p95": 8, "clock": 9, "worst topic": 24,
@@ -75,6 +79,26 @@ def line(row: Row, cols: list[tuple[int, int]], selected: bool) -> Text:
     if selected:
         text.stylize("reverse")
     return text
+
+
+def fit_lines(lines: list[str], width: int) -> list[str]:
+    """Each line in ``width`` columns (0: as it is): broken between its parts (``PARTS``), a part still
+    too wide between its words, each row after a line's first indented (at 80 columns the head's
+    "connecting: client of ..." and the detail's lines were cut)."""
+    room = width - len(GO_ON)
+    if room <= 0:
+        return lines
+    out: list[str] = []
+    for line in lines:
+        if cell_len(line) <= width:
+            out.append(line)
+            continue
+        sep = next((s for s in PARTS if s in line), " ")
+        rows: list[str] = []
+        for row in fit_fields([line.split(sep)], room, sep):
+            rows += fit_fields([row.split(" ")], room) if cell_len(row) > room else [row]
+        out += [rows[0], *(GO_ON + r for r in rows[1:])]
+    return out
 
 
 class FleetList(Widget, can_focus=True):
@@ -209,10 +233,21 @@ class FleetScreen(Screen[None]):
         self._show("#fleet-head", head)
 
     def _show(self, selector: str, text: str) -> None:
-        """A Static's new text; nothing (no layout) when it is the text shown."""
-        if self._texts.get(selector) != text:
-            self._texts[selector] = text
-            self.query_one(selector, Static).update(Text(text, no_wrap=True, overflow="ellipsis"))
+        """A Static's new text, each line broken to fit its width (``fit_lines``); nothing (no layout)
+        when it is the text shown at this width."""
+        static = self.query_one(selector, Static)
+        fitted = "\n".join(fit_lines(text.splitlines(), static.content_size.width))
+        if self._texts.get(selector) != fitted:
+            self._texts[selector] = fitted
+            static.update(Text(fitted, no_wrap=True, overflow="ellipsis"))
+
+    def on_resize(self) -> None:
+        """Another width: the head and the detail fitted to it again."""
+        self.call_after_refresh(self._refit)
+
+    def _refit(self) -> None:
+        self.watch_view(self.view)
+        self.show_detail(FleetList.Highlighted(self.query_one(FleetList).current()))
 
     @on(FleetList.Highlighted)
     def show_detail(self, event: FleetList.Highlighted) -> None:

@@ -388,14 +388,14 @@ def cells(row: Row) -> tuple[str, ...]:
 
 
 def console_argv(row: Row, token_file: str | None = None, ca_file: str | None = None) -> list[str] | str:
-    """The single-robot console's command line for ``row`` (``arbiter-tui --rosbridge URL --tracker URL
-    [--namespace NS]``), or why it cannot be opened, in one line."""
+    """The single-robot console's command line for ``row`` (``arbiter-tui --robot-name NAME --rosbridge
+    URL --tracker URL [--namespace NS]``), or why it cannot be opened, in one line."""
     if row.state == "lost":
         since = "" if row.since is None else f" since {clock_time(row.since)}"
         return f"{row.name} is lost{since}: nothing to open"
     if row.rosbridge is None:
         return f"{row.name} advertises no rosbridge URL (its backend runs --no-bridge, or no status yet)"
-    argv = ["--rosbridge", row.rosbridge]
+    argv = ["--robot-name", row.name, "--rosbridge", row.rosbridge]
     if row.tracker is not None:
         argv += ["--tracker", row.tracker]
     if row.namespace:

@@ -79,3 +79,9 @@ class RobotSideView:
     running: bool = False
     text: str = "not asked yet"  # its state ("running", "idle"), or why it cannot be asked
     run: str = ""  # the run in progress or the last one: "stanley on corner at 1/2"
+    algorithm: str = ""  # its controller ("" before any run)
+
+    @property
+    def driving(self) -> str | None:
+        """What drives the robot, for the status line: ``robot-side stanley`` while it runs."""
+        return f"robot-side {self.algorithm}" if self.running and self.algorithm else None

@@ -17,7 +17,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field, fields, replace
 from typing import TypeVar
 
-from ..analytics.linkcurve import RUNNING, LinkSweepView, measured_p95
+from ..analytics.linkcurve import FAILED, RUNNING, SWEEP_RETRY_S, LinkSweepView, measured_p95
 from ..latency.autonomy import RobotSideView
 from ..latency.topics_client import NO_BACKEND, TopicsState
 from ..latency.tracker_client import TrackerAnswer, TrackerClient
@@ -172,6 +172,7 @@ class FrameSampler:
         self.recording: AnalyticsView | None = None  # a file shown instead of the live analytics
         self._tracker_answer = TrackerAnswer()  # the tracker's last answer, as its poller handed it on
         self._sweep_version = -1  # the store version the measured p95 is from
+        self._sweep_failed_at = float("-inf")  # when the last sweep failed (tried again SWEEP_RETRY_S on)
         # holds the sweep's child while the robot drives, where the console has no core to spare
         self.sweep_pause = sweep_pause if sweep_pause is not None else SweepPause(cores_available)
 
@@ -204,16 +205,21 @@ class FrameSampler:
 
     def sweep_changed(self, view: LinkSweepView) -> None:
         """The sweep started, ended or failed (only a running sweep is ever paused)."""
+        if view.state == FAILED:
+            self._sweep_failed_at = self.clock()
         self.frame = replace(
             self.frame, link_sweep=replace(view, paused=view.paused and view.state == RUNNING)
         )
 
     def sweep_wanted(self) -> str | None:
-        """The mission whose error-vs-latency sweep the analytics screen needs and has not (live only);
-        marks it running."""
+        """The mission whose error-vs-latency sweep the analytics screen needs and has not (live only):
+        another mission's, or this one's again ``SWEEP_RETRY_S`` after it failed; marks it running."""
         view = self.frame.link_sweep
         mission = self.session.loop.mission_name
-        if not self.settings.live or view.state == RUNNING or view.mission == mission:
+        if not self.settings.live or view.state == RUNNING:
+            return None
+        retry = view.state == FAILED and self.clock() - self._sweep_failed_at >= SWEEP_RETRY_S
+        if view.mission == mission and not retry:
             return None
         self.sweep_changed(replace(view, state=RUNNING, mission=mission, curve=None, error=""))
         return mission
@@ -291,9 +297,11 @@ class FrameSampler:
         simulated = self.settings.mode == SIM
         observing = self.settings.observe_label if self.settings.observe else None
         shown_file = None if self.recording is None else self.recording.source
+        side = self.robot_side  # observe mode: the robot-side controller, while it drives, not "manual"
         return status_view(
             s.link, self.target(), s.loop, s.store, self.tracker_view(), simulated, self.start_error,
-            observing=observing, recording=shown_file,
+            observing=observing, recording=shown_file, driving=None if side is None else side.driving,
+            robot=self.settings.robot_name,
         )  # fmt: skip
 
     def _status(self, shown: StatusView, now: float, slow: bool, force: bool) -> StatusView:

@@ -36,6 +36,8 @@ def recording_view(graded: Graded, now: float | None = None) -> AnalyticsView:
     store = AnalyticsStore(max_data_points=max(1, min(len(points), MAX_CAPACITY)))
     store.start_collection()
     notes = list(graded.notes)
+    if graded.no_reference:
+        notes.append(graded.no_reference)  # beside the cards' "—"
     if export.runs is None:  # a CSV: runs rebuilt from its runId column, in file order
         notes.append(NO_OUTCOMES)
         current = None
@@ -65,4 +67,5 @@ def recording_view(graded: Graded, now: float | None = None) -> AnalyticsView:
         ring=len(points),
         source=f"{name} ({graded.what})",
         notes=tuple(notes),
+        no_reference=graded.no_reference,
     )

@@ -29,7 +29,15 @@ from arbiter_core.controllers import MANUAL, choose_controller_hint, goal_driver
 from arbiter_core.simulator import RATE_HZ as SIM_HZ
 from arbiter_core.topicstats import TopicFigures
 
-from ..analytics.files import FORMATS, ExportError, NothingToExport, export_stem, export_store
+from ..analytics.files import (
+    FORMATS,
+    Collected,
+    ExportError,
+    NothingToExport,
+    collected,
+    export_stem,
+    export_store,
+)
 from ..analytics.observe import ObserveConfig, Observer
 from ..analytics.store import AnalyticsStore, DataPoint
 from ..control.loop import ControlLoop
@@ -349,7 +357,10 @@ class RobotSession:
             text = "off (the backend runs without --autonomy)" if exc.disabled else f"cannot ask: {exc}"
             return RobotSideView(known=True, enabled=False, text=text)
         run = "" if status.algorithm is None else status.run()
-        return RobotSideView(known=True, enabled=True, running=status.running, text=status.state, run=run)
+        return RobotSideView(
+            known=True, enabled=True, running=status.running, text=status.state, run=run,
+            algorithm=status.algorithm or "",
+        )  # fmt: skip
 
     def start_robot_side(self) -> str:
         """``g`` in observe mode: the selected controller (go_to_goal when manual is selected) on the
@@ -387,16 +398,23 @@ class RobotSession:
         self.store.clear()
         return n
 
-    def export(self, *formats: str) -> list[ExportResult]:
-        """Write the collected data in each format under one file stem; nothing when there is none."""
-        n = len(self.store)
+    def collected(self) -> Collected:
+        """The collected data now, as an export writes it: what the export chooser counts and writes.
+        (The store's own lock, not the session's: a long copy never holds up a control tick or a stop.)"""
+        return collected(self.store)
+
+    def export(self, *formats: str, data: Collected | None = None) -> list[ExportResult]:
+        """Write the collected data (``data``: as it was collected when asked, else now) in each format
+        under one file stem, every format the same samples; nothing when there is none."""
+        data = self.collected() if data is None else data
+        n = len(data.points)
         stem = export_stem()
         results = []
         for fmt in formats:
             if fmt not in FORMATS:
                 raise ValueError(f"unknown export format {fmt!r}")
             try:
-                path = export_store(self.store, fmt, self.config.export_dir, stem=stem)
+                path = export_store(data, fmt, self.config.export_dir, stem=stem)
             except NothingToExport as exc:
                 return [ExportResult(fmt, None, n, str(exc), nothing=True)]  # said once, whatever the formats
             except (ExportError, OSError, ValueError) as exc:

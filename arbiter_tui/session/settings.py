@@ -49,6 +49,7 @@ class Settings:
     # observe mode: analytics of whatever drives the robot, from its own topics (analytics/observe.py)
     observe: bool = False
     observe_label: str = "observed"  # what drives: the observed samples' algorithm
+    robot_name: str = ""  # the robot's name (the fleet's), first in the status line; "" none given
     cmd_topic: str = "cmd_vel"  # relative names resolve under the link's namespace
     cmd_stamped: bool = False  # geometry_msgs/TwistStamped (its age is the sample's latency), else Twist
     plan_topic: str = "plan"

@@ -143,6 +143,7 @@ class StatusView:
     error: str | None = None  # why the console could not start its link, or why the link is down
     warning: str | None = None  # e.g. "no odometry on /robot1/odom"
     observing: str | None = None  # observe mode: the observed controller's label
+    robot: str = ""  # the robot's name (--robot-name, as the fleet passes it)
     recording: str | None = None  # the analytics show a file, not the live session
 
     @property
@@ -155,6 +156,8 @@ class StatusView:
         press r, the deploy mode."""
         link = "DISCONNECTED (reconnecting)" if self.link == RECONNECTING else self.link
         parts = [Part.of(link, ALARM)]
+        if self.robot:  # which robot this console drives: left out only after the sample count
+            parts.append(Part.of(self.robot, RECORDING))
         if self.observing:  # the mode is never left out: keys do not do here what they do elsewhere
             parts.append(Part(((f"OBSERVING {self.observing}", ALARM),)))
         parts.append(Part.of(self.target, TARGET))
@@ -263,6 +266,7 @@ class AnalyticsView:
     goal: tuple[float, float] | None = None
     source: str = ""  # a recording shown instead of the live session: what it is ("" = live)
     notes: tuple[str, ...] = ()  # what the recording's figures cannot vouch for
+    no_reference: str = ""  # why the recording's error stats have no reference ("" where they have one)
 
     @property
     def dropped_runs(self) -> tuple[RunSummary, ...]:
@@ -313,7 +317,11 @@ def status_view(
     now: float | None = None,
     observing: str | None = None,
     recording: str | None = None,
+    driving: str | None = None,
+    robot: str = "",
 ) -> StatusView:
+    """``driving``: what drives the robot when the console's loop does not (observe mode's robot-side
+    controller), shown instead of the loop's algorithm."""
     api = deploy = None
     if not simulated and tracker is not None:
         reach = tracker.reachable
@@ -325,7 +333,7 @@ def status_view(
         link=link.state,
         target=target,
         deploy=deploy,
-        algorithm=loop.algorithm,
+        algorithm=driving or loop.algorithm,
         collecting=store.is_collecting,
         points=len(store),
         api=api,
@@ -333,6 +341,7 @@ def status_view(
         warning=odometry_warning(link, time.monotonic() if now is None else now),
         observing=observing,
         recording=recording,
+        robot=robot,
     )
 
 

@@ -36,7 +36,7 @@ from ..session.robot import RobotSession
 from ..session.settings import Settings
 from . import lifecycle, palette, perf, robot_side, sweep
 from .dialogs import Dialogs
-from .keys import NOT_TEXT, STOP_BINDINGS, KeyRouter, direct_keys
+from .keys import STOP_BINDINGS, TYPING, KeyRouter, direct_keys
 from .messages import (
     BackendFailed,
     BackendStarted,
@@ -58,7 +58,6 @@ from .screens.topics import TopicsScreen
 
 log = logging.getLogger(__name__)
 EXIT_DEADLINE_S = 2.0  # after SIGHUP/SIGTERM the process is gone by then, whatever the terminal does
-PALETTE_PROMPT = "Search for commands…  (ctrl+k stops the robot)"
 
 
 SCREENS: dict[str, str | Callable[[], Screen[Any]]] = {
@@ -250,17 +249,17 @@ class ArbiterApp(RegistryTheme):
         await super().on_event(event)
 
     def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
-        """space and k stop everywhere but in a text input, where they are text (ctrl+k stops there)."""
-        if action == "stop" and parameters == (NOT_TEXT,):
-            return not isinstance(self.focused, (Input, TextArea))
-        return True
+        """space and k stop but in a text input, where ctrl+k stops and the footer names it (``TYPING``)."""
+        if action != "stop" or not parameters:
+            return True
+        return isinstance(self.focused, (Input, TextArea)) == (parameters == (TYPING,))
 
     def action_command_palette(self) -> None:
-        """The palette, saying in its prompt how to stop the robot while typing in it."""
+        """The palette, saying in its prompt and its footer how to stop the robot while typing in it."""
         if self.use_command_palette and not CommandPalette.is_open(
             self  # type: ignore[arg-type]  # Textual wants an App[object], and App[T] is invariant
         ):
-            self.push_screen(CommandPalette(id="--command-palette", placeholder=PALETTE_PROMPT))
+            self.push_screen(palette.StopPalette())
 
     def get_system_commands(self, screen: Screen[object]) -> Iterable[SystemCommand]:
         yield from super().get_system_commands(screen)

@@ -5,6 +5,7 @@ screen imports a dialog."""
 
 from __future__ import annotations
 
+import logging
 from functools import partial
 from pathlib import Path
 from typing import Any
@@ -14,14 +15,17 @@ from textual.app import App
 from arbiter_core.controllers import goal_driver
 
 from ..analytics.exports import ExportFormatError
+from ..analytics.files import Collected
 from ..session.recording import open_recording
 from ..session.robot import ExportResult
-from .messages import GoalPicked, RecordingFailed, RecordingOpened
+from .messages import GoalPicked, RecordingFailed, RecordingOpened, unexpected
 from .screens.base import Console
 from .screens.confirm import ConfirmClear
 from .screens.export import ExportChooser
 from .screens.goal import GoalPrompt
 from .screens.open_file import OpenRecording
+
+log = logging.getLogger(__name__)
 
 
 class Dialogs:
@@ -32,13 +36,16 @@ class Dialogs:
     def ask_goal(self) -> None:
         """``t``: type a go-to-goal target; the app drives there (``GoalPicked``)."""
         session = self.console.session
-        pose = session.link.telemetry.snapshot()[0]
+
+        def where() -> tuple[float, float]:  # the link's pose now (the prompt says it live)
+            pose = session.link.telemetry.snapshot()[0]
+            return pose.x, pose.y
 
         def chosen(goal: tuple[float, float] | None) -> None:
             if goal is not None:
                 self.app.post_message(GoalPicked(*goal))
 
-        self.app.push_screen(GoalPrompt((pose.x, pose.y), goal_driver(session.loop.algorithm)), chosen)
+        self.app.push_screen(GoalPrompt(where, goal_driver(session.loop.algorithm)), chosen)
 
     def ask_clear(self) -> None:
         """Clearing the collected samples asks first (nothing else in the console destroys data)."""
@@ -53,16 +60,20 @@ class Dialogs:
     def ask_export(self) -> None:
         """The export chooser, then the export."""
 
+        data = self.console.session.collected()  # what it says it exports is what the file gets
+
         def chosen(formats: tuple[str, ...] | None) -> None:
             if formats:
-                self.export(*formats)
+                self.export(*formats, data=data)
 
-        self.app.push_screen(ExportChooser(len(self.console.session.store)), chosen)
+        self.app.push_screen(ExportChooser(len(data.points)), chosen)
+        self.console.refresh_frame(force=True)  # the status line's count, taken at the same moment
 
-    def export(self, *formats: str) -> list[ExportResult]:
-        """Write the collected data in each format, all under one file stem, and say what became of it:
-        the whole path written, nothing to write, or the failure (the collected data is kept)."""
-        results = self.console.session.export(*formats)
+    def export(self, *formats: str, data: Collected | None = None) -> list[ExportResult]:
+        """Write the collected data (``data``: as the chooser took it) in each format, all under one
+        file stem, and say what became of it: the whole path written, nothing to write, or the failure
+        (the collected data is kept)."""
+        results = self.console.session.export(*formats, data=data)
         for r in results:
             if r.path is not None:
                 where = Path(r.path).resolve()  # the whole path: no guessing where
@@ -94,6 +105,10 @@ class Dialogs:
             return
         except MemoryError:
             self.app.post_message(RecordingFailed(str(path), "out of memory reading it"))
+            return
+        except Exception as exc:  # a fault of ours: said as well (the live session stays), and logged
+            log.exception("opening %s failed", path)
+            self.app.post_message(RecordingFailed(str(path), unexpected(exc)))
             return
         self.app.post_message(RecordingOpened(view))
 

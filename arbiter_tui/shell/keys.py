@@ -110,13 +110,18 @@ def direct_keys(base: type[Driver], router: Callable[[], KeyRouter | None]) -> t
 
 # -- the stop keys' bindings (one definition: the app's, and what every dialog's footer shows) ------------
 NOT_TEXT = "not_text"  # the stop's parameter for the keys that are text in a text input
+TYPING = "typing"  # ... and for ctrl+k's binding the footer shows while a text input has the focus
 STOP_BINDINGS = [
     # priority: a dialog, a table or a button never takes them first; space and k are text in a text
     # input (the app's check_action then passes them on), ctrl+k never is
     Binding("space", f"stop('{NOT_TEXT}')", "Stop", priority=True),
     Binding("k", f"stop('{NOT_TEXT}')", "Stop", show=False, priority=True),
+    # while typing (the topics filter), where space and k are text, the footer names ctrl+k instead; the
+    # app's check_action enables this one only then, and the next one answers ctrl+k everywhere else
+    Binding(ANYWHERE_STOP, f"stop('{TYPING}')", "Stop robot", key_display="^k", priority=True),
     Binding(ANYWHERE_STOP, "stop", "Stop", show=False, priority=True),
 ]
-# what a dialog's footer shows (the app's priority bindings above answer the keys first)
+# what a dialog's footer shows (a modal dialog's footer shows its own bindings, not the app's; the app's
+# priority bindings above answer the keys first): space/^k, or ^k in a dialog one types in
 STOP_HINT = Binding(ANYWHERE_STOP, "app.stop", "Stop robot", key_display="space/^k", priority=True)
 STOP_HINT_TYPING = Binding(ANYWHERE_STOP, "app.stop", "Stop robot", key_display="^k", priority=True)

@@ -34,6 +34,12 @@ class Notice:
     after_s: float = 0.0  # shown this long after the event (0: at once)
 
 
+def unexpected(exc: BaseException) -> str:
+    """A failure no worker expected, in the one line a worker says it in: its kind and what it says (the
+    log has its traceback)."""
+    return f"{type(exc).__name__}: {exc}" if str(exc) else type(exc).__name__
+
+
 class Said(Message):
     """An event the user is told about; the app shows each one's :meth:`notice` (None: nothing to say)."""
 

@@ -1,5 +1,5 @@
-"""The command palette's commands (ctrl+p): screens, stop, controllers, missions, go, goal, collection,
-clear and export, each the same call its key makes."""
+"""The command palette (ctrl+p) and its commands: screens, stop, controllers, missions, go, goal,
+collection, clear and export, each the same call its key makes."""
 
 from __future__ import annotations
 
@@ -7,14 +7,33 @@ from collections.abc import Callable, Iterable
 from functools import partial
 from typing import Any
 
-from textual.app import App, SystemCommand
+from textual.app import App, ComposeResult, SystemCommand
+from textual.command import CommandPalette
+from textual.widgets import Footer
 
 from arbiter_core.controllers import ALGORITHMS, MISSIONS
 
 from ..analytics.files import FORMATS
+from .keys import STOP_HINT_TYPING
 from .screens.base import Console
 
 SCREENS = ("control", "analytics", "latency", "topics")
+PROMPT = "Search for commands…  (ctrl+k stops the robot)"
+
+
+class StopPalette(CommandPalette):
+    """Textual's palette with a footer of its own naming the stop key while one types (``^k``: space
+    and k are text here). Without it the screen's footer behind showed that screen's keys, letters that
+    are text in the palette."""
+
+    BINDINGS = [STOP_HINT_TYPING]
+
+    def __init__(self) -> None:
+        super().__init__(id="--command-palette", placeholder=PROMPT)
+
+    def compose(self) -> ComposeResult:
+        yield from super().compose()
+        yield Footer(show_command_palette=False, compact=True)
 
 
 def commands(

@@ -86,6 +86,10 @@ def test_the_console_records_a_foreign_controllers_run_from_the_robots_topics():
     try:
         assert wait_for(lambda: link.state == CONNECTED, 15)
         assert wait_for(lambda: link.telemetry.odom_count > 0, 10)
+        # the robot stands, no run (issue 54, item 3): one sample where it stands, not one each 0.1 s
+        seen = link.telemetry.odom_count
+        assert wait_for(lambda: link.telemetry.odom_count >= seen + 50, 10)  # a second of odometry
+        assert len(session.store) == 1 and session.store.points()[0].runId is None, len(session.store)
         driver.start()
 
         def completed():

@@ -13,6 +13,7 @@ from arbiter_tui.analytics.exports import to_csv, to_json, to_mcap
 from arbiter_tui.analytics.store import STATS_FIELDS, stats_of_points
 from arbiter_tui.session.compare import AUTONOMOUS
 
+from ..support.bags import Recording, drive, write_bag
 from ..support.points import random_points
 
 HEADER = b"timestamp,x,y,theta,linearVel,angularVel,distanceError,headingError,algorithm,latencyMs\n"
@@ -328,3 +329,31 @@ def test_an_export_with_no_samples_says_so(tmp_path, content, by):
     r = run(f, *by)
     assert (r.returncode, r.stdout) == (1, "")
     assert r.stderr.splitlines() == [f"arbiter-tui stats: {f}: no samples"]
+
+
+@pytest.fixture(scope="module")
+def odometry_only(tmp_path_factory):
+    """A recording with no goal and no plan (as evo's test bag: odometry, no /goal_pose, no /plan): a
+    robot driven about by something the recording does not show."""
+    rec = drive("pure_pursuit", goal=(2.0, 1.0), seconds=8.0)
+    only = Recording([m for m in rec.messages if m[0] == "/odom"], rec.poses)
+    return write_bag(tmp_path_factory.mktemp("bags") / "odom_only", only, "mcap")
+
+
+ERRORS = ("avgDistanceError", "avgHeadingError", "stdDevError", "p95Error")
+
+
+def test_a_recording_with_no_goal_or_plan_has_no_error_not_zero(odometry_only):
+    """Issue 54, item 4: with no reference there is no error: '—' and why, null in JSON, never 0."""
+    r = run(odometry_only)
+    assert r.returncode == 0, r.stderr
+    lines = dict(line.split(None, 1) for line in r.stdout.splitlines())
+    for name in ERRORS:
+        assert lines[name] == "— (no reference: no goal or plan in the recording, so no error to measure)"
+    assert float(lines["avgLinearVel"].split()[0]) > 0.1 and int(lines["sampleCount"]) > 10
+    r = run(odometry_only, "--json")
+    got = json.loads(r.stdout)
+    assert list(got) == [*STATS_FIELDS, "noReference"] and got["noReference"].startswith("no reference")
+    assert all(got[name] is None for name in ERRORS) and got["totalPathLength"] > 1.0
+    r = run(odometry_only, "--by", "run", "--json")
+    assert all(json.loads(r.stdout)["no run"][name] is None for name in ERRORS)

@@ -25,6 +25,7 @@ from arbiter_tui.shell.screens.confirm import ConfirmClear
 from arbiter_tui.shell.screens.export import ExportChooser
 from arbiter_tui.shell.screens.goal import GoalPrompt
 from arbiter_tui.shell.screens.help import HelpScreen
+from arbiter_tui.shell.screens.open_file import OpenRecording
 
 from ..support.backend import start_backend
 from ..support.foreign import FakeNav2
@@ -46,6 +47,7 @@ CONTEXTS = [
     ("2", CommandPalette, ("ctrl+p",), "ctrl+k"),
     ("2", ExportChooser, ("ctrl+s",), "space"),
     ("2", ConfirmClear, ("delete",), "k"),
+    ("2", OpenRecording, ("f",), "ctrl+k"),  # a path: space and k are text there
     ("3", None, (), "space"),
     ("3", HelpScreen, ("question_mark",), "ctrl+k"),
     ("3", CommandPalette, ("ctrl+p",), "ctrl+k"),
@@ -173,6 +175,10 @@ async def test_observe_mode_stops_the_robot_side_controller_from_everywhere(back
             # the panel learns the backend runs one: a, n and g are offered
             side = lambda: app.sampler.robot_side  # noqa: E731
             assert await until(pilot, lambda: side() is not None and side().enabled)
+            # the status line names what drives: the robot-side stanley, not the console's "manual"
+            autonomy.start("stanley", "corner", 0.5, 1.0)
+            status = lambda: app.sampler.frame.status.text()  # noqa: E731
+            assert await until(pilot, lambda: "robot-side stanley" in status(), timeout=10), status()
 
             async def start(pilot):
                 app.session.remote_stop.wait_idle(5)  # the last stop's zeros are over

@@ -178,3 +178,12 @@ def burst(app, *keys: str) -> None:
 def tracker_said(app) -> None:
     """The tracker view a test changed, handed to the screens as the poller hands its answers on."""
     app.sampler.latency_polled(app.tracker.view.answer())
+
+
+def screen_text(app) -> str:
+    """What the terminal shows now, as text: the screen in front over the screens it lets show through
+    (a dialog over the screen behind it), as Textual composes them for the terminal."""
+    from textual._context import visible_screen_stack
+
+    visible_screen_stack.set(app._background_screens)
+    return "\n".join(strip.text.rstrip() for strip in app.screen._compositor.render_strips())

@@ -181,3 +181,34 @@ async def test_the_help_shows_one_scrollbar_against_its_frame_and_none_where_it_
         assert bars == ([scroll] if size[1] < 36 else []), bars
         assert {edge for edge, _ in (scroll.styles.border_left, scroll.styles.border_right)} == {"round"}
         assert scroll.styles.padding.right == 0 and scroll.styles.padding.top == 0  # the bar at the frame
+
+
+@pytest.mark.parametrize("size", [(80, 24), (200, 60)], ids=["80x24", "200x60"])
+async def test_the_observed_robot_side_run_and_the_topics_filter_hint_are_whole(size):
+    """Issue 54, item 7: at 80 columns "pure_pursuit on corner at 0/2" ran on under the panel's labels
+    ("0/2" alone at its left edge) and the topics filter's hint lost its end ("...ctrl+k stops the")."""
+    from arbiter_tui.latency.autonomy import RobotSideView
+    from arbiter_tui.shell.screens.topics import TopicsScreen
+
+    from ..support.tui import screen_text
+
+    app = still_app(observe=True, observe_label="nav2_rpp", cmd_topic="/cmd_vel_measured")
+    async with app.run_test(size=size) as pilot:
+        run = "regulated_pure_pursuit on figure_eight at 10/16"
+        side = RobotSideView(known=True, enabled=True, running=True, text="running", run=run)
+        app.sampler.robot_side_polled(side)
+        app.refresh_frame(force=True)
+        await pilot.pause()
+        panel = app.screen.query_one(RobotPanel)
+        lines = panel.render().plain.splitlines()
+        width = panel.content_size.width
+        robot = lines[next(i for i, line in enumerate(lines) if line.startswith("Robot")) :]
+        assert all(cell_len(line) <= width for line in robot), robot
+        assert all(line.startswith("Robot") or line.startswith(" " * LABEL) for line in robot), robot
+        said = " ".join(" ".join(line.split()) for line in robot)
+        assert said == "Robot running regulated_pure_pursuit on figure_eight at 10/16", robot
+        await pilot.press("4")
+        assert await until(pilot, lambda: isinstance(app.screen, TopicsScreen))
+        await pilot.pause()
+        hint = app.screen.query_one("#topics-filter").placeholder
+        assert hint in screen_text(app), hint

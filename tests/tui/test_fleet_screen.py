@@ -10,7 +10,7 @@ from textual.widgets import Static
 from arbiter_core import fleet
 from arbiter_core.timesync import TimeSync
 from arbiter_tui.fleet.app import FleetApp, FleetList
-from arbiter_tui.fleet.rows import FleetModel
+from arbiter_tui.fleet.rows import FleetModel, detail_lines
 
 W = 1_800_000_000.0  # 2027-01-15 08:00:00 UTC
 MONO = 1000.0
@@ -172,6 +172,8 @@ async def test_enter_opens_the_console_on_the_advertised_urls_and_comes_back():
         await pilot.pause()
         assert opened == [
             [
+                "--robot-name",
+                "lab-01",
                 "--rosbridge",
                 "ws://lab-01.lab:9090",
                 "--tracker",
@@ -235,3 +237,56 @@ async def test_a_view_that_shows_the_same_text_repaints_nothing(monkeypatch):
         app.screen.sample()
         await pilot.pause()
         assert renders[0] > before[0]
+
+
+async def test_at_80_columns_the_head_and_every_detail_line_are_whole():
+    """Issue 54, item 7: at 80 columns the head's "connecting: client of ..." and the detail's longer
+    lines were cut (an ellipsis, the rest lost): now each breaks between its parts, then indented."""
+    from rich.cells import cell_len
+
+    model = fleet_model()
+    session = "connecting: client of tcp/192.168.100.200:7447,tcp/192.168.100.201:7447"
+    app = FleetApp(source=lambda p: model.view(W, MONO, p, session), opener=lambda argv: 0)
+    async with app.run_test(size=(80, 24)) as pilot:
+        await pilot.press("slash", *"lab-0[12]", "enter")
+        rows = app.screen.query_one(FleetList)
+        for name in ("lab-01", "lab-02"):
+            while rows.current().name != name:
+                await pilot.press("down")
+            await pilot.pause()
+            for selector in ("#fleet-head", "#fleet-detail"):
+                static = app.screen.query_one(selector, Static)
+                shown = static.render().plain.splitlines()
+                assert all(cell_len(line) <= static.content_size.width for line in shown), shown
+                assert not any(line.endswith("…") for line in shown), shown
+            head = " ".join(str(app.screen.query_one("#fleet-head", Static).render()).split())
+            assert head.startswith("fleet · 2 of 8 robots") and session in head, head
+            detail = str(app.screen.query_one("#fleet-detail", Static).render())
+            row = rows.current()
+            words = lambda text: " ".join(w for w in text.split() if w != "·")  # noqa: E731
+            for line in detail_lines(row, W):  # every word of every line is on the screen, in order
+                assert words(line) in words(detail), (line, detail)
+
+
+async def test_the_console_opened_from_the_fleet_says_which_robot_it_drives(tmp_path):
+    """Issue 54, item 7: the console the fleet opened never showed the robot's name; the fleet passes it
+    (--robot-name) and the status line says it first, at 80 columns too."""
+    from arbiter_tui.launch import parse
+
+    from ..support.tui import still_app
+
+    opened: list[list[str]] = []
+    app = fleet_app(opened)
+    async with app.run_test(size=(80, 24)) as pilot:
+        app.screen.query_one(FleetList).selected = "lab-01"
+        await pilot.pause()
+        await pilot.press("enter")
+        await pilot.pause()
+    (tmp_path / "empty.toml").write_text("")
+    args, _loaded, _cli = parse([*opened[0], "--config", str(tmp_path / "empty.toml")])
+    assert args.robot_name == "lab-01"
+    console = still_app(tmp_path, robot_name=args.robot_name)
+    async with console.run_test(size=(80, 24)) as pilot:
+        await pilot.pause()
+        status = str(console.screen.query_one("#status").render())
+        assert status.startswith("CONNECTED · lab-01 · "), status

@@ -82,6 +82,30 @@ async def test_a_typed_goal_and_its_errors(tmp_path):
         assert not isinstance(app.screen, GoalPrompt) and not app.session.loop.running
 
 
+async def test_the_goal_prompt_says_where_the_robot_is_now_and_asks_before_a_far_goal(tmp_path):
+    """Issue 54, item 7: the robot's position in the prompt is live, not the one at opening; a goal far
+    from the robot (a typo, another frame) is asked about first and driven on a second enter."""
+    from arbiter_core.kinematics import Pose
+
+    app = still_app(tmp_path)
+    telemetry, loop = app.session.link.telemetry, app.session.loop
+    async with app.run_test(size=SIZE) as pilot:
+        await pilot.press("t")
+        what = lambda: str(app.screen.query(Static).first().render())  # noqa: E731
+        assert "The robot is at +1.25 -0.50." in what()
+        telemetry.pose = Pose(2.99, 0.48, 0.0)  # it drives on while the user types
+        assert await until(pilot, lambda: "The robot is at +2.99 +0.48." in what(), timeout=3)
+        await pilot.press(*"1000 1000", "enter")
+        assert isinstance(app.screen, GoalPrompt) and not loop.running
+        said = str(app.screen.query_one("#goal-error").render())
+        assert said == "(+1000.00, +1000.00) is 1412 m from the robot: enter again to drive there"
+        await pilot.press("enter")
+        assert not isinstance(app.screen, GoalPrompt)
+        assert loop.running and loop.mission.waypoints == ((1000.0, 1000.0),)
+        await pilot.press("space", "t", *"3.5 1", "enter")  # a goal near the robot drives at once
+        assert not isinstance(app.screen, GoalPrompt) and loop.mission.waypoints == ((3.5, 1.0),)
+
+
 async def test_the_hints_name_the_controller_that_will_drive_from_the_registry(tmp_path):
     from arbiter_core.controllers import CONTROLLERS
 

@@ -62,3 +62,23 @@ def test_observe_mode_on_screen(snap_compare, size):
     app.sampler.robot_side_polled(RobotSideView(known=True, enabled=True, running=True, text="running",
                                                 run="stanley on corner at 1/2"))  # fmt: skip
     assert snap_compare(app, terminal_size=size)
+
+
+async def test_the_status_line_names_the_robot_side_controller_that_drives(tmp_path):
+    """Issue 54, item 7: observe mode's status line said `manual` while a robot-side stanley drove."""
+    app = still_app(tmp_path, **OBSERVE)
+    async with app.run_test(size=(80, 24)) as pilot:
+        status = lambda: str(app.screen.query_one("#status").render())  # noqa: E731
+        app.sampler.robot_side_polled(
+            RobotSideView(known=True, enabled=True, running=True, text="running",
+                          run="stanley on corner at 0/2", algorithm="stanley")
+        )  # fmt: skip
+        app.refresh_frame(force=True)
+        await pilot.pause()
+        assert "robot-side stanley" in status() and "manual" not in status(), status()
+        ended = RobotSideView(known=True, enabled=True, text="aborted", run="stanley on corner at 1/2",
+                              algorithm="stanley")  # fmt: skip
+        app.sampler.robot_side_polled(ended)
+        app.refresh_frame(force=True)
+        await pilot.pause()
+        assert "robot-side" not in status() and "manual" in status(), status()

@@ -15,7 +15,7 @@ from arbiter_tui.shell.paths import complete
 from arbiter_tui.shell.widgets.analytics import CompareTable, FileBanner
 
 from ..support.bags import T0_NS, Recording, drive, write_bag
-from ..support.tui import still_app, until
+from ..support.tui import screen_text, still_app, until
 
 
 @pytest.fixture(scope="module")
@@ -29,6 +29,14 @@ def bag(tmp_path_factory):
 
 
 LIVE = "Back to the live session"
+
+
+@pytest.fixture(scope="module")
+def no_goal(tmp_path_factory):
+    """Odometry alone: no goal, no plan, so no reference for an error."""
+    rec = drive("pure_pursuit", goal=(2.0, 1.0), seconds=8.0)
+    only = Recording([m for m in rec.messages if m[0] == "/odom"], rec.poses)
+    return write_bag(tmp_path_factory.mktemp("bags") / "odom_only", only, "mcap")
 
 
 def palette_titles(app) -> list[str]:
@@ -100,3 +108,26 @@ def test_a_recording_on_screen(snap_compare, bag):
     app = still_app()
     app.sampler.recording_opened(recording_view(grade(bag)))
     assert snap_compare(app, terminal_size=(120, 36), press=["2"])
+
+
+async def test_a_recording_with_no_goal_shows_no_error_and_no_live_latency(no_goal, tmp_path):
+    """Issue 54, item 4: the file view of a recording with no goal or plan says "—" and why for the error
+    stats (not 0.000), and shows nothing of the live session's link (its latency line and plot)."""
+    app = still_app(tmp_path)
+    async with app.run_test(size=(120, 36)) as pilot:
+        await pilot.press("2")
+        live = screen_text(app)
+        assert "error vs latency" in live  # the live session's link line
+        await pilot.press("f", *str(no_goal), "enter")
+        assert await until(pilot, lambda: bool(app.frame.analytics.source), timeout=30)
+        await pilot.pause()
+        shown = screen_text(app)
+        for label in ("avg e_d", "p95 e_d", "std e_d", "avg |e_θ|"):
+            assert f"{label} —" in shown, shown
+        assert "0.000 m" not in shown
+        assert "no reference: no goal or plan in the recording" in shown
+        assert "error vs latency" not in shown and "latency (ms)" not in shown
+        await pilot.press("escape")
+        assert await until(pilot, lambda: not app.frame.analytics.source)
+        await pilot.pause()
+        assert "error vs latency" in screen_text(app)

@@ -79,6 +79,9 @@ def test_backend_help_mentions_every_flag(capsys):
         ["--bogus"],
         ["stats"],
         ["stats", "a.csv", "b.csv"],
+        ["--robot-name", "lab 01"],  # not a name the fleet could announce
+        ["--label", "x"],  # observe mode's flags without --observe: said, not silently ignored
+        ["--sim", "--plan-topic", "/plan2", "--cmd-stamped"],
     ],
 )
 def test_console_bad_values_are_one_line_errors(args, capsys, tmp_path, monkeypatch):
@@ -104,6 +107,20 @@ def test_help_names_the_log_file_and_the_config_file(capsys):
     assert code == 0
     flat = " ".join(out.split())
     assert "arbiter-tui-<pid>.log" in flat and "config.toml" in flat and "--print-config" in flat
+
+
+def test_help_names_every_subcommand(capsys):
+    code, out, _ = run_main(tui_cli.main, ["--help"], capsys)
+    assert code == 0
+    flat = " ".join(out.split())
+    for name in ("compare", "stats", "topics", "autonomy", "fleet"):
+        assert f"'arbiter-tui {name} " in flat, name
+        assert tui_cli._command(name) is not None
+
+
+def test_observe_flags_without_observe_say_which(capsys):
+    code, _, err = run_main(tui_cli.main, ["--label", "nav2_rpp", "--goal-topic", "/g"], capsys)
+    assert code == 2 and err == "arbiter-tui: --label, --goal-topic: only with --observe (observe mode)\n"
 
 
 @pytest.mark.parametrize(

@@ -179,6 +179,8 @@ def test_the_console_opens_a_robot_on_its_advertised_urls():
     alive(m, "r1", namespace="/lab/r1")
     row = by_name(m.view(W, 0.1))["r1"]
     assert console_argv(row) == [
+        "--robot-name",
+        "r1",
         "--rosbridge",
         "ws://r1:9090",
         "--tracker",

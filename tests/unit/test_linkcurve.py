@@ -44,7 +44,8 @@ def test_the_marker_line_names_each_controllers_extra_error_at_the_measured_p95(
     held = LinkSweepView(RUNNING, "square", paused=True).text()
     assert "paused while the robot drives" in held and "goes on once it stops" in held and len(held) <= 98
     assert "sweeping latency" in LinkSweepView(RUNNING, "square", paused=False).text()
-    assert LinkSweepView(FAILED, "square", error="boom").text() == "latency sweep failed: boom"
+    failed = LinkSweepView(FAILED, "square", error="boom").text()
+    assert failed == "latency sweep failed: boom (tried again in 30 s)"
 
 
 def test_p95_of_recorded_latencies_ignores_unknown_ones_and_clamps_negative_ones():

@@ -271,7 +271,32 @@ def test_a_controller_that_stops_short_ends_its_run_where_it_stopped_not_at_the_
     assert run.end_ms == pytest.approx(stop_ns / 1e6)
     assert all(p.timestamp <= stop_ns / 1e6 for p in run_points(store, run.id))
     assert run.stats.sampleCount == len(run_points(store, run.id))
-    assert sum(1 for p in store.points() if p.runId is None and p.timestamp > stop_ns / 1e6) >= 55
+    after = [p for p in store.points() if p.timestamp > stop_ns / 1e6]
+    # the stalled window's samples (the run's until it ended, then dropped from it), and one of the robot
+    # standing after the run, not one each 0.1 s (runs.IdleSamples)
+    assert after and all(p.runId is None for p in after)
+    assert len(after) <= 2.0 * 10 + 2
+
+
+def test_a_robot_standing_outside_any_run_gives_one_sample_until_it_moves():
+    """The console's rule (issue 54): observe mode, no goal and no run, the robot at v = 0 for 5 s adds
+    one sample, not 50; a command or motion samples again at the rate, and standing again one more."""
+    obs, store = observer()
+    for k in range(50):  # 5 s standing, nothing commanded
+        obs.on_odometry(T0 + k * S // 10, 1.0, 2.0, 0.5, 0.0, 0.001)
+    assert len(store) == 1 and store.points()[0].runId is None
+    obs.on_command(T0 + 5 * S, 0.0, 0.0)  # a zero command is no command
+    for k in range(50, 60):
+        obs.on_odometry(T0 + k * S // 10, 1.0, 2.0, 0.5, 0.0, 0.0)
+    assert len(store) == 1
+    obs.on_command(T0 + 6 * S, 0.3, 0.0)  # a teleop node drives it, outside any run
+    for k in range(60, 70):
+        obs.on_odometry(T0 + k * S // 10, 1.0 + 0.03 * (k - 59), 2.0, 0.5, 0.3, 0.0)
+    assert len(store) == 11
+    obs.on_command(T0 + 7 * S, 0.0, 0.0)
+    for k in range(70, 90):  # stopped again: one sample where it stopped
+        obs.on_odometry(T0 + k * S // 10, 1.3, 2.0, 0.5, 0.0, 0.0)
+    assert len(store) == 12
 
 
 def test_a_controller_gone_silent_ends_at_its_last_command_and_a_short_pause_ends_nothing():

@@ -88,6 +88,7 @@ class AnalyticsScreen(BaseScreen):
     def watch_frame(self, old: Frame, new: Frame) -> None:
         if bool(old.analytics.source) != bool(new.analytics.source):
             self.refresh_bindings()  # the footer offers esc only while a file is shown
+            self.set_class(bool(new.analytics.source), "-file")  # no live latency over a file
 
     def action_export(self) -> None:
         self.console.dialogs.ask_export()

@@ -14,8 +14,9 @@ from ..keys import STOP_HINT
 HELP = f"""[b]arbiter-tui[/b] — teleop console, analytics and latency monitor
 
 [b]Screens[/b]  1 control  2 analytics  3 latency  4 topics  ? help  ctrl+p
-[b]Stop[/b]     space or k, on every screen and in every dialog;
-         ctrl+k anywhere, even while typing (it stops whatever drives)
+[b]Stop[/b]     ctrl+k anywhere, even while typing: it stops whatever drives;
+         space or k too, but where they are text: the goal prompt,
+         the topics filter, the palette and a recording's path
 [b]Quit[/b]     ctrl+q or ctrl+c (stops the robot first)
 
 [b]Control[/b] (teleop_twist_keyboard keys; hold a key to keep moving)

@@ -38,7 +38,7 @@ class TopicsScreen(BaseScreen):
     sort: reactive[str] = reactive("name", repaint=False)
 
     def compose_body(self) -> ComposeResult:
-        hint = "/ filters by name or type; esc returns to the table; ctrl+k stops the robot"
+        hint = "/ filters by name or type; esc: the table; ctrl+k stops the robot"  # fits 80 columns
         yield FilterInput(placeholder=hint, id="topics-filter")
         yield TopicsList(id="topics-list").data_bind(TopicsScreen.state, TopicsScreen.sort)
         with Horizontal(id="topics-side"):

@@ -8,6 +8,7 @@ costs nothing).
 
 from __future__ import annotations
 
+import re
 from typing import Generic, TypeVar
 
 from rich.cells import cell_len
@@ -35,6 +36,7 @@ KEY_HELP = legend_compact()
 FIT = "fit"  # the dashboard's class for a widget that lays its figures out to its width, never wrapping one
 PART = " · "  # what separates the parts of a line of figures: where a line may break
 INDENT = "  "  # a line's continuation, when it was broken to fit
+FIELDS = re.compile(r"(?:(?:on|at|g:) )?\S+")  # a run's fields: "stanley", "on corner", "at 1/2"
 
 
 def _breaks(plain: str, start: int) -> tuple[list[tuple[int, int]], list[tuple[int, int]]]:
@@ -194,19 +196,28 @@ class RobotPanel(Bound[RobotView]):
         else:
             self.row(t, "Errors", [[f"e_d {r.e_d:.2f} m", f"e_θ {r.e_th:+.2f} rad"]], sep="  ", end="")
         if r.observing is not None:
-            rs = r.robot_side
-            t.append("\nRobot    ", "bold")
-            if rs is None or not rs.known:
-                t.append("robot-side: not asked yet")
-            elif not rs.enabled:
-                t.append(rs.text, "dim")
-            else:
-                t.append(rs.text, "bold green" if rs.running else "")
-                if rs.run:
-                    t.append(f"\n         {rs.run}", "" if rs.running else "dim")
-                if not rs.running:
-                    t.append(f"\n         g: {goal_driver(r.algorithm)} on {r.mission}", "dim")
+            t.append("\n")
+            self.draw_robot_side(t, r)
         return t
+
+    def draw_robot_side(self, t: Text, r: RobotView) -> None:
+        """Observe mode: the robot-side controller, each line broken between whole words to fit (at 80
+        columns "pure_pursuit on corner at 0/2" did not, and ran on under the label)."""
+        rs = r.robot_side
+        rows: list[tuple[str, str, str]] = []  # (label, text, style)
+        if rs is None or not rs.known:
+            rows.append(("Robot", "robot-side: not asked yet", ""))
+        elif not rs.enabled:
+            rows.append(("Robot", rs.text, "dim"))
+        else:
+            rows.append(("Robot", rs.text, "bold green" if rs.running else ""))
+            if rs.run:
+                rows.append(("", rs.run, "" if rs.running else "dim"))
+            if not rs.running:
+                rows.append(("", f"g: {goal_driver(r.algorithm)} on {r.mission}", "dim"))
+        for i, (label, text, style) in enumerate(rows):
+            fields = FIELDS.findall(text)  # "on corner", "at 0/2": a word with the one it governs
+            self.row(t, label, [fields], style, end="\n" if i < len(rows) - 1 else "")
 
     def room(self) -> int | None:
         """Columns for a row's value, right of its label (None: not laid out yet, no limit)."""
@@ -248,11 +259,11 @@ class StatsCards(Bound[AnalyticsView]):
     def draw(self) -> Text:
         if self.has_class(FIT):
             return self.draw_fitted()
-        stats = self.view.stats
+        stats, why = self.view.stats, self.view.no_reference
         t = Text()
         for i, name in enumerate(STATS_FIELDS):
             t.append(f"{STAT_LABELS[name].short:>10} ", "bold")
-            t.append(f"{format_stat(name, getattr(stats, name)):<16}")
+            t.append(f"{format_stat(name, getattr(stats, name), no_reference=why):<16}")
             if i % 3 == 2 and i < len(STATS_FIELDS) - 1:
                 t.append("\n")
         return t
@@ -261,8 +272,10 @@ class StatsCards(Bound[AnalyticsView]):
         """The dashboard's cards: as many to a row as fit the width (rows balanced), each label on the row
         of its value, columns as wide as the longest label and value need (values: at least ``VALUE``, so
         the cards do not move as the figures grow)."""
-        stats = self.view.stats
-        cards = [(STAT_LABELS[n].short, format_stat(n, getattr(stats, n))) for n in STATS_FIELDS]
+        stats, why = self.view.stats, self.view.no_reference
+        cards = [
+            (STAT_LABELS[n].short, format_stat(n, getattr(stats, n), no_reference=why)) for n in STATS_FIELDS
+        ]
         label = max(cell_len(k) for k, _v in cards)
         value = max(self.VALUE, *(cell_len(v) for _k, v in cards))
         card = label + 1 + value + 2
