@@ -19,9 +19,10 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, TypeGuard
 
-from arbiter_core.topicstats import WINDOW_S, TopicFigures, TopicWindow
+from arbiter_core.topicstats import WINDOW_S, TopicFigures, TopicWindow, unknown
 
 from .bus import TopicBus
+from .supervise import Supervisor, WorkerRecord
 
 
 @dataclass(frozen=True)
@@ -62,6 +63,22 @@ class TopicWatch:
     _lock: threading.Lock = field(default_factory=threading.Lock)
     _windows: dict[str, TopicWindow] = field(default_factory=dict)
     _graph: dict[str, _Graph] = field(default_factory=dict)
+    _held: dict[str, str] = field(default_factory=dict)  # worker -> why its topics' states are unknown
+
+    def hold(self, worker: str, reason: str) -> None:
+        """``worker``, which feeds this watch, failed: every measured topic is ``unknown`` (with
+        ``reason`` as its note) until :meth:`release`, never ``silent`` for want of a reader."""
+        with self._lock:
+            self._held[worker] = reason
+
+    def release(self, worker: str) -> None:
+        with self._lock:
+            self._held.pop(worker, None)
+
+    def interrupted(self) -> str | None:
+        """Why the figures cannot be trusted now (a worker that feeds them is restarting or failed)."""
+        with self._lock:
+            return "; ".join(self._held.values()) or None
 
     def watch(self, topic: str, type_name: str, stamped: bool = False, unmeasured: str | None = None) -> bool:
         """Start watching ``topic`` (if the filter wants it); False when it does not."""
@@ -126,15 +143,35 @@ class TopicWatch:
     def figures(self) -> list[TopicFigures]:
         now = self.clock()
         with self._lock:
+            held = "; ".join(self._held.values()) or None
             out = []
             for name, w in sorted(self._windows.items()):
                 g = self._graph.get(name, _Graph())
-                out.append(w.figures(now, g.publishers, g.subscribers, g.qos_note, g.nodes))
+                f = w.figures(now, g.publishers, g.subscribers, g.qos_note, g.nodes)
+                out.append(f if held is None else unknown(f, held))
         return out
 
     def answer(self) -> dict[str, Any]:
-        """The body of ``GET /api/topics``."""
-        return {"window_s": self.window_s, "topics": [f.to_json() for f in self.figures()]}
+        """The body of ``GET /api/topics``: ``interrupted`` says why the states are ``unknown`` (null: they
+        are not)."""
+        return {
+            "window_s": self.window_s,
+            "interrupted": self.interrupted(),
+            "topics": [f.to_json() for f in self.figures()],
+        }
+
+
+def follow(supervisor: Supervisor, worker: str, watch: TopicWatch, label: str) -> None:
+    """While ``worker`` (which feeds ``watch``) is restarting or failed, ``watch`` is held:
+    ``"<label> restarted: <error>"`` (or ``failed``); released at its first round after a restart."""
+
+    def changed(w: WorkerRecord) -> None:
+        if w.state in ("restarting", "failed") and w.error is not None:
+            watch.hold(worker, f"{label} {'failed' if w.state == 'failed' else 'restarted'}: {w.error}"[:200])
+        elif w.state == "running":
+            watch.release(worker)
+
+    supervisor.listen(worker, changed)
 
 
 def _finite_number(v: object) -> TypeGuard[int | float]:

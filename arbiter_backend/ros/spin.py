@@ -1,28 +1,31 @@
-"""An rclpy executor spun in a thread of its own: the relay's nodes (``backend.py``) and the provided
-servers (``interfaces.py``) each have one."""
+"""An rclpy executor spun in a thread of its own, under the backend's supervisor: the relay's nodes
+(``backend.py``) and the provided servers (``interfaces.py``) each have one. A callback that raises
+ends ``spin_once``: the supervisor logs it once and spins again (``supervise.py``), where a bare
+``executor.spin()`` stopped for good, and with it the tracker's watchdog."""
 
 from __future__ import annotations
 
-import logging
 import threading
 
 from rclpy.executors import Executor, ExternalShutdownException
 
-log = logging.getLogger(__name__)
+from ..supervise import Supervisor
+
+SPIN_S = 0.5  # the longest spin_once waits: a stop (or a beat) is seen within it
 
 
-def spin_in_thread(executor: Executor, name: str, what: str) -> threading.Thread:
-    """Spin ``executor`` in a daemon thread called ``name`` until it shuts down; an error that stops it
-    is logged as ``what`` stopping."""
+def spin_in_thread(
+    executor: Executor, name: str, supervisor: Supervisor, stop: threading.Event
+) -> threading.Thread:
+    """Spin ``executor`` in a supervised daemon thread called ``name`` until ``stop`` is set (set it
+    before ``executor.shutdown``) or its context shuts down."""
 
     def spin() -> None:
-        try:
-            executor.spin()
-        except ExternalShutdownException:
-            pass
-        except Exception:
-            log.exception("%s stopped", what)
+        while not stop.is_set():
+            try:
+                executor.spin_once(timeout_sec=SPIN_S)
+            except ExternalShutdownException:
+                return
+            supervisor.beat(name)
 
-    thread = threading.Thread(target=spin, name=name, daemon=True)
-    thread.start()
-    return thread
+    return supervisor.thread(name, spin, stop)
