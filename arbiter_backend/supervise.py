@@ -52,9 +52,9 @@ def parse_faults(text: str | None) -> dict[str, float]:
     for item in (part.strip() for part in (text or "").split(",")):
         if not item:
             continue
-        name, _, after = item.partition("@")
+        name, at, after = item.partition("@")
         try:
-            seconds = float(after) if after else 0.0
+            seconds = float(after) if at else 0.0
         except ValueError:
             seconds = -1.0
         if not name.strip() or not seconds >= 0 or seconds == float("inf"):
