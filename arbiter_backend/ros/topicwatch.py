@@ -16,7 +16,11 @@ callback) is what made watching as dear as deserialising; it never sees these su
 type whose first field is a ``std_msgs/Header`` the stamp is read from the bytes right after the
 4-byte encapsulation header (``int32 sec, uint32 nanosec``, in the byte order the encapsulation
 names). A type not installed here cannot be subscribed (rclpy has no generic subscription): it is
-listed with its type, counts and "type not installed here".
+listed with its type, counts and "type not installed here". A service's introspection topic
+(``pkg/srv/Name_Event``) and an action's feedback (``pkg/action/Name_FeedbackMessage``) are message
+types like any other (``arbiter_core.msgtypes.normalize_type``). A topic that cannot be looked at for
+any other reason is listed with the reason ("cannot be read here: …"), and the others are followed all
+the same. The loop runs under the backend's supervisor (``supervise.py``).
 
 A topic the rosbridge relay reads with a volatile reader of the same reliability (a WebSocket client
 subscribed to it) gets no reader of the monitor's own: the relay's messages are measured instead
