@@ -5,12 +5,14 @@ while, and a 50 Hz ``/odom``. The topic monitor lists and measures them all; eac
 made to fail once (``ARBITER_FAULT``), is restarted and says so in ``/api/health``, and the odometry is
 measured at its rate, never reported silent, throughout."""
 
+import base64
 import subprocess
 import sys
 import time
 
 import httpx
 import pytest
+import roslibpy
 
 from ..support.backend import start_backend
 from ..support.ros import DOMAIN, use_test_domain
@@ -139,6 +141,22 @@ def test_service_events_and_action_topics_are_measured_beside_the_robots_topics(
             ROS_WORKERS, "running"
         ), w
         assert all(w[name]["restarts"] == 0 and w[name]["last_error"] is None for name in ROS_WORKERS), w
+        # the same types across the bridge: a rosbridge client reads the calls and the feedback
+        ros = roslibpy.Ros("127.0.0.1", backend.bridge_port)
+        ros.run(timeout=10)
+        try:
+            calls: list = []
+            feedback: list = []
+            roslibpy.Topic(ros, EVENTS, "std_srvs/srv/Trigger_Event").subscribe(calls.append)
+            roslibpy.Topic(ros, FEEDBACK, "test_msgs/action/Fibonacci_FeedbackMessage").subscribe(
+                feedback.append
+            )
+            assert wait_for(lambda: len(calls) >= 2 and feedback, 10), (calls, feedback)
+            assert {c["info"]["event_type"] for c in calls} & {1, 2}  # REQUEST_RECEIVED, RESPONSE_SENT
+            assert feedback[0]["feedback"]["sequence"]  # uint8[16] travels base64, as rosbridge sends it
+            assert len(base64.b64decode(feedback[0]["goal_id"]["uuid"])) == 16
+        finally:
+            ros.close()
     finally:
         assert backend.stop() == 0
 
