@@ -451,6 +451,8 @@ def unmet(expectations: list[Expectation], answer: TopicsAnswer) -> list[str]:
         t = by_name.get(e.topic)
         if t is None:
             reasons.append(f"{e.topic}: not on the graph (expected >= {e.min_hz:g} Hz)")
+        elif t.state == "unknown":  # the monitor is restarting: its rate cannot be vouched for
+            reasons.append(f"{e.topic}: not known now ({t.note}), expected >= {e.min_hz:g} Hz")
         elif t.rate_hz is None or t.rate_hz < e.min_hz:
             have = "no messages" if t.rate_hz is None else f"{t.rate_hz:.2f} Hz"
             reasons.append(

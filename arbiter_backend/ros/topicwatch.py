@@ -173,11 +173,8 @@ class RosTopics:
         """Follow the graph: watch topics that appeared, drop those gone, refresh counts and QoS notes.
         A topic that cannot be looked at (a type no message class answers to, a subscription refused) is
         listed with the reason and the others are followed all the same."""
-        try:
-            graph = {name: types for name, types in self.node.get_topic_names_and_types() if types}
-        except Exception:  # the graph query is best effort
-            log.exception("reading the graph failed")
-            return
+        # a graph that cannot be read ends the round: the supervisor logs it once and runs the loop again
+        graph = {name: types for name, types in self.node.get_topic_names_and_types() if types}
         me = self.node.get_name()
         relayed = self.relayed()
         for name, types in graph.items():

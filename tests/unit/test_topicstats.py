@@ -280,6 +280,12 @@ def test_expectations_parse_and_name_each_unmet_topic():
         "/odom: 44.00 Hz in the last 5 s, expected >= 45 Hz",
     ]
     assert unmet(parse_expect("/imu>=99"), answer) == []
+    held = parse_topics(
+        {"window_s": 5, "topics": [good(rate_hz=50.0, state="unknown", note="monitor restarted: E")]}
+    )
+    assert unmet(parse_expect("/odom>=45"), held) == [
+        "/odom: not known now (monitor restarted: E), expected >= 45 Hz"
+    ]
     for bad in ("scan>=9", "/scan>9", "/scan>=fast", "/scan>=-1", "/scan>=nan", ",,"):
         with pytest.raises(ValueError):
             parse_expect(bad)
