@@ -4,18 +4,20 @@ A worker is a loop that runs until the backend stops it: a thread (``Supervisor.
 monitor on DDS, the rclpy executors) or an asyncio task (``Supervisor.task``: the embedded transport's
 watchdog, simulator and topic monitor, the relay's QoS follower, the fleet announcer). When its body
 raises, the supervisor logs the error once (a traceback the first time an error is seen, nothing more
-while the same error repeats), waits (``Backoff``: from ``MIN_BACKOFF_S``, doubling, at most
-``MAX_BACKOFF_S``; back to the minimum after a run of ``STABLE_S``) and runs it again. After
-``GIVE_UP_AFTER`` failures in a row, none of them after a stable run, the worker is ``failed`` and left
-stopped: a body that fails that fast fails for a reason a restart does not mend.
+while the same error repeats), waits (from ``MIN_BACKOFF_S``, doubling, at most ``MAX_BACKOFF_S``; back
+to the minimum after a run of ``STABLE_S``) and runs it again. After ``GIVE_UP_AFTER`` failures in a
+row, none of them after a stable run, the worker is ``failed`` and left stopped: a body that fails that
+fast fails for a reason a restart does not mend.
 
 Each worker calls :meth:`Supervisor.beat` once a round: the first beat of a run says it is running again
 (its listeners are told: the topic monitor's answers say "monitor restarted: …" until then), and it is
-where a failure is injected for tests and drills: ``ARBITER_FAULT=NAME[@SECONDS][,NAME...]`` makes
-worker ``NAME`` raise :class:`InjectedFault` once, at its first beat ``SECONDS`` (default 0) after it
-started. ``GET /api/health`` lists each worker (:meth:`Supervisor.workers`): its name, state
-(``starting``, ``running``, ``restarting``, ``failed``, ``stopped``), restarts, last error and since
-when (Unix time) it is in that state. :class:`WorkerRecord` is the bookkeeping, pure; the rest runs the loops.
+where a failure is injected for tests and drills: ``ARBITER_FAULT=NAME[@SECONDS][*TIMES][,NAME...]``
+makes worker ``NAME`` raise :class:`InjectedFault` at its first beat ``SECONDS`` (default 0) after it
+first started, and at the first beat of each run after that until it has failed ``TIMES`` (default 1)
+times in a row (``*4`` holds it down through three backoffs). ``GET /api/health`` lists each worker
+(:meth:`Supervisor.workers`): its name, state (``starting``, ``running``, ``restarting``, ``failed``,
+``stopped``), restarts, last error and since when (Unix time) it is in that state.
+:class:`WorkerRecord` is the bookkeeping, pure; the rest runs the loops.
 """
 
 from __future__ import annotations
@@ -45,21 +47,34 @@ class InjectedFault(RuntimeError):
     """The failure ``ARBITER_FAULT`` asks a worker for."""
 
 
-def parse_faults(text: str | None) -> dict[str, float]:
-    """``"topic-monitor@2,fleet-announcer"`` -> ``{"topic-monitor": 2.0, "fleet-announcer": 0.0}``;
-    ValueError naming the item that is not ``NAME[@SECONDS]``."""
-    out: dict[str, float] = {}
+@dataclass(frozen=True)
+class Fault:
+    """A failure asked of a worker: ``after`` seconds into its first run, ``times`` runs in a row."""
+
+    after: float = 0.0
+    times: int = 1
+
+
+def parse_faults(text: str | None) -> dict[str, Fault]:
+    """``"topic-monitor@2*3,fleet-announcer"`` -> ``{"topic-monitor": Fault(2.0, 3), "fleet-announcer":
+    Fault()}``; ValueError naming the item that is not ``NAME[@SECONDS][*TIMES]``."""
+    out: dict[str, Fault] = {}
     for item in (part.strip() for part in (text or "").split(",")):
         if not item:
             continue
-        name, at, after = item.partition("@")
+        head, star, times_text = item.partition("*")
+        name, at, after = head.partition("@")
         try:
             seconds = float(after) if at else 0.0
+            times = int(times_text) if star else 1
         except ValueError:
-            seconds = -1.0
-        if not name.strip() or not seconds >= 0 or seconds == float("inf"):
-            raise ValueError(f"{FAULT_ENV}: bad item {item!r}: write NAME[@SECONDS], e.g. topic-monitor@2")
-        out[name.strip()] = seconds
+            seconds, times = -1.0, 0
+        if not name.strip() or not 0 <= seconds < float("inf") or not 1 <= times <= GIVE_UP_AFTER:
+            raise ValueError(
+                f"{FAULT_ENV}: bad item {item!r}: write NAME[@SECONDS][*TIMES] (TIMES 1 to {GIVE_UP_AFTER}), "
+                "e.g. topic-monitor@2"
+            )
+        out[name.strip()] = Fault(seconds, times)
     return out
 
 
@@ -75,16 +90,20 @@ class WorkerRecord:
     since: float = 0.0  # Unix time of the latest change of state
     started: float = 0.0  # monotonic time the current run began
     in_a_row: int = 0  # failures since the last stable run
-    fault_after: float | None = None  # an injected failure still to come, this long into a run
+    fault: Fault | None = None  # injected failures still to come
+    fault_at: float | None = None  # monotonic time from which they come (set by the first ``begin``)
 
     def begin(self, mono: float) -> None:
         self.started = mono
+        if self.fault is not None and self.fault_at is None:
+            self.fault_at = mono + self.fault.after
 
     def beat(self, mono: float, wall: float) -> bool:
         """A round of the worker's loop; True when this beat made it ``running`` (its first of a run).
         Raises InjectedFault when one is due."""
-        if self.fault_after is not None and mono - self.started >= self.fault_after:
-            self.fault_after = None
+        if self.fault is not None and self.fault_at is not None and mono >= self.fault_at:
+            left = self.fault.times - 1
+            self.fault = Fault(self.fault.after, left) if left else None
             raise InjectedFault(f"{FAULT_ENV}={self.name}")
         if self.state == "running":
             return False
@@ -129,7 +148,7 @@ class WorkerRecord:
 class Supervisor:
     """The backend's workers (``Servers.supervisor``): shared by both transports and the fleet."""
 
-    faults: Mapping[str, float] = field(default_factory=lambda: parse_faults(os.environ.get(FAULT_ENV)))
+    faults: Mapping[str, Fault] = field(default_factory=lambda: parse_faults(os.environ.get(FAULT_ENV)))
     clock: Callable[[], float] = time.monotonic
     wall: Callable[[], float] = time.time
     _workers: dict[str, WorkerRecord] = field(default_factory=dict)
@@ -151,7 +170,7 @@ class Supervisor:
     def beat(self, name: str) -> None:
         """Called by worker ``name`` once a round (cheap: a look-up and two comparisons)."""
         w = self._workers[name]
-        if w.state == "running" and w.fault_after is None:
+        if w.state == "running" and w.fault is None:
             return
         if w.beat(self.clock(), self.wall()):
             log.debug("%s: running", name)
@@ -161,7 +180,7 @@ class Supervisor:
         with self._lock:
             if name in self._workers:
                 raise ValueError(f"a worker called {name} runs already")
-            w = WorkerRecord(name, since=self.wall(), fault_after=self.faults.get(name))
+            w = WorkerRecord(name, since=self.wall(), fault=self.faults.get(name))
             self._workers[name] = w
         return w
 

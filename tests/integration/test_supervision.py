@@ -28,7 +28,7 @@ def odometry(api: str) -> dict | None:
 
 
 def test_each_embedded_worker_made_to_fail_restarts_and_the_odometry_is_never_silent():
-    faults = ",".join(f"{name}@2" for name in WORKERS)
+    faults = ",".join(f"{name}@2" for name in WORKERS)  # each 2 s after it started
     # no router at that endpoint: the announcer runs all the same (the link is retried in the background)
     backend = start_backend(
         "--zenoh",

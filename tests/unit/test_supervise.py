@@ -8,7 +8,7 @@ import threading
 import pytest
 
 from arbiter_backend import supervise
-from arbiter_backend.supervise import InjectedFault, Supervisor, WorkerRecord, parse_faults
+from arbiter_backend.supervise import Fault, InjectedFault, Supervisor, WorkerRecord, parse_faults
 from arbiter_backend.topicwatch import TopicWatch, follow
 
 from ..support.waits import async_until, wait_for
@@ -45,25 +45,39 @@ def test_a_worker_that_keeps_failing_at_once_is_given_up():
     assert w.state == "failed"  # a failed worker stays failed when the backend stops
 
 
-def test_an_injected_fault_comes_once_after_its_delay():
-    w = WorkerRecord("x", fault_after=2.0)
+def test_an_injected_fault_comes_after_its_delay_from_the_first_start_as_many_runs_as_asked():
+    w = WorkerRecord("x", fault=Fault(2.0, 2))
     w.begin(10.0)
     assert w.beat(11.0, 0.0) is True and w.state == "running"
-    with pytest.raises(InjectedFault, match="ARBITER_FAULT=x"):
+    with pytest.raises(InjectedFault, match="ARBITER_FAULT=x") as first:
         w.beat(12.0, 0.0)
+    w.fail(first.value, 12.0, 0.0)
     w.begin(12.5)
-    assert w.beat(20.0, 0.0) is False  # once
+    with pytest.raises(InjectedFault) as second:  # the next run, at its first beat
+        w.beat(12.5, 0.0)
+    w.fail(second.value, 12.5, 0.0)
+    w.begin(13.0)
+    assert w.beat(20.0, 0.0) is True  # twice, then no more
+    assert w.beat(30.0, 0.0) is False
 
 
 @pytest.mark.parametrize(
     ("text", "faults"),
-    [(None, {}), ("", {}), ("a", {"a": 0.0}), (" a@2 , b@0.5 ,", {"a": 2.0, "b": 0.5})],
+    [
+        (None, {}),
+        ("", {}),
+        ("a", {"a": Fault()}),
+        (" a@2 , b@0.5 ,", {"a": Fault(2.0), "b": Fault(0.5)}),
+        ("a@1*4,b*2", {"a": Fault(1.0, 4), "b": Fault(0.0, 2)}),
+    ],
 )
 def test_faults_parse(text, faults):
     assert parse_faults(text) == faults
 
 
-@pytest.mark.parametrize("text", ["a@", "@2", "a@-1", "a@soon", "a@inf", "a@nan"])
+@pytest.mark.parametrize(
+    "text", ["a@", "@2", "a@-1", "a@soon", "a@inf", "a@nan", "a*0", "a*x", "a@1*", "a*99"]
+)
 def test_a_bad_fault_names_the_item(text):
     with pytest.raises(ValueError, match=re.escape(f"bad item {text!r}")):
         parse_faults(text)
@@ -120,7 +134,7 @@ def test_a_name_runs_once():
 
 
 async def test_a_task_is_restarted_after_an_injected_fault_and_stopped_when_cancelled():
-    sup = Supervisor(faults={"loop": 0.0})
+    sup = Supervisor(faults={"loop": Fault()})
     rounds = []
 
     async def body() -> None:
