@@ -175,6 +175,7 @@ class Announcer:
         self.name = settings.name
         self._due = dict.fromkeys((fleet.STATUS, fleet.LATENCY, fleet.TOPICS), 0.0)
         self._figures: list[TopicFigures] = []
+        self._monitor: str | None = None  # why the figures' states are unknown (read with them)
         self._graded: object = None  # the last run graded (a Mission value)
         self.runs = 0
         self._run: fleet.RunGrade | None = None  # ended, not sent yet
@@ -207,7 +208,7 @@ class Announcer:
     # -- the payloads -----------------------------------------------------------------------------
     def status(self, mono: float, now: float) -> fleet.Status:
         if self.src.watch is not None:
-            self._figures = self.src.watch.figures()
+            self._figures, self._monitor = self.src.watch.snapshot()
         driver, detail = self.driver(mono, now)
         svc = self.src.autonomy
         mission = None if svc is None else svc.autonomy.mission
@@ -267,9 +268,9 @@ class Announcer:
     def topics(self, now: float) -> fleet.Topics | None:
         if self.src.watch is None:
             return None
-        window, monitor = self.src.watch.window_s, self.src.watch.interrupted()
+        window = self.src.watch.window_s
         return fleet.topics_payload(
-            self.name, round(now, 3), window, self._figures, self.settings.expect, monitor
+            self.name, round(now, 3), window, self._figures, self.settings.expect, self._monitor
         )
 
     def grade_runs(self, now: float) -> None:

@@ -75,11 +75,6 @@ class TopicWatch:
         with self._lock:
             self._held.pop(worker, None)
 
-    def interrupted(self) -> str | None:
-        """Why the figures cannot be trusted now (a worker that feeds them is restarting or failed)."""
-        with self._lock:
-            return "; ".join(self._held.values()) or None
-
     def watch(self, topic: str, type_name: str, stamped: bool = False, unmeasured: str | None = None) -> bool:
         """Start watching ``topic`` (if the filter wants it); False when it does not."""
         if not self.filter.wants(topic):
@@ -141,6 +136,11 @@ class TopicWatch:
                 w.sample(now)
 
     def figures(self) -> list[TopicFigures]:
+        return self.snapshot()[0]
+
+    def snapshot(self) -> tuple[list[TopicFigures], str | None]:
+        """Every topic's figures and, while held, why their states are ``unknown`` (read together: the
+        answer and the fleet's payload never say one without the other)."""
         now = self.clock()
         with self._lock:
             held = "; ".join(self._held.values()) or None
@@ -149,16 +149,13 @@ class TopicWatch:
                 g = self._graph.get(name, _Graph())
                 f = w.figures(now, g.publishers, g.subscribers, g.qos_note, g.nodes)
                 out.append(f if held is None else unknown(f, held))
-        return out
+        return out, held
 
     def answer(self) -> dict[str, Any]:
         """The body of ``GET /api/topics``: ``interrupted`` says why the states are ``unknown`` (null: they
         are not)."""
-        return {
-            "window_s": self.window_s,
-            "interrupted": self.interrupted(),
-            "topics": [f.to_json() for f in self.figures()],
-        }
+        figures, held = self.snapshot()
+        return {"window_s": self.window_s, "interrupted": held, "topics": [f.to_json() for f in figures]}
 
 
 def follow(supervisor: Supervisor, worker: str, watch: TopicWatch, label: str) -> None:

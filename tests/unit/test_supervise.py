@@ -110,7 +110,7 @@ def test_a_thread_that_fails_is_restarted_and_its_topics_are_unknown_until_it_ru
     assert [(t["state"], t["note"]) for t in answer["topics"]] == [("unknown", answer["interrupted"])]
     assert sup.workers()[0]["state"] == "restarting"
     go_on.set()
-    assert wait_for(lambda: watch.interrupted() is None, 5)
+    assert wait_for(lambda: watch.answer()["interrupted"] is None, 5)
     assert watch.answer()["topics"][0]["state"] == "waiting"
     assert sup.workers()[0] | {"since": 0} == {
         "name": "mon",
