@@ -172,7 +172,9 @@ class Supervisor:
         w = self._workers[name]
         if w.state == "running" and w.fault is None:
             return
-        if w.beat(self.clock(), self.wall()):
+        with self._lock:  # a worker may beat on two threads at once (an executor's pool): one fault each
+            started = w.beat(self.clock(), self.wall())
+        if started:
             log.debug("%s: running", name)
             self._tell(w)
 

@@ -108,7 +108,9 @@ class RosBackend(Servers):
             self.bridge_node.declare_parameter(
                 "actual_port", self.bridge_port, ParameterDescriptor(read_only=True)
             )
-        self._thread = spin_in_thread(self.executor, "rclpy-executor", self.supervisor, self._stop_spin)
+        self._thread = spin_in_thread(
+            self.executor, self.tracker_node, "rclpy-executor", self.supervisor, self._stop_spin
+        )
         self.topics.start()
 
     async def stop(self) -> None:

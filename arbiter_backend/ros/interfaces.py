@@ -144,7 +144,9 @@ class RosInterfaces:
         self._action_clients: dict[str, tuple[type, ActionClient[Any, Any, Any]]] = {}
         self._closed = False
         self._stop = threading.Event()
-        self._thread = spin_in_thread(self.executor, "rclpy-provider", supervisor, self._stop)
+        self._thread = spin_in_thread(
+            self.executor, self.provider_node, "rclpy-provider", supervisor, self._stop
+        )
 
     # -- types and values -------------------------------------------------------------------
     @staticmethod
