@@ -2,12 +2,14 @@
 to fail once (``ARBITER_FAULT``): each is restarted and says so in ``/api/health``, the error is logged
 once, and the simulator's 50 Hz odometry is measured at its rate, never reported silent, throughout."""
 
+import json
 import os
 import subprocess
 import sys
 import time
 
 import httpx
+import pytest
 
 from ..support.backend import free_port, start_backend
 from ..support.waits import wait_for
@@ -81,3 +83,42 @@ def test_a_malformed_fault_is_refused_in_one_line():
     assert "ARBITER_FAULT: bad item 'topic-monitor@soon'" in r.stderr and len(r.stderr.splitlines()) == 1, (
         r.stderr
     )
+
+
+@pytest.mark.slow  # the hold must outlast the topics payload's 5 s period
+def test_a_fleet_console_reads_monitor_restarted_while_the_robots_monitor_is_down():
+    """The monitor held down through five backoffs (about 6 s: longer than the topics payload's period):
+    the robot's row on a real fleet console says "monitor restarted: …", a warning, not a silent topic;
+    /api/health says the monitor runs again after its sixth failure."""
+    import zenoh
+
+    from arbiter_tui.fleet.client import ConsoleSettings, FleetClient
+    from arbiter_tui.fleet.rows import FleetModel
+
+    port = free_port()
+    endpoint = f"tcp/127.0.0.1:{port}"
+    config = {
+        "mode": "router",
+        "listen": {"endpoints": [endpoint]},
+        "scouting": {"multicast": {"enabled": False}},
+    }
+    router = zenoh.open(zenoh.Config.from_json5(json.dumps(config)))
+    backend = start_backend(
+        "--no-bridge", "--zenoh", endpoint, "--robot-name", "held", env={"ARBITER_FAULT": "topic-monitor*6"}
+    )
+    console = FleetClient(ConsoleSettings(connect=(endpoint,)), FleetModel(stale_after=3.0))
+    try:
+        console.open(connect_timeout_ms=5000)
+
+        def row():
+            return next((r for r in console.view().rows if r.name == "held"), None)
+
+        why = "monitor restarted: InjectedFault: ARBITER_FAULT=topic-monitor"
+        assert wait_for(lambda: (r := row()) is not None and r.worst_topic == why, 20), row()
+        assert row().worst_health == "unknown" and row().severity == 1  # WARN
+        assert wait_for(lambda: workers(backend.api).get("topic-monitor", {}).get("state") == "running", 20)
+        assert workers(backend.api)["topic-monitor"]["restarts"] == 6
+    finally:
+        console.close()
+        backend.stop()
+        router.close()
