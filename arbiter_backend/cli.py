@@ -217,7 +217,8 @@ def build_parser() -> argparse.ArgumentParser:
     add_version(p)
     p.epilog = (
         "In ROS mode, arguments after --ros-args go to rclpy: e.g. --ros-args -p deploy_mode:=pi "
-        "-r __ns:=/robot1. Parameters override the flags."
+        "-r __ns:=/robot1. Parameters override the flags. GET /api/health lists the backend's workers; "
+        "ARBITER_FAULT=NAME[@SECONDS][*TIMES] makes one fail, to drill a restart (docs/robot.md)."
     )
     return p
 
