@@ -80,11 +80,13 @@ def make_app(
     host_clock: HostClock | None = None,
     bridge: Callable[[], dict[str, Any]] | None = None,
     autonomy: AutonomySource | None = None,
+    workers: Callable[[], list[dict[str, Any]]] | None = None,
 ) -> web.Application:
     """``bridge``: the rosbridge endpoint's figures (clients, frames dropped per topic), added to
     ``/api/health`` as its ``bridge`` key. ``autonomy``: the robot-side controller ``/api/autonomy``
     starts (POST), stops (DELETE) and reports (GET); None: 403 (the backend runs without
-    ``--autonomy``: nothing that moves the robot is reachable)."""
+    ``--autonomy``: nothing that moves the robot is reachable). ``workers``: the backend's long-lived
+    workers (``supervise.Supervisor.workers``), added to ``/api/health`` as its ``workers`` key."""
     clock = HostClock() if host_clock is None else host_clock
 
     def _int(request: web.Request, name: str, lo: int, hi: int) -> int | None:
@@ -116,6 +118,8 @@ def make_app(
         body["time_sync"] = (await asyncio.to_thread(clock.read)).to_dict()
         if bridge is not None:
             body = {**body, "bridge": bridge()}
+        if workers is not None:
+            body = {**body, "workers": workers()}
         return _json(body)
 
     async def topic_figures(request: web.Request) -> web.Response:

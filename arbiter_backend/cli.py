@@ -6,6 +6,7 @@ import argparse
 import asyncio
 import errno
 import logging
+import os
 import signal
 import ssl
 import sys
@@ -30,6 +31,7 @@ from arbiter_core.rosenv import rclpy_missing
 from arbiter_core.topics import MEASURED_TYPES
 from arbiter_core.topicstats import WINDOW_S
 
+from . import supervise
 from .bridge import DEAD_AFTER, MAX_FRAME_BYTES, TRANSPORT_MAX_FRAME, WS_PING_S
 from .pacing import WAIT_S as PACED_WAIT_S
 from .server import Backend, BackendConfig
@@ -216,7 +218,8 @@ def build_parser() -> argparse.ArgumentParser:
     add_version(p)
     p.epilog = (
         "In ROS mode, arguments after --ros-args go to rclpy: e.g. --ros-args -p deploy_mode:=pi "
-        "-r __ns:=/robot1. Parameters override the flags."
+        "-r __ns:=/robot1. Parameters override the flags. GET /api/health lists the backend's workers; "
+        "ARBITER_FAULT=NAME[@SECONDS][*TIMES] makes one fail, to drill a restart (docs/robot.md)."
     )
     return p
 
@@ -282,6 +285,10 @@ def split_ros_args(argv: list[str]) -> tuple[list[str], list[str]]:
 
 
 def make_backend(config: BackendConfig, ros_args: list[str]) -> Backend | RosBackendT:
+    try:  # the failures asked of the workers (docs/topics.md), checked before anything starts
+        supervise.parse_faults(os.environ.get(supervise.FAULT_ENV))
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
     if config.transport != "ros":
         if ros_args:
             raise UsageError("--ros-args needs --transport ros")

@@ -35,6 +35,7 @@ from arbiter_core.stats import percentile
 from arbiter_core.topicstats import Expectation, TopicFigures
 
 from .autonomy import AutonomyService
+from .supervise import Supervisor
 from .topicwatch import TopicWatch
 from .tracker import LatencyTracker
 
@@ -43,6 +44,7 @@ TICK_S = 0.25  # the announcer's beat: what is due is published on it
 SYNC_REFRESH_S = 30.0  # the host's clock-sync probe (it may take a second: off the loop)
 DRIVER_RECENT_S = 1.0  # a command this recent says who drives
 MODES = ("client", "peer")
+WORKER = "fleet-announcer"  # its name among the backend's supervised workers
 
 
 class FleetConfigError(Exception):
@@ -173,6 +175,7 @@ class Announcer:
         self.name = settings.name
         self._due = dict.fromkeys((fleet.STATUS, fleet.LATENCY, fleet.TOPICS), 0.0)
         self._figures: list[TopicFigures] = []
+        self._monitor: str | None = None  # why the figures' states are unknown (read with them)
         self._graded: object = None  # the last run graded (a Mission value)
         self.runs = 0
         self._run: fleet.RunGrade | None = None  # ended, not sent yet
@@ -205,7 +208,7 @@ class Announcer:
     # -- the payloads -----------------------------------------------------------------------------
     def status(self, mono: float, now: float) -> fleet.Status:
         if self.src.watch is not None:
-            self._figures = self.src.watch.figures()
+            self._figures, self._monitor = self.src.watch.snapshot()
         driver, detail = self.driver(mono, now)
         svc = self.src.autonomy
         mission = None if svc is None else svc.autonomy.mission
@@ -266,7 +269,9 @@ class Announcer:
         if self.src.watch is None:
             return None
         window = self.src.watch.window_s
-        return fleet.topics_payload(self.name, round(now, 3), window, self._figures, self.settings.expect)
+        return fleet.topics_payload(
+            self.name, round(now, 3), window, self._figures, self.settings.expect, self._monitor
+        )
 
     def grade_runs(self, now: float) -> None:
         """A robot-side run that ended since the last look: graded once, counted, sent when the gap
@@ -408,15 +413,18 @@ class FleetAnnouncer:
     def __init__(self, backend: Any, settings: FleetSettings, link: FleetLink) -> None:
         self.link = link
         self.host_clock: HostClock = backend.host_clock  # the API's: the host is probed once for both
+        self.supervisor: Supervisor = backend.supervisor  # the backend's: its workers in /api/health
         src = sources_of(backend, settings.advertise_host)
         self.announcer = Announcer(settings, src, time.time(), self.host_clock)
         self._task: asyncio.Task[None] | None = None
 
     def start(self) -> None:
         self.link.open_in_background(lambda minutes: self.announcer.history(minutes, time.time()))
-        self._task = asyncio.get_running_loop().create_task(self._run())
+        self._task = self.supervisor.task(WORKER, self._run)
 
     async def _run(self) -> None:
+        """The announcer's loop, supervised (``supervise.py``): an error that ends it (a bug: the payloads
+        are pure) is logged once and the loop runs again, announcing afresh once the link is open."""
         loop = asyncio.get_running_loop()
         loop.run_in_executor(None, self.host_clock.read)
         synced, was_open = time.monotonic(), False
@@ -428,12 +436,10 @@ class FleetAnnouncer:
             if mono - synced > SYNC_REFRESH_S:
                 synced = mono
                 loop.run_in_executor(None, self.host_clock.read)
-            try:
-                for p in self.announcer.due(mono, now):
-                    if was_open:
-                        self.link.put(p.kind, fleet.encode(p))
-            except Exception:  # a bug here must not take the robot's servers down
-                log.exception("fleet: a payload was not published")
+            self.supervisor.beat(WORKER)
+            for p in self.announcer.due(mono, now):
+                if was_open:
+                    self.link.put(p.kind, fleet.encode(p))
             await asyncio.sleep(TICK_S)
 
     async def stop(self) -> None:

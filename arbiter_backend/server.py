@@ -33,7 +33,8 @@ from .autonomy import AutonomyService
 from .bridge import MAX_FRAME_BYTES, WS_PING_S, RosbridgeEndpoint
 from .bus import Bus, TopicBus
 from .pacing import WAIT_S as PACED_WAIT_S
-from .topicwatch import EmbeddedTopics, TopicFilter, TopicWatch
+from .supervise import Supervisor
+from .topicwatch import EmbeddedTopics, TopicFilter, TopicWatch, follow
 from .tracker import DEFAULT_MAX_COMMAND_AGE_MS, LatencyTracker
 
 log = logging.getLogger(__name__)
@@ -146,6 +147,8 @@ class Servers:
         self._ssl = config.ssl_context()
         # the host's clock-sync probe, cached: one for the API's /api/health and the fleet's announcer
         self.host_clock = HostClock()
+        # every long-lived worker of the backend, whichever the transport (supervise.py)
+        self.supervisor = Supervisor()
 
     async def _serve(self, app: web.Application, port: int) -> int:
         runner = web.AppRunner(app, access_log=None, handle_signals=False)
@@ -176,6 +179,7 @@ class Servers:
                 host_clock=self.host_clock,
                 bridge=endpoint.stats if endpoint is not None else None,
                 autonomy=autonomy,
+                workers=self.supervisor.workers,
             )
             self.api_port = await self._serve(api_app, self.config.api_port)
         except BaseException:
@@ -272,6 +276,7 @@ class Backend(Servers):
         period = min(0.05, self.config.cmd_timeout / 4)
         while True:
             await asyncio.sleep(period)
+            self.supervisor.beat("watchdog")
             if self.tracker.watchdog_due():
                 log.info("no command for %.2fs: publishing zero twist", self.config.cmd_timeout)
                 self.bus.publish(
@@ -284,6 +289,7 @@ class Backend(Servers):
         while True:
             await asyncio.sleep(TOPICS_TICK_S)
             self.topics.tick()
+            self.supervisor.beat("topic-monitor")
 
     async def _sim_loop(self) -> None:
         assert self.simulator is not None
@@ -291,6 +297,7 @@ class Backend(Servers):
         loop = asyncio.get_running_loop()
         next_t = loop.time()
         while True:
+            self.supervisor.beat("simulator")
             odom = self.simulator.tick(time.monotonic(), time.time_ns())
             self.bus.publish(self.topic_odom, odom)
             next_t += period
@@ -304,11 +311,12 @@ class Backend(Servers):
         await self.start_servers(
             self.endpoint if self.config.bridge else None, self.tracker, self.topics, self.autonomy
         )
-        loop = asyncio.get_running_loop()
-        self._tasks.append(loop.create_task(self._watchdog()))
-        self._tasks.append(loop.create_task(self._topics_loop()))
+        sup = self.supervisor
+        follow(sup, "topic-monitor", self.topics.watch, "monitor")
+        self._tasks.append(sup.task("watchdog", self._watchdog))
+        self._tasks.append(sup.task("topic-monitor", self._topics_loop))
         if self.simulator is not None:
-            self._tasks.append(loop.create_task(self._sim_loop()))
+            self._tasks.append(sup.task("simulator", self._sim_loop))
 
     async def stop(self) -> None:
         for task in self._tasks:

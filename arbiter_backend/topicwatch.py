@@ -19,9 +19,10 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, TypeGuard
 
-from arbiter_core.topicstats import WINDOW_S, TopicFigures, TopicWindow
+from arbiter_core.topicstats import WINDOW_S, TopicFigures, TopicWindow, unknown
 
 from .bus import TopicBus
+from .supervise import Supervisor, WorkerRecord
 
 
 @dataclass(frozen=True)
@@ -62,6 +63,17 @@ class TopicWatch:
     _lock: threading.Lock = field(default_factory=threading.Lock)
     _windows: dict[str, TopicWindow] = field(default_factory=dict)
     _graph: dict[str, _Graph] = field(default_factory=dict)
+    _held: dict[str, str] = field(default_factory=dict)  # worker -> why its topics' states are unknown
+
+    def hold(self, worker: str, reason: str) -> None:
+        """``worker``, which feeds this watch, failed: every measured topic is ``unknown`` (with
+        ``reason`` as its note) until :meth:`release`, never ``silent`` for want of a reader."""
+        with self._lock:
+            self._held[worker] = reason
+
+    def release(self, worker: str) -> None:
+        with self._lock:
+            self._held.pop(worker, None)
 
     def watch(self, topic: str, type_name: str, stamped: bool = False, unmeasured: str | None = None) -> bool:
         """Start watching ``topic`` (if the filter wants it); False when it does not."""
@@ -124,17 +136,39 @@ class TopicWatch:
                 w.sample(now)
 
     def figures(self) -> list[TopicFigures]:
+        return self.snapshot()[0]
+
+    def snapshot(self) -> tuple[list[TopicFigures], str | None]:
+        """Every topic's figures and, while held, why their states are ``unknown`` (read together: the
+        answer and the fleet's payload never say one without the other)."""
         now = self.clock()
         with self._lock:
+            held = "; ".join(self._held.values()) or None
             out = []
             for name, w in sorted(self._windows.items()):
                 g = self._graph.get(name, _Graph())
-                out.append(w.figures(now, g.publishers, g.subscribers, g.qos_note, g.nodes))
-        return out
+                f = w.figures(now, g.publishers, g.subscribers, g.qos_note, g.nodes)
+                out.append(f if held is None else unknown(f, held))
+        return out, held
 
     def answer(self) -> dict[str, Any]:
-        """The body of ``GET /api/topics``."""
-        return {"window_s": self.window_s, "topics": [f.to_json() for f in self.figures()]}
+        """The body of ``GET /api/topics``: ``interrupted`` says why the states are ``unknown`` (null: they
+        are not)."""
+        figures, held = self.snapshot()
+        return {"window_s": self.window_s, "interrupted": held, "topics": [f.to_json() for f in figures]}
+
+
+def follow(supervisor: Supervisor, worker: str, watch: TopicWatch, label: str) -> None:
+    """While ``worker`` (which feeds ``watch``) is restarting or failed, ``watch`` is held:
+    ``"<label> restarted: <error>"`` (or ``failed``); released at its first round after a restart."""
+
+    def changed(w: WorkerRecord) -> None:
+        if w.state in ("restarting", "failed") and w.error is not None:
+            watch.hold(worker, f"{label} {'failed' if w.state == 'failed' else 'restarted'}: {w.error}"[:200])
+        elif w.state == "running":
+            watch.release(worker)
+
+    supervisor.listen(worker, changed)
 
 
 def _finite_number(v: object) -> TypeGuard[int | float]:

@@ -57,7 +57,7 @@ DRIVER_WORDS = {
     "nobody": "nobody",
 }
 # a topic's health against the robot's expectations, worst first (the topics payload's order)
-HEALTH = ("missing", "below", "silent", "slow", "waiting", "quiet", "unmeasured", "ok")
+HEALTH = ("missing", "below", "silent", "slow", "unknown", "waiting", "quiet", "unmeasured", "ok")
 OUTCOMES = ("completed", "aborted", "overridden")
 PROTOCOLS = ("tcp", "udp", "tls", "quic", "ws", "unixsock-stream")
 
@@ -371,6 +371,8 @@ class Topics:
     window_s: float
     watched: int
     topics: tuple[TopicHealth, ...] = ()
+    # why the topics' health is ``unknown`` ("monitor restarted: …", ``TopicsAnswer.interrupted``)
+    monitor: str | None = None
 
     kind = TOPICS
 
@@ -407,6 +409,7 @@ class Topics:
             window_s=_num(o, w, "window_s", lo=0),
             watched=_int(o, w, "watched"),
             topics=tuple(items),
+            monitor=_str(o, w, "monitor", "detail", optional=True),
         )
 
 
@@ -594,19 +597,28 @@ def history_minutes(parameters: str) -> float:
 
 # -- building the topics payload (the publisher's side, pure) --------------------------------------
 def health_of(fig: TopicFigures, expect_hz: float | None) -> str:
-    """One topic's health: ``below`` its expectation, else its monitor state (``topicstats``)."""
-    if fig.state == "unmeasured":
-        return "unmeasured"
+    """One topic's health: ``below`` its expectation, else its monitor state (``topicstats``); while the
+    monitor is down (``unknown``) nothing is known of it, its expectation included."""
+    if fig.state in ("unmeasured", "unknown"):
+        return fig.state
     if expect_hz is not None and (fig.rate_hz is None or fig.rate_hz < expect_hz):
         return "below"
     return fig.state if fig.state in HEALTH else "ok"
 
 
 def topics_payload(
-    robot: str, t: float, window_s: float, figures: Sequence[TopicFigures], expect: Sequence[Expectation]
+    robot: str,
+    t: float,
+    window_s: float,
+    figures: Sequence[TopicFigures],
+    expect: Sequence[Expectation],
+    monitor: str | None = None,
 ) -> Topics:
     """Every topic's health against ``expect`` (an expected topic absent is ``missing``), the worst
-    first, as many as fit in the payload's limit (``watched`` counts them all)."""
+    first, as many as fit in the payload's limit (``watched`` counts them all); ``monitor``: why the
+    healths are ``unknown`` (``TopicWatch.interrupted``)."""
+    note = None if monitor is None else "".join(c if c.isprintable() else " " for c in monitor)
+    note = note[: _STR_MAX["detail"]] if note else None
     wanted = {e.topic: e.min_hz for e in expect}
     items = [
         TopicHealth(f.name[: _STR_MAX["topic"]], health_of(f, wanted.get(f.name)), _round(f.rate_hz),
@@ -620,7 +632,7 @@ def topics_payload(
     watched = len(items)
     items = items[:MAX_TOPICS]
     while True:
-        p = Topics(robot, t, window_s, watched, tuple(items))
+        p = Topics(robot, t, window_s, watched, tuple(items), note)
         if len(json.dumps(to_obj(p), separators=(",", ":"))) <= MAX_BYTES[TOPICS] or not items:
             return p
         items = items[: len(items) * 3 // 4]

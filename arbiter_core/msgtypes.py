@@ -54,6 +54,17 @@ _NAMES = {id(spec): name for name, spec in TYPES.items()}  # a nested spec's typ
 _ROSIDL = {"float64": "double"}  # the basic types as rosidl (and rosapi's TypeDef) spell them
 
 _TYPE_RE = re.compile(r"^([A-Za-z][A-Za-z0-9_]*)/(?:(msg)/)?([A-Za-z][A-Za-z0-9_]*)$")
+# the messages rosidl generates for a service or an action, which travel on topics of their own: a
+# service's ``_service_event`` topic (``pkg/srv/Name_Event``, with introspection on) and an action's
+# ``_action/feedback`` (``pkg/action/Name_FeedbackMessage``); the rest for completeness
+SRV_MESSAGES = ("Request", "Response", "Event")
+ACTION_MESSAGES = (
+    "Goal", "Result", "Feedback", "FeedbackMessage",
+    *(f"{call}_{part}" for call in ("SendGoal", "GetResult") for part in SRV_MESSAGES),
+)  # fmt: skip
+_INTERFACE_MESSAGE_RE = re.compile(
+    r"^([A-Za-z][A-Za-z0-9_]*)/(srv|action)/([A-Za-z][A-Za-z0-9]*)_([A-Za-z_]+)$"
+)
 _INT_RANGES = {"int32": (-(2**31), 2**31 - 1), "uint32": (0, 2**32 - 1)}
 _QUAT_DEFAULT_W = 1.0
 
@@ -88,13 +99,29 @@ def time_fields(value: Any, path: str, now_ok: bool) -> dict[str, Any] | None:
 
 
 def normalize_type(name: Any) -> str:
-    """``pkg/Type`` and ``pkg/msg/Type`` -> ``pkg/msg/Type``; raises MessageError for anything else."""
+    """``pkg/Type`` and ``pkg/msg/Type`` -> ``pkg/msg/Type``; a message generated for a service or an
+    action (``pkg/srv/Name_Event``, ``pkg/action/Name_FeedbackMessage``, see ``SRV_MESSAGES`` and
+    ``ACTION_MESSAGES``) as it is; raises MessageError for anything else."""
     if not isinstance(name, str):
         raise MessageError(f"type must be a string, got {type(name).__name__}")
     m = _TYPE_RE.match(name)
-    if not m:
+    if m:
+        return f"{m.group(1)}/msg/{m.group(3)}"
+    if interface_message(name) is None:
         raise MessageError(f"invalid message type name {name[:80]!r}")
-    return f"{m.group(1)}/msg/{m.group(3)}"
+    return name
+
+
+def interface_message(name: str) -> tuple[str, str, str, str] | None:
+    """``pkg/srv/Name_Event`` -> ``(pkg, "srv", Name, "Event")`` (likewise ``action``); None when
+    ``name`` is not a message rosidl generates for a service or an action."""
+    m = _INTERFACE_MESSAGE_RE.match(name)
+    if not m:
+        return None
+    pkg, kind, base, part = m.groups()
+    if part not in (SRV_MESSAGES if kind == "srv" else ACTION_MESSAGES):
+        return None
+    return pkg, kind, base, part
 
 
 def _default(spec: Any) -> Any:

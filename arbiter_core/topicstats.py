@@ -18,7 +18,9 @@ answer with :func:`parse_topics` into frozen :class:`TopicFigures`. One definiti
   (nothing in the window, and not ``silent``: a topic that publishes on demand), ``slow`` (the rate fell
   below ``SLOW_FRACTION`` of the usual rate: the highest rate seen, decaying with a half-life of
   ``USUAL_HALF_LIFE_S``, so a topic that settles at a new rate is usual again a minute later), else
-  ``ok``; ``unmeasured`` when the backend cannot subscribe (its type is not installed there).
+  ``ok``; ``unmeasured`` when the backend cannot subscribe (its type is not installed there, or it
+  cannot be read: the note says why); ``unknown`` while the monitor that measures it is restarting or
+  failed (the note, and the answer's ``interrupted``, say "monitor restarted: …"): not ``silent``.
 
 Stopped or quiet: a sensor that stops is a fault, a command topic that stops is a robot standing still.
 Each topic's rhythm is followed message by message: its period and the period's spread, averaged over
@@ -33,6 +35,7 @@ the window is ``quiet``: it has shown it publishes on demand (commands, events, 
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections import deque
 from dataclasses import dataclass
@@ -45,6 +48,7 @@ MAX_SAMPLES = 20_000  # per topic: a 4 kHz topic fills the window; beyond, the o
 SLOW_FRACTION = 0.7
 USUAL_HALF_LIFE_S = 60.0
 NOT_INSTALLED = "type not installed here"
+CANNOT_READ = "cannot be read here"  # the start of the note of a topic the monitor could not look at
 # stopped or quiet (see the module's docstring)
 REGULAR_CV = 0.5  # periods are regular when their standard deviation is at most half their mean
 MIN_GAPS = 5  # periods seen before a rhythm is judged
@@ -54,7 +58,7 @@ STEADY_S = 60.0  # a topic that waited or paused before is steady after publishi
 SAMPLE_S = 1.0  # the rate history: one sample a second...
 RATE_HISTORY = 60  # ...over the last minute
 
-STATES = ("ok", "slow", "silent", "quiet", "waiting", "unmeasured")
+STATES = ("ok", "slow", "silent", "quiet", "waiting", "unmeasured", "unknown")
 
 
 class TopicsError(ValueError):
@@ -97,6 +101,15 @@ class TopicFigures:
 
 def _finite(v: Any) -> Any:
     return None if isinstance(v, float) and not math.isfinite(v) else v
+
+
+def unknown(f: TopicFigures, reason: str) -> TopicFigures:
+    """``f`` while the monitor that measures it is down (``reason``: "monitor restarted: …"): its state
+    ``unknown`` and the reason its note, its figures as they were; a topic the monitor cannot read at all
+    stays ``unmeasured``."""
+    if f.state == "unmeasured":
+        return f
+    return dataclasses.replace(f, state="unknown", note=reason)
 
 
 class TopicWindow:
@@ -382,6 +395,7 @@ class TopicsAnswer:
     window_s: float
     topics: tuple[TopicFigures, ...]
     skipped: int = 0  # topics in the answer that were not the documented shape
+    interrupted: str | None = None  # why the states are ``unknown``: the monitor is restarting or failed
 
 
 def parse_topics(body: Any) -> TopicsAnswer:
@@ -398,7 +412,9 @@ def parse_topics(body: Any) -> TopicsAnswer:
             topics.append(_topic(obj))
         except TopicsError:
             skipped += 1
-    return TopicsAnswer(float(window), tuple(sorted(topics, key=lambda t: t.name)), skipped)
+    why = body.get("interrupted")
+    interrupted = why[:200] if isinstance(why, str) and why else None
+    return TopicsAnswer(float(window), tuple(sorted(topics, key=lambda t: t.name)), skipped, interrupted)
 
 
 # -- expectations: "is every expected topic above its rate?" ---------------------------------------
@@ -435,6 +451,8 @@ def unmet(expectations: list[Expectation], answer: TopicsAnswer) -> list[str]:
         t = by_name.get(e.topic)
         if t is None:
             reasons.append(f"{e.topic}: not on the graph (expected >= {e.min_hz:g} Hz)")
+        elif t.state == "unknown":  # the monitor is restarting: its rate cannot be vouched for
+            reasons.append(f"{e.topic}: not known now ({t.note}), expected >= {e.min_hz:g} Hz")
         elif t.rate_hz is None or t.rate_hz < e.min_hz:
             have = "no messages" if t.rate_hz is None else f"{t.rate_hz:.2f} Hz"
             reasons.append(

@@ -75,7 +75,7 @@ class RosBackend(Servers):
             self.monitor_node = Node(
                 topicwatch.NODE_NAME, context=self.context, start_parameter_services=False
             )
-            self.topics = topicwatch.RosTopics(self.monitor_node, config.make_topic_watch())
+            self.topics = topicwatch.RosTopics(self.monitor_node, config.make_topic_watch(), self.supervisor)
         except BaseException:
             self._shutdown_ros()
             raise
@@ -86,6 +86,7 @@ class RosBackend(Servers):
         for node in self.nodes:
             self.executor.add_node(node)
         self._thread: threading.Thread | None = None
+        self._stop_spin = threading.Event()
 
     async def start(self) -> None:
         if self.bridge_node is not None:
@@ -93,14 +94,18 @@ class RosBackend(Servers):
             # a topic the relay reads is measured on its reader, not on a second one (ros/topicwatch.py)
             self.bus.tap, self.topics.relayed = self.topics.took, self.bus.relayed
             # services and actions across the bridge: the provided servers on a node of their own
-            self.bus.interfaces = RosInterfaces(self.bridge_node, asyncio.get_running_loop(), self.context)
+            self.bus.interfaces = RosInterfaces(
+                self.bridge_node, asyncio.get_running_loop(), self.context, self.supervisor
+            )
             self.tracker_node.local_report = self.bus.deliver_local
             stamped = self.tracker_node.stamped_sub.topic_name
             self.bus.local_handlers[stamped] = self.tracker_node.on_local_command
             # names resolve as rclpy resolves them for the bridge node (remaps of __ns, __node included)
             node = self.bridge_node
             self.endpoint = self.config.make_endpoint(self.bus, node.get_namespace(), node.get_name())
-            self._watch = asyncio.create_task(self.bus.watch_publishers())  # QoS follows the publishers
+            bus, beat = self.bus, self.supervisor.beat
+            # QoS follows the publishers
+            self._watch = self.supervisor.task("qos-follower", lambda: bus.watch_publishers(beat=beat))
         autonomy = self.autonomy_node.service if self.autonomy_node is not None else None
         await self.start_servers(self.endpoint, self.tracker, self.topics, autonomy)
         if self.bridge_node is not None:
@@ -108,7 +113,9 @@ class RosBackend(Servers):
             self.bridge_node.declare_parameter(
                 "actual_port", self.bridge_port, ParameterDescriptor(read_only=True)
             )
-        self._thread = spin_in_thread(self.executor, "rclpy-executor", "rclpy executor")
+        self._thread = spin_in_thread(
+            self.executor, self.tracker_node, "rclpy-executor", self.supervisor, self._stop_spin
+        )
         self.topics.start()
 
     async def stop(self) -> None:
@@ -120,6 +127,7 @@ class RosBackend(Servers):
             if self.bus.interfaces is not None:
                 self.bus.interfaces.close()
         self.topics.close()
+        self._stop_spin.set()
         self.executor.shutdown(timeout_sec=2.0)
         if self._thread is not None:
             self._thread.join(timeout=2.0)

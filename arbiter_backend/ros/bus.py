@@ -381,14 +381,17 @@ class RosBus:
             latched = want.durability == DurabilityPolicy.TRANSIENT_LOCAL
             sub.latched = (sub.latched or deque(maxlen=want.depth)) if latched else None
 
-    async def watch_publishers(self, period: float = REMATCH_S) -> None:
-        """Call :meth:`rematch` every ``period`` seconds until cancelled."""
+    async def watch_publishers(
+        self, period: float = REMATCH_S, beat: Callable[[str], None] | None = None
+    ) -> None:
+        """Call :meth:`rematch` every ``period`` seconds until cancelled; an error ends it (the backend's
+        supervisor logs it once and calls this again: ``supervise.py``). ``beat``: the supervisor's, each
+        round, as worker ``qos-follower``."""
         while True:
             await asyncio.sleep(period)
-            try:
-                self.rematch()
-            except Exception:  # never let the graph take the relay down
-                log.exception("following the publishers failed")
+            if beat is not None:
+                beat("qos-follower")
+            self.rematch()
 
     def subscribe(self, topic: str, callback: Callback, type_name: str | None = None) -> Callable[[], None]:
         t = self.declare(topic, type_name) if type_name is not None else self.type_of(topic)

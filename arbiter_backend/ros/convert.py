@@ -26,7 +26,7 @@ from typing import Any
 from rosidl_parser import definition as rd
 
 from arbiter_core import msgtypes
-from arbiter_core.msgtypes import MessageError, normalize_type
+from arbiter_core.msgtypes import MessageError, interface_message, normalize_type
 from arbiter_core.topics import stamp
 
 from .. import cborenc
@@ -52,16 +52,30 @@ MAX_DEPTH = 32
 
 @lru_cache(maxsize=256)
 def message_class(type_name: str) -> type[Any]:
-    """The generated class for ``pkg/msg/Type`` (or ``pkg/Type``); MessageError if it is not installed."""
-    pkg, _, name = normalize_type(type_name).split("/")
+    """The generated class for ``pkg/msg/Type`` (or ``pkg/Type``), or for a message of a service or an
+    action (``pkg/srv/Name_Event``, ``pkg/action/Name_FeedbackMessage``: ``msgtypes.normalize_type``);
+    MessageError if it is not installed."""
+    full = normalize_type(type_name)
+    pkg, kind, name = full.split("/")
     try:
-        module = importlib.import_module(f"{pkg}.msg")
-        cls: type[Any] = getattr(module, name)
-    except (ImportError, AttributeError):
-        raise MessageError(f"message type {pkg}/msg/{name} is not installed") from None
+        module = importlib.import_module(f"{pkg}.{kind}")
+        cls: type[Any] = getattr(module, name, None) or _action_part(module, full)
+    except (ImportError, AttributeError, ValueError):
+        raise MessageError(f"message type {full} is not installed") from None
     if not hasattr(cls, "get_fields_and_field_types"):
-        raise MessageError(f"{pkg}/msg/{name} is not a message type")
+        raise MessageError(f"{full} is not a message type")
     return cls
+
+
+def _action_part(module: Any, full: str) -> type[Any]:
+    """An action's Goal, Result, Feedback or FeedbackMessage: attributes of the action's class, not of
+    its package's module (AttributeError when ``full`` is none of them)."""
+    parts = interface_message(full)
+    if parts is None or parts[1] != "action":
+        raise AttributeError(full)
+    action = getattr(module, parts[2])
+    part: type[Any] = getattr(action.Impl if parts[3] == "FeedbackMessage" else action, parts[3])
+    return part
 
 
 @lru_cache(maxsize=128)
@@ -113,9 +127,10 @@ def interface_name(cls: type, kind: str) -> str:
 
 
 def type_name_of(cls: type) -> str:
-    """``geometry_msgs.msg.Twist`` -> ``geometry_msgs/msg/Twist``."""
-    pkg = cls.__module__.split(".")[0]
-    return f"{pkg}/msg/{cls.__name__}"
+    """``geometry_msgs.msg.Twist`` -> ``geometry_msgs/msg/Twist``; ``std_srvs.srv.Trigger_Event`` ->
+    ``std_srvs/srv/Trigger_Event``."""
+    pkg, kind = [*cls.__module__.split("."), "msg"][:2]
+    return f"{pkg}/{kind}/{cls.__name__}"
 
 
 # mypy takes no class for Hashable (python/mypy#11470), which the cache asks of its arguments: the

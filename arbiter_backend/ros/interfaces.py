@@ -49,6 +49,7 @@ from ..provided import (
     STATUS_SUCCEEDED,
     Goal,
 )
+from ..supervise import Supervisor
 from .convert import action_class, interface_name, service_class, to_json, to_ros
 from .futures import on_loop
 from .spin import spin_in_thread
@@ -131,7 +132,9 @@ class _Withdrawable:
 
 
 class RosInterfaces:
-    def __init__(self, node: Node, loop: asyncio.AbstractEventLoop, context: Context) -> None:
+    def __init__(
+        self, node: Node, loop: asyncio.AbstractEventLoop, context: Context, supervisor: Supervisor
+    ) -> None:
         self.node = node  # the relay's node: action clients
         self.loop = loop
         self.provider_node = Node(PROVIDER_NODE_NAME, context=context, start_parameter_services=False)
@@ -140,7 +143,10 @@ class RosInterfaces:
         self.group = ReentrantCallbackGroup()
         self._action_clients: dict[str, tuple[type, ActionClient[Any, Any, Any]]] = {}
         self._closed = False
-        self._thread = spin_in_thread(self.executor, "rclpy-provider", "the provider executor")
+        self._stop = threading.Event()
+        self._thread = spin_in_thread(
+            self.executor, self.provider_node, "rclpy-provider", supervisor, self._stop
+        )
 
     # -- types and values -------------------------------------------------------------------
     @staticmethod
@@ -388,6 +394,7 @@ class RosInterfaces:
             with contextlib.suppress(Exception):
                 client.destroy()
         self._action_clients.clear()
+        self._stop.set()
         self.executor.shutdown(timeout_sec=2.0)
         self._thread.join(timeout=2.0)
         with contextlib.suppress(Exception):

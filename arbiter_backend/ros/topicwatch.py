@@ -16,7 +16,11 @@ callback) is what made watching as dear as deserialising; it never sees these su
 type whose first field is a ``std_msgs/Header`` the stamp is read from the bytes right after the
 4-byte encapsulation header (``int32 sec, uint32 nanosec``, in the byte order the encapsulation
 names). A type not installed here cannot be subscribed (rclpy has no generic subscription): it is
-listed with its type, counts and "type not installed here".
+listed with its type, counts and "type not installed here". A service's introspection topic
+(``pkg/srv/Name_Event``) and an action's feedback (``pkg/action/Name_FeedbackMessage``) are message
+types like any other (``arbiter_core.msgtypes.normalize_type``). A topic that cannot be looked at for
+any other reason is listed with the reason ("cannot be read here: …"), and the others are followed all
+the same. The loop runs under the backend's supervisor (``supervise.py``).
 
 A topic the rosbridge relay reads with a volatile reader of the same reliability (a WebSocket client
 subscribed to it) gets no reader of the monitor's own: the relay's messages are measured instead
@@ -43,14 +47,16 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.subscription import Subscription
 
 from arbiter_core.msgtypes import MessageError, normalize_type
-from arbiter_core.topicstats import NOT_INSTALLED, qos_mismatch
+from arbiter_core.topicstats import CANNOT_READ, NOT_INSTALLED, qos_mismatch
 
-from ..topicwatch import TopicWatch
+from ..supervise import Supervisor
+from ..topicwatch import TopicWatch, follow
 from .convert import message_class
 
 log = logging.getLogger(__name__)
 
 NODE_NAME = "arbiter_topic_monitor"
+WORKER = "topic-monitor"  # its name among the backend's supervised workers
 GRAPH_S = 1.0  # how often the graph is looked at: topics that appear are watched within a second
 TAKE_S = 0.1  # how often the subscriptions are emptied: up to DEPTH / TAKE_S = 1 kHz per topic
 DEPTH = 100
@@ -92,9 +98,10 @@ def _policy(profile: QoSProfile) -> tuple[str, str]:
 class RosTopics:
     """Runs on its own thread (:meth:`start`): the node must not be added to an executor."""
 
-    def __init__(self, node: Node, watch: TopicWatch) -> None:
+    def __init__(self, node: Node, watch: TopicWatch, supervisor: Supervisor) -> None:
         self.node = node
         self.watch = watch
+        self.supervisor = supervisor
         # topic -> (type, best effort, subscription, stamped)
         self._subs: dict[str, tuple[str, bool, Subscription[Any] | None, bool]] = {}
         self._stop = threading.Event()
@@ -102,12 +109,15 @@ class RosTopics:
         # what the relay reads (``RosBus.relayed``): topic -> (type, best effort); set by the backend
         self.relayed: Callable[[], dict[str, tuple[str, bool]]] = dict
         self._shared: dict[str, bool] = {}  # topics measured on the relay's reader -> stamped
+        self._unread: dict[str, str] = {}  # topics that could not be looked at -> why (``_unreadable``)
 
     def start(self) -> None:
-        self._thread = threading.Thread(target=self._run, name="topic-monitor", daemon=True)
-        self._thread.start()
+        follow(self.supervisor, WORKER, self.watch, "monitor")
+        self._thread = self.supervisor.thread(WORKER, self._run, self._stop)
 
     def _run(self) -> None:
+        """The monitor's loop, supervised (``supervise.py``): an error that ends it is logged once and the
+        loop runs again, the topics' states ``unknown`` meanwhile (``topicwatch.follow``)."""
         next_look = 0.0
         while not self._stop.is_set():
             if time.monotonic() >= next_look:
@@ -118,6 +128,7 @@ class RosTopics:
             except Exception:  # the node is being destroyed, or a handle went away: next sweep
                 log.debug("taking messages failed", exc_info=True)
             self.watch.sample()  # the rate history: once a second per topic, whoever asks
+            self.supervisor.beat(WORKER)  # after a round: its figures are whole again
             self._stop.wait(TAKE_S)
 
     def take(self) -> None:
@@ -158,39 +169,21 @@ class RosTopics:
     def answer(self) -> dict[str, Any]:
         return self.watch.answer()
 
-    def look(self) -> None:  # executor thread
-        """Follow the graph: watch topics that appeared, drop those gone, refresh counts and QoS notes."""
-        try:
-            graph = {name: types for name, types in self.node.get_topic_names_and_types() if types}
-        except Exception:  # the graph query is best effort
-            log.exception("reading the graph failed")
-            return
+    def look(self) -> None:  # the monitor's thread
+        """Follow the graph: watch topics that appeared, drop those gone, refresh counts and QoS notes.
+        A topic that cannot be looked at (a type no message class answers to, a subscription refused) is
+        listed with the reason and the others are followed all the same."""
+        # a graph that cannot be read ends the round: the supervisor logs it once and runs the loop again
+        graph = {name: types for name, types in self.node.get_topic_names_and_types() if types}
         me = self.node.get_name()
         relayed = self.relayed()
         for name, types in graph.items():
             if not self.watch.filter.wants(name):
                 continue
-            type_name = normalize_type(types[0])
             try:
-                pubs = [i for i in self.node.get_publishers_info_by_topic(name) if i.node_name != me]
-                subs = [i for i in self.node.get_subscriptions_info_by_topic(name) if i.node_name != me]
-            except Exception:  # the graph query is best effort: next time
-                continue
-            offered = [_policy(i.qos_profile) for i in pubs]
-            requested = [_policy(i.qos_profile) for i in subs]
-            nodes = (_node_names(pubs), _node_names(subs))
-            self.watch.set_graph(name, len(pubs), len(subs), qos_mismatch(offered, requested), nodes)
-            best_effort = any(r == "best_effort" for r, _ in offered)
-            if relayed.get(name) == (type_name, best_effort):
-                self._share(name, type_name)
-                continue
-            self._shared.pop(name, None)  # the relay stopped reading it, or reads it otherwise
-            have = self._subs.get(name)
-            if have is None or have[:2] != (type_name, best_effort):
-                if have is not None and have[2] is not None:
-                    self.node.destroy_subscription(have[2])
-                sub, stamped = self._subscribe(name, type_name, best_effort)
-                self._subs[name] = (type_name, best_effort, sub, stamped)
+                self._look_at(name, types[0], me, relayed)
+            except Exception as exc:  # this topic only: the next look tries it again
+                self._unreadable(name, types[0], exc)
         for name in [n for n in self._subs if n not in graph]:
             _, _, sub, _ = self._subs.pop(name)
             if sub is not None:
@@ -199,6 +192,43 @@ class RosTopics:
         for name in [n for n in self._shared if n not in graph]:
             del self._shared[name]
             self.watch.forget(name)
+        for name in [n for n in self._unread if n not in graph]:
+            del self._unread[name]
+            self.watch.forget(name)
+
+    def _look_at(self, name: str, graph_type: str, me: str, relayed: dict[str, tuple[str, bool]]) -> None:
+        type_name = normalize_type(graph_type)
+        try:
+            pubs = [i for i in self.node.get_publishers_info_by_topic(name) if i.node_name != me]
+            subs = [i for i in self.node.get_subscriptions_info_by_topic(name) if i.node_name != me]
+        except Exception:  # the graph query is best effort: next time
+            return
+        offered = [_policy(i.qos_profile) for i in pubs]
+        requested = [_policy(i.qos_profile) for i in subs]
+        nodes = (_node_names(pubs), _node_names(subs))
+        self.watch.set_graph(name, len(pubs), len(subs), qos_mismatch(offered, requested), nodes)
+        best_effort = any(r == "best_effort" for r, _ in offered)
+        self._unread.pop(name, None)
+        if relayed.get(name) == (type_name, best_effort):
+            self._share(name, type_name)
+            return
+        self._shared.pop(name, None)  # the relay stopped reading it, or reads it otherwise
+        have = self._subs.get(name)
+        if have is None or have[:2] != (type_name, best_effort):
+            if have is not None:
+                del self._subs[name]
+                if have[2] is not None:
+                    self.node.destroy_subscription(have[2])
+            sub, stamped = self._subscribe(name, type_name, best_effort)
+            self._subs[name] = (type_name, best_effort, sub, stamped)
+
+    def _unreadable(self, topic: str, graph_type: str, exc: Exception) -> None:
+        """List ``topic`` with why it cannot be measured; logged once per topic and reason."""
+        reason = f"{CANNOT_READ}: {type(exc).__name__}: {exc}"[:200]
+        if self._unread.get(topic) != reason:
+            log.warning("topic monitor: %s (%s) %s", topic, graph_type, reason)
+            self._unread[topic] = reason
+        self.watch.watch(topic, graph_type, unmeasured=reason)
 
     def _share(self, topic: str, type_name: str) -> None:
         """Measure ``topic`` on the relay's reader: the monitor's own goes (its messages taken first)."""

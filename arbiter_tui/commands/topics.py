@@ -54,6 +54,8 @@ def table(answer: TopicsAnswer) -> str:
     for r in rows:
         lines.append("  ".join(aligned(v, w, c) for v, w, c in zip(r, widths, COLUMNS, strict=True)))
     lines.append(f"(window {answer.window_s:g} s; {len(answer.topics)} topics)")
+    if answer.interrupted:
+        lines.append(f"({answer.interrupted}: the states are unknown until it is back)")
     return "\n".join(line.rstrip() for line in lines)
 
 
@@ -65,7 +67,11 @@ async def _ask(
     deadline = loop.time() + wait
     while True:
         state = await poller.poll()
-        answer = TopicsAnswer(state.window_s, state.topics, state.skipped) if state.error is None else None
+        answer = (
+            TopicsAnswer(state.window_s, state.topics, state.skipped, state.interrupted)
+            if state.error is None
+            else None
+        )
         done = answer is not None and (not expect or not unmet(expect, answer))
         if done or loop.time() >= deadline:
             return answer, state.error

@@ -31,7 +31,7 @@ BAD_HOLD_S = 60.0  # a row says "bad data" this long after the last bad payload
 MAX_ROBOTS = 1000  # names beyond are counted, not listed (a flood of names cannot exhaust the console)
 STATES = ("alive", "stale", "lost")
 LOST, BAD, STALE, WARN, OK = 4, 3, 2, 1, 0
-WARN_HEALTH = ("missing", "below", "silent", "slow")
+WARN_HEALTH = ("missing", "below", "silent", "slow", "unknown")
 
 
 @dataclass
@@ -93,6 +93,16 @@ class Row:
         out = {f.name: _plain(getattr(self, f.name)) for f in fields(self)}
         out["cells"] = dict(zip(COLUMNS, cells(self), strict=True))
         return out
+
+
+def _worst_words(top: Topics | None) -> str | None:
+    """The worst topic's words; while the robot's topic monitor restarts, that ("monitor restarted: …"),
+    not each topic's ``unknown``."""
+    if top is None:
+        return None
+    if top.monitor:
+        return top.monitor
+    return None if top.worst is None else top.worst.words()
 
 
 def _grade(last: fleet.RunGrade, current: str | None) -> str:
@@ -268,7 +278,7 @@ class FleetModel:
             latency_count=None if lat is None else lat.count,
             offset_bound_ms=bound,
             clock_note=clock_note,
-            worst_topic=None if worst is None else worst.words(),
+            worst_topic=_worst_words(top),
             worst_health=None if worst is None else worst.health,
             controller=controller,
             progress=progress,

@@ -32,6 +32,7 @@ class TopicsState:
     skipped: int = 0  # topics in the answer that were not the documented shape
     echo: tuple[str, str] | None = None  # (topic, its latest message as text, or why there is none)
     unavailable: str | None = None  # why there is no backend to ask at all (client-side simulation)
+    interrupted: str | None = None  # the backend's topic monitor is down: "monitor restarted: …"
 
     def rates(self, name: str) -> tuple[float | None, ...]:
         """``name``'s rate once a second over the last minute, oldest first (None: no rate then), as the
@@ -61,7 +62,11 @@ class TopicsPoller:
         except (ValueError, TopicsError) as exc:
             return self._failed(polls, f"bad response: {exc}")
         self.state = TopicsState(
-            polls=polls, window_s=answer.window_s, topics=answer.topics, skipped=answer.skipped
+            polls=polls,
+            window_s=answer.window_s,
+            topics=answer.topics,
+            skipped=answer.skipped,
+            interrupted=answer.interrupted,
         )
         return self.state
 

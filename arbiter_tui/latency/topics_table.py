@@ -44,6 +44,7 @@ def aligned(value: str, width: int, column: str) -> str:
 # the state a row is marked with (a word, and a style the screen maps to colour): never colour alone
 MARKS = {
     "ok": "", "slow": "slow", "silent": "SILENT", "quiet": "quiet", "waiting": "waiting", "unmeasured": "n/a",
+    "unknown": "unknown",
 }  # fmt: skip
 STATE_NOTES = {  # the detail pane's word on what a state means
     "silent": "steady until it stopped: 5 of its periods without a message",

@@ -212,6 +212,26 @@ async def test_a_quiet_command_topic_is_dim_and_explained_a_stopped_sensor_is_re
         assert "red" in row_style("/tf") and "SILENT" in table.render().plain
 
 
+async def test_while_the_backends_monitor_restarts_no_topic_is_silent_the_screen_says_why():
+    why = "monitor restarted: MessageError: invalid message type name 'std_srvs/srv/Trigger_Event'"
+    held = tuple(t if t.state == "unmeasured" else replace(t, state="unknown", note=why) for t in TOPICS)
+    app = topics_app(replace(STATE, topics=held, interrupted=why))
+    async with app.run_test(size=(100, 30)) as pilot:
+        await pilot.press("4", "end")
+        table = app.screen.query_one(TopicsList)
+        detail = app.screen.query_one(TopicDetail)
+        assert table.selected == "/tf"
+        await pilot.pause()
+        plain = table.render().plain
+        assert "SILENT" not in plain
+        assert next(x for x in plain.splitlines() if x.startswith("/tf")).split()[2] == "unknown"
+        assert f"state unknown ({why})" in str(detail.render())
+        table.selected = "/imu/data"  # cannot be read at all: its own reason, and the monitor's below
+        await pilot.pause()
+        text = str(detail.render())
+        assert f"state unmeasured ({NOT_INSTALLED})" in text and text.rstrip().endswith(why)
+
+
 async def test_the_rate_plot_covers_the_last_minute_the_moment_the_screen_opens():
     """The backend samples every topic's rate once a second whoever asks: the first answer the screen gets
     holds the last minute, and the plot draws all of it (from -59 s), not only what came since it opened."""

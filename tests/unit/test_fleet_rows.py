@@ -8,6 +8,7 @@ from arbiter_tui.fleet.rows import (
     BAD_HOLD_S,
     COLUMNS,
     MAX_ROBOTS,
+    WARN,
     FleetModel,
     cells,
     console_argv,
@@ -220,3 +221,17 @@ def test_history_in_one_line():
         "history (10 min): 3 summaries, p95 2-5 ms, 1 runs, last stanley completed 30.0 s, 0.10 m"
     )
     assert history_words("r1 did not answer in 3 s") == "history: r1 did not answer in 3 s"
+
+
+def test_a_robot_whose_topic_monitor_restarts_says_so_not_that_its_topics_are_silent():
+    m = FleetModel()
+    alive(m, "r1")
+    m.accept(
+        fleet.Topics("r1", W, 5.0, 2, (fleet.TopicHealth("/odom", "unknown"),), "monitor restarted: E: x"),
+        200,
+        0.0,
+    )
+    row = by_name(m.view(W, 0.1))["r1"]
+    assert (row.worst_topic, row.worst_health) == ("monitor restarted: E: x", "unknown")
+    assert row.severity == WARN
+    assert "monitor restarted: E: x" in cells(row)

@@ -277,6 +277,20 @@ def test_topics_payload_keeps_the_worst_that_fit_and_counts_them_all():
     assert len(fleet.encode(p)) <= fleet.MAX_BYTES["topics"]
 
 
+def test_while_the_robots_monitor_restarts_its_topics_are_unknown_not_silent_nor_below():
+    figs = [fig("/odom", "unknown", rate=31.0), fig("/scan", "unknown"), fig("/imu", "unmeasured")]
+    why = "monitor restarted: RuntimeError: boom\n" + "x" * 300  # cut to fit, made printable
+    p = fleet.topics_payload("r1", T, 5.0, figs, [Expectation("/odom", 45.0)], why)
+    assert [(t.name, t.health) for t in p.topics] == [
+        ("/odom", "unknown"),
+        ("/scan", "unknown"),
+        ("/imu", "unmeasured"),
+    ]
+    assert p.monitor is not None and p.monitor.startswith("monitor restarted: RuntimeError: boom x")
+    assert fleet.decode(fleet.encode(p), "topics", "r1") == p
+    assert fleet.topics_payload("r1", T, 5.0, figs, []).monitor is None
+
+
 def test_session_settings_retry_for_ever_and_turn_scouting_off_without_a_file():
     s = fleet.session_settings("client", ["tcp/10.0.0.1:7447"], (), 1500)
     assert s["connect/timeout_ms"] == -1

@@ -84,3 +84,40 @@ def test_non_finite_floats_leave_as_null():
 def test_bad_messages_name_the_field(type_name, data, expect):
     with pytest.raises(MessageError, match=expect):
         convert.to_ros(convert.message_class(type_name), data)
+
+
+# the messages rosidl generates for services and actions travel on topics of their own: a service's
+# ``_service_event`` (introspection on) and an action's ``_action/feedback``; their classes live in the
+# ``srv``/``action`` modules, an action's Goal/Result/Feedback/FeedbackMessage on the action's class
+INTERFACE_MESSAGES = [
+    ("std_srvs/srv/Trigger_Event", "std_srvs.srv", "Trigger_Event"),
+    ("std_srvs/srv/Trigger_Request", "std_srvs.srv", "Trigger_Request"),
+    ("test_msgs/action/Fibonacci_FeedbackMessage", "test_msgs.action", "Fibonacci_FeedbackMessage"),
+    ("test_msgs/action/Fibonacci_Goal", "test_msgs.action", "Fibonacci_Goal"),
+    ("test_msgs/action/Fibonacci_SendGoal_Event", "test_msgs.action", "Fibonacci_SendGoal_Event"),
+]
+
+
+@pytest.mark.parametrize(("name", "module", "cls_name"), INTERFACE_MESSAGES)
+def test_the_messages_of_services_and_actions_are_message_types(name, module, cls_name):
+    cls = convert.message_class(name)
+    assert cls.__module__.startswith(module) and cls.__name__ == cls_name
+    assert convert.type_name_of(cls) == name
+    data = convert.to_json(cls())  # nested srv/action messages (a Trigger_Event's request) resolve too
+    assert convert.to_json(convert.to_ros(cls, json.loads(json.dumps(data)))) == data
+
+
+@pytest.mark.parametrize(
+    ("name", "words"),
+    [
+        ("std_srvs/srv/Trigger", "invalid message type name"),  # a service, not a message
+        ("test_msgs/action/Fibonacci", "invalid message type name"),
+        ("test_msgs/action/Fibonacci_Bogus", "invalid message type name"),
+        ("std_srvs/srv/Trigger_FeedbackMessage", "invalid message type name"),  # an action's part, on a srv
+        ("no_such_pkg/srv/X_Event", "message type no_such_pkg/srv/X_Event is not installed"),
+        ("std_srvs/srv/NoSuch_Event", "is not installed"),
+    ],
+)
+def test_what_is_not_a_message_of_a_service_or_action_is_refused(name, words):
+    with pytest.raises(MessageError, match=words):
+        convert.message_class(name)

@@ -280,6 +280,27 @@ def test_expectations_parse_and_name_each_unmet_topic():
         "/odom: 44.00 Hz in the last 5 s, expected >= 45 Hz",
     ]
     assert unmet(parse_expect("/imu>=99"), answer) == []
+    held = parse_topics(
+        {"window_s": 5, "topics": [good(rate_hz=50.0, state="unknown", note="monitor restarted: E")]}
+    )
+    assert unmet(parse_expect("/odom>=45"), held) == [
+        "/odom: not known now (monitor restarted: E), expected >= 45 Hz"
+    ]
     for bad in ("scan>=9", "/scan>9", "/scan>=fast", "/scan>=-1", "/scan>=nan", ",,"):
         with pytest.raises(ValueError):
             parse_expect(bad)
+
+
+def test_while_the_monitor_restarts_a_topic_is_unknown_with_the_reason_and_the_answer_says_so():
+    from arbiter_core.topicstats import unknown
+
+    f = fed(50.0, 8.0).figures(108.0)
+    held = unknown(f, "monitor restarted: OSError: gone")
+    assert (held.state, held.note, held.rate_hz) == ("unknown", "monitor restarted: OSError: gone", f.rate_hz)
+    cannot = TopicWindow("/x", "a/msg/B")
+    cannot.unmeasured = NOT_INSTALLED
+    assert unknown(cannot.figures(1.0), "monitor restarted: x").state == "unmeasured"  # why stays its own
+    answer = parse_topics({"window_s": 5, "interrupted": held.note, "topics": [held.to_json()]})
+    assert answer.interrupted == "monitor restarted: OSError: gone" and answer.skipped == 0
+    assert answer.topics[0].state == "unknown"
+    assert parse_topics({"window_s": 5, "topics": []}).interrupted is None  # an older backend: not said

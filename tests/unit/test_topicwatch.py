@@ -1,7 +1,8 @@
 """The backend's topic monitor (``arbiter_backend.topicwatch``) on the embedded bus, on a fake clock."""
 
 from arbiter_backend.bus import TopicBus
-from arbiter_backend.topicwatch import EmbeddedTopics, TopicWatch
+from arbiter_backend.topicwatch import EmbeddedTopics, TopicFilter, TopicWatch
+from arbiter_core.topicstats import NOT_INSTALLED
 
 
 class Clock:
@@ -56,3 +57,31 @@ def test_the_backend_samples_each_topics_rate_once_a_second_whether_or_not_anyon
     topics.tick()
     late = next(t for t in topics.answer()["topics"] if t["name"] == "/late")
     assert late["state"] == "waiting" and late["rate_history"] == [None] * 4
+
+
+def test_hidden_topics_of_services_and_actions_are_taken_unless_excluded():
+    hidden = ("/nav/_action/feedback", "/nav/_action/status", "/srv/_service_event")
+    every = TopicFilter.parse(None, None)
+    assert all(every.wants(t) for t in (*hidden, "/odom"))
+    visible = TopicFilter.parse(None, "*/_*")
+    assert not any(visible.wants(t) for t in hidden) and visible.wants("/odom")
+
+
+def test_a_held_watch_says_why_and_its_topics_are_unknown_until_released():
+    clock = [100.0]
+    watch = TopicWatch(window_s=1.0, clock=lambda: clock[0])
+    watch.watch("/odom", "nav_msgs/msg/Odometry")
+    watch.watch("/imu", "sensor_msgs/msg/Imu", unmeasured=NOT_INSTALLED)
+    for i in range(200):  # steady at 50 Hz for 4 s, then nothing for 2 s: silent
+        watch.note("/odom", 10, at=94.0 + i / 50)
+    states = {t["name"]: t["state"] for t in watch.answer()["topics"]}
+    assert states == {"/odom": "silent", "/imu": "unmeasured"} and watch.answer()["interrupted"] is None
+    watch.hold("topic-monitor", "monitor restarted: OSError: x")
+    answer = watch.answer()
+    assert answer["interrupted"] == "monitor restarted: OSError: x"
+    assert {t["name"]: (t["state"], t["note"]) for t in answer["topics"]} == {
+        "/odom": ("unknown", "monitor restarted: OSError: x"),
+        "/imu": ("unmeasured", NOT_INSTALLED),
+    }
+    watch.release("topic-monitor")
+    assert {t["name"]: t["state"] for t in watch.answer()["topics"]}["/odom"] == "silent"

@@ -71,7 +71,10 @@ def column_widths(width: int, rows: Sequence[TopicFigures]) -> tuple[tuple[int, 
     return shown, widths
 
 
-STYLES = {"slow": "yellow", "silent": "bold red", "quiet": "dim", "waiting": "dim", "unmeasured": "dim"}
+STYLES = {
+    "slow": "yellow", "silent": "bold red", "quiet": "dim", "waiting": "dim", "unmeasured": "dim",
+    "unknown": "yellow",
+}  # fmt: skip
 
 
 class TopicsList(Widget, can_focus=True):
@@ -189,6 +192,8 @@ class TopicDetail(Widget):
         out.append("\n".join(lines[1:]))
         if self.state.error:
             out.append(f"\nlast poll failed: {self.state.error}", style="red")
+        elif self.state.interrupted and t.state != "unknown":  # an unknown topic's note says it already
+            out.append(f"\n{self.state.interrupted}", style="yellow")
         echo = self.state.echo
         if echo is not None and echo[0] == t.name:
             out.append("\nlatest (at most 2/s): ", style="bold")
