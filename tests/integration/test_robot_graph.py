@@ -35,7 +35,7 @@ from arbiter_tui.session.robot import RobotSession
 from arbiter_tui.session.settings import Settings
 
 from ..support.backend import start_backend
-from ..support.ros import DOMAIN, use_test_domain
+from ..support.ros import domain, use_test_domain
 from ..support.waits import wait_for
 
 ros_domain = pytest.fixture(scope="module", autouse=True)(use_test_domain)
@@ -59,7 +59,7 @@ class GraphProc:
             stdin=subprocess.PIPE,
             stdout=subprocess.PIPE,
             text=True,
-            env={**os.environ, "ROS_DOMAIN_ID": str(DOMAIN)},
+            env={**os.environ, "ROS_DOMAIN_ID": str(domain())},
         )
         self.lines: list[str] = []
         self._dumps: list[dict] = []

@@ -15,7 +15,7 @@ import pytest
 import roslibpy
 
 from ..support.backend import start_backend
-from ..support.ros import DOMAIN, use_test_domain
+from ..support.ros import domain, use_test_domain
 from ..support.waits import wait_for
 
 ros_domain = pytest.fixture(scope="module", autouse=True)(use_test_domain)
@@ -82,7 +82,10 @@ ODOM = "/arbiter_test/odom"
 @pytest.fixture(scope="module")
 def graph():
     proc = subprocess.Popen(
-        [sys.executable, "-c", GRAPH, str(DOMAIN)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+        [sys.executable, "-c", GRAPH, str(domain())],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
     )
     assert proc.stdout is not None and proc.stdout.readline().strip() == "ready", proc.stderr.read()
     yield proc

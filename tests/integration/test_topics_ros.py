@@ -13,7 +13,7 @@ import httpx
 import pytest
 
 from ..support.backend import start_backend, wait_for
-from ..support.ros import DOMAIN, Odometry, Peer, use_test_domain
+from ..support.ros import Odometry, Peer, domain, use_test_domain
 
 ros_domain = pytest.fixture(scope="module", autouse=True)(use_test_domain)
 
@@ -97,7 +97,7 @@ def test_rate_bandwidth_delay_and_silence_match_ground_truth():
         stdin=subprocess.PIPE,
         stdout=subprocess.PIPE,
         text=True,
-        env={**os.environ, "ROS_DOMAIN_ID": str(DOMAIN)},
+        env={**os.environ, "ROS_DOMAIN_ID": str(domain())},
     )
     names = ("scan", "odom", "chatter", "image")
     try:

@@ -1,10 +1,13 @@
 """An rclpy peer for the ROS-mode tests: its own context and domain, spun in a thread.
 
 The tests run on a random ROS domain with discovery limited to this host, so
-concurrent runs on one machine never see each other's topics.
+concurrent runs on one machine never see each other's topics; each test module takes the next domain
+(``use_test_domain``), so a module never sees what an earlier one left on the graph (a participant that
+went away is seen for a while after, until discovery drops it).
 """
 
 import contextlib
+import itertools
 import os
 import random
 import threading
@@ -29,15 +32,23 @@ except ImportError as exc:  # pragma: no cover - depends on the install
         allow_module_level=True,
     )
 
-DOMAIN = random.Random(os.getpid()).randint(1, 100)
+DOMAIN = random.Random(os.getpid()).randint(1, 100)  # this run's first; see ``domain``
+_modules = itertools.count()
+
+
+def domain() -> int:
+    """The domain the current module runs on (set by ``use_test_domain``)."""
+    return int(os.environ.get("ROS_DOMAIN_ID", DOMAIN))
 
 
 def use_test_domain():
-    """Generator for a module-scoped autouse fixture: this run's domain, discovery on this host only."""
+    """Generator for a module-scoped autouse fixture: the module's own domain (this run's next one, in
+    1..100), discovery on this host only."""
     saved = {k: os.environ.get(k) for k in ("ROS_DOMAIN_ID", "ROS_AUTOMATIC_DISCOVERY_RANGE")}
-    os.environ["ROS_DOMAIN_ID"] = str(DOMAIN)
+    current = (DOMAIN - 1 + next(_modules)) % 100 + 1
+    os.environ["ROS_DOMAIN_ID"] = str(current)
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
-    yield DOMAIN
+    yield current
     for k, v in saved.items():
         if v is None:
             os.environ.pop(k, None)
@@ -49,7 +60,7 @@ class Peer:
     def __init__(self, name: str = "arbiter_test_peer", threads: int = 1) -> None:
         """``threads`` > 1: callbacks that block (an action server's) do not hold the others up."""
         self.context = Context()
-        rclpy.init(context=self.context, domain_id=DOMAIN)
+        rclpy.init(context=self.context, domain_id=domain())
         self.node = rclpy.create_node(name, context=self.context)
         self.executor = (
             MultiThreadedExecutor(num_threads=threads, context=self.context)
