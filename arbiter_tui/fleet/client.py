@@ -2,7 +2,8 @@
 
 A client of the site's router (``--connect``), or the router itself (``--listen``, for a site with
 none). It subscribes to ``arbiter/*/alive`` liveliness (with history: the robots already there are
-listed at once) and to ``arbiter/*/*`` payloads, and asks ``arbiter/<name>/history`` on demand. Every
+listed at once) and to ``arbiter/*/*`` payloads, and asks ``arbiter/<name>/history`` on demand, and
+``arbiter/<name>/stop`` when the person stops a robot (who may is the router's access control). Every
 payload is checked by ``arbiter_core.fleet.decode`` (its size before it is copied) on Zenoh's thread,
 outside the model's lock; the model is then changed under the lock, and the screen takes frozen views.
 Nothing a robot sends can raise out of a callback: it marks that robot's row, or is counted.
@@ -278,3 +279,32 @@ class FleetClient:
         except Exception as exc:
             return f"{name}'s history: {str(exc).splitlines()[0][:120]}"
         return f"{name} did not answer in {HISTORY_TIMEOUT_S:g} s"
+
+    def stop(self, name: str) -> fleet.StopAnswer | str:
+        """Ask ``name`` to stop whatever drives it (``arbiter/<name>/stop``): its answer, or why there is
+        none, in one line. A query the router lets through to no robot ends at once with no answer:
+        refused by its access control (or the robot is not there); a robot that took it and did not
+        answer ends it after ``fleet.STOP_TIMEOUT_S``."""
+        if self.session is None:
+            return f"not stopped: not connected ({self.session_words()})"
+        asked = self.mono()
+        try:
+            for reply in self.session.get(fleet.key(name, fleet.STOP), timeout=fleet.STOP_TIMEOUT_S):
+                if reply.ok is None:
+                    return f"not stopped: {name} answered with an error"
+                answer = fleet.decode(reply.ok.payload.to_bytes(), fleet.STOP, name)
+                assert isinstance(answer, fleet.StopAnswer)
+                return answer
+        except fleet.FleetPayloadError as exc:
+            return f"stop: {name}'s answer is not one this console reads ({exc})"
+        except Exception as exc:
+            return f"not stopped: {str(exc).splitlines()[0][:120]}"
+        if self.mono() - asked < fleet.STOP_TIMEOUT_S * 0.8:
+            current = self.row(name)
+            if current is None or current.state == "lost":
+                return f"not stopped: {name} is not there to take a stop"
+            return (
+                f"not stopped: this console may not stop {name} (the router let the stop through to "
+                f"nobody: its access control on {fleet.key(name, fleet.STOP)})"
+            )
+        return f"not stopped: {name} did not answer within {fleet.STOP_TIMEOUT_S:g} s"
