@@ -4,12 +4,16 @@ The screen takes a frozen ``FleetView`` from its source every ``REFRESH_S`` (the
 change the model; nothing is drawn on their threads) and hands it to the list by ``data_bind``; the
 list draws only the rows that fit (200 robots cost what 20 do). ``/`` filters by name glob, Enter opens
 the single-robot console on the selected robot (the app suspends, the console runs in this terminal,
-the fleet comes back when it quits), ``h`` asks the robot's history on a worker thread.
+the fleet comes back when it quits), ``h`` asks the robot's history on a worker thread. ``space`` or
+``ctrl+k`` asks the selected robot to stop (``arbiter/<name>/stop``), ``S`` twice every robot shown; the
+row's note says what each answered.
 """
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 
 from rich.text import Text
 from textual import on, work
@@ -23,7 +27,7 @@ from textual.widgets import Footer, Input, Static
 
 from arbiter_core import fleet
 
-from .rows import COLUMNS, FleetView, Row, cells, console_argv, detail_lines, history_words
+from .rows import COLUMNS, FleetView, Row, cells, console_argv, detail_lines, history_words, stop_words
 
 REFRESH_S = 0.5
 SEP = 1  # space between columns
@@ -33,6 +37,8 @@ WIDTHS = {"robot": 12, "state": 20, "driver": 8, "p95": 8, "clock": 9, "worst to
 PRIORITY = ("robot", "state", "driver", "p95", "worst topic", "clock", "controller", "last run", "runs")
 NOTE_MIN = 22
 STATE_STYLES = {"lost": "bold red", "stale": "yellow", "alive": "green"}
+CONFIRM_S = 3.0  # "stop all shown" asks for a second press within this
+STOPS_AT_ONCE = 32  # stop questions in flight at once (each waits at most fleet.STOP_TIMEOUT_S)
 
 
 def layout(width: int) -> list[tuple[int, int]]:
@@ -52,11 +58,11 @@ def fit(text: str, width: int) -> str:
     return text if len(text) <= width else text[: max(0, width - 1)] + "…"
 
 
-def line(row: Row, cols: list[tuple[int, int]], selected: bool) -> Text:
-    """One row at the columns ``layout`` gave."""
+def line(row: Row, cols: list[tuple[int, int]], selected: bool, stop: str | None = None) -> Text:
+    """One row at the columns ``layout`` gave; ``stop``: what the robot answered a stop, in its note."""
     values = cells(row)
     shown = {i for i, _ in cols}
-    note = values[-1]
+    note = values[-1] if stop is None else stop
     if not note and COLUMNS.index("worst topic") not in shown and row.worst_topic:
         note = row.worst_topic  # no room for its column: the note says it
     text = Text(no_wrap=True, overflow="crop")
@@ -65,6 +71,8 @@ def line(row: Row, cols: list[tuple[int, int]], selected: bool) -> Text:
         style = ""
         if COLUMNS[i] == "state":
             style = STATE_STYLES.get(row.state, "")
+        elif COLUMNS[i] == "note" and stop is not None:
+            style = "bold" if " stopped: " in stop else "bold red"
         elif COLUMNS[i] == "note" and row.bad is not None:
             style = "bold magenta"
         elif COLUMNS[i] in ("worst topic", "note") and row.worst_health in ("missing", "below", "silent"):
@@ -96,6 +104,15 @@ class FleetList(Widget, can_focus=True):
     selected: reactive[str | None] = reactive(None)
     _shown: tuple[object, ...] | None = None
 
+    def __init__(self, id: str | None = None) -> None:  # Textual's name for it
+        super().__init__(id=id)
+        self.stops: dict[str, str] = {}  # robot -> what it answered its last stop (its note)
+
+    def set_stop(self, name: str, words: str) -> None:
+        self.stops[name] = words
+        self._repaint(self.view)
+        self.post_message(self.Highlighted(self.current()))
+
     class Chosen(Message):
         """Enter on a row: open its console."""
 
@@ -120,11 +137,15 @@ class FleetList(Widget, can_focus=True):
     def watch_view(self, view: FleetView) -> None:
         if view.rows and self.selected not in {r.name for r in view.rows}:
             self.selected = view.rows[0].name
-        shown = (view.filter, *((cells(r), r.worst_health) for r in view.rows))
+        self._repaint(view)
+        self.post_message(self.Highlighted(self.current()))
+
+    def _repaint(self, view: FleetView) -> None:
+        """A refresh only when what the rows show changed."""
+        shown = (view.filter, *((cells(r), r.worst_health, self.stops.get(r.name)) for r in view.rows))
         if shown != self._shown:
             self._shown = shown
             self.refresh()
-        self.post_message(self.Highlighted(self.current()))
 
     def watch_selected(self) -> None:
         self.post_message(self.Highlighted(self.current()))
@@ -156,7 +177,10 @@ class FleetList(Widget, can_focus=True):
         room = height - 1
         self._top = min(max(self._top, i - room + 1), i, max(0, len(rows) - room))
         out = [head]
-        out += [line(r, cols, r.name == self.selected) for r in rows[self._top : self._top + room]]
+        out += [
+            line(r, cols, r.name == self.selected, self.stops.get(r.name))
+            for r in rows[self._top : self._top + room]
+        ]
         return Text("\n").join(out)
 
 
@@ -165,6 +189,9 @@ class FleetScreen(Screen[None]):
         Binding("slash", "filter", "Filter"),
         Binding("escape", "clear", "Clear filter"),
         Binding("h", "history", "History"),
+        Binding("space", "stop", "Stop robot"),
+        Binding("ctrl+k", "stop", "Stop robot", show=False, priority=True),  # from the filter too
+        Binding("S", "stop_shown", "Stop all shown"),
         Binding("q", "app.quit", "Quit"),
         Binding("ctrl+q", "app.quit", "Quit", show=False, priority=True),
     ]
@@ -176,6 +203,7 @@ class FleetScreen(Screen[None]):
         super().__init__()
         self.set_reactive(FleetScreen.pattern, pattern)
         self._texts: dict[str, str] = {}
+        self._confirm_until = 0.0  # "stop all shown" armed until (monotonic s)
 
     def compose(self) -> ComposeResult:
         yield Static(id="fleet-head")
@@ -218,6 +246,9 @@ class FleetScreen(Screen[None]):
     def show_detail(self, event: FleetList.Highlighted) -> None:
         row = event.row
         lines = [] if row is None else detail_lines(row, self.view.now)
+        stopped = None if row is None else self.query_one(FleetList).stops.get(row.name)
+        if stopped is not None:
+            lines.append(f"stop: {stopped}")
         if row is not None and self.history_line.startswith(f"{row.name}: "):
             lines.append(self.history_line.removeprefix(f"{row.name}: "))
         self._show("#fleet-detail", "\n".join(lines))
@@ -253,6 +284,56 @@ class FleetScreen(Screen[None]):
         words = history_words(self.fleet_app.history(name, fleet.HISTORY_MINUTES))
         self.app.call_from_thread(setattr, self, "history_line", f"{name}: {words}")
 
+    # -- the stop --------------------------------------------------------------------------------
+    def action_stop(self) -> None:
+        """The selected robot asked to stop; its row says what it answered."""
+        row = self.query_one(FleetList).current()
+        if row is None:
+            return
+        if self.fleet_app.stopper is None:
+            self.notify("this fleet view cannot stop robots", severity="warning")
+            return
+        self.ask_stops([row.name])
+
+    def action_stop_shown(self) -> None:
+        """Every robot the filter shows asked to stop, on a second press within CONFIRM_S."""
+        names = [r.name for r in self.view.rows if r.state != "lost"]
+        if self.fleet_app.stopper is None or not names:
+            self.notify("no robot here to stop", severity="warning")
+            return
+        now = time.monotonic()
+        if now > self._confirm_until:
+            self._confirm_until = now + CONFIRM_S
+            which = f" matching {self.view.filter!r}" if self.view.filter else ""
+            self.notify(f"press S again within {CONFIRM_S:g} s to stop the {len(names)} robots shown{which}")
+            return
+        self._confirm_until = 0.0
+        self.ask_stops(names)
+
+    def ask_stops(self, names: list[str]) -> None:
+        lst = self.query_one(FleetList)
+        for name in names:
+            lst.set_stop(name, stop_words("asking it to stop...", time.time()))
+        self._stop_many(names)
+
+    @work(thread=True, group="stop")
+    def _stop_many(self, names: list[str]) -> None:
+        stop = self.fleet_app.stopper
+        assert stop is not None
+
+        def one(name: str) -> None:
+            at = time.time()
+            answer = stop(name)
+            self.app.call_from_thread(self._stopped, name, stop_words(answer, at), isinstance(answer, str))
+
+        with ThreadPoolExecutor(min(STOPS_AT_ONCE, len(names)), thread_name_prefix="fleet-stop") as pool:
+            list(pool.map(one, names))
+
+    def _stopped(self, name: str, words: str, failed: bool) -> None:
+        self.query_one(FleetList).set_stop(name, words)
+        if failed:
+            self.notify(words, severity="error")
+
     @on(FleetList.Chosen)
     def open_console(self, event: FleetList.Chosen) -> None:
         self.fleet_app.open_robot(event.row)
@@ -268,11 +349,12 @@ class FleetApp(App[None]):
         opener: Callable[[list[str]], int],
         history: Callable[[str, float], fleet.History | str] | None = None,
         pattern: str = "",
+        stop: Callable[[str], fleet.StopAnswer | str] | None = None,
         token_file: str | None = None,
         ca_file: str | None = None,
     ) -> None:
         super().__init__()
-        self.source, self.opener, self.history = source, opener, history
+        self.source, self.opener, self.history, self.stopper = source, opener, history, stop
         self.pattern, self.token_file, self.ca_file = pattern, token_file, ca_file
         self.opened: list[list[str]] = []  # the consoles opened, in order (what a test reads)
 

@@ -169,6 +169,7 @@ def _screen(client: FleetClient, args: argparse.Namespace) -> int:
     app = FleetApp(
         source=client.view,
         history=client.history,
+        stop=client.stop,
         opener=open_console,
         pattern=args.filter,
         token_file=None if args.token_file is None else str(Path(args.token_file)),

@@ -456,3 +456,9 @@ def history_words(answer: fleet.History | str) -> str:
     if runs:
         parts.append(f"{len(runs)} runs, last {runs[-1].last.controller} {runs[-1].last.words()}")
     return ", ".join(parts)
+
+
+def stop_words(answer: fleet.StopAnswer | str, at: float) -> str:
+    """One line of what a robot answered a stop (or why it did not), with the time it was asked."""
+    said = answer if isinstance(answer, str) else answer.words()
+    return f"{clock_time(at)} {said}"

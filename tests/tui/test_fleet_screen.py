@@ -109,7 +109,7 @@ def fleet_model():
 SESSION = "router on tcp/0.0.0.0:7447"
 
 
-def fleet_app(opened=None, history=None, pattern=""):
+def fleet_app(opened=None, history=None, pattern="", stop=None):
     model = fleet_model()
     calls = [] if opened is None else opened
 
@@ -118,7 +118,11 @@ def fleet_app(opened=None, history=None, pattern=""):
         return 0
 
     return FleetApp(
-        source=lambda p: model.view(W, MONO, p, SESSION), opener=opener, history=history, pattern=pattern
+        source=lambda p: model.view(W, MONO, p, SESSION),
+        opener=opener,
+        history=history,
+        pattern=pattern,
+        stop=stop,
     )
 
 
@@ -203,6 +207,58 @@ async def test_history_of_the_selected_robot_on_h():
         detail = str(app.screen.query_one("#fleet-detail").content)
         assert "history (10 min): 3 summaries, p95 2-5 ms, 1 runs, last stanley completed 30.0 s" in detail
         assert "bad data (2): status: 10.5 MB" in detail
+
+
+def shown_row(app, name):
+    """The list's line for ``name`` as drawn."""
+    drawn = app.screen.query_one(FleetList).render().plain.splitlines()
+    return next(line for line in drawn if line.startswith(name))
+
+
+async def test_space_and_ctrl_k_stop_the_selected_robot_and_its_row_says_what_it_answered():
+    asked = []
+
+    def stop(name):
+        asked.append(name)
+        if name == "lab-02":
+            return fleet.StopAnswer(name, W, "robot", True, "stanley on square at 2/4", 0)
+        return f"not stopped: this console may not stop {name} (its access control on arbiter/{name}/stop)"
+
+    app = fleet_app(stop=stop)
+    async with app.run_test(size=(300, 40)) as pilot:
+        app.screen.query_one(FleetList).selected = "lab-02"
+        await pilot.press("space")
+        await app.workers.wait_for_complete()
+        await pilot.pause()
+        assert asked == ["lab-02"]
+        assert "stopped: stanley aborted, 0 commands, zero sent" in shown_row(app, "lab-02")
+        assert "stop: " in str(app.screen.query_one("#fleet-detail").content)
+        # ctrl+k reaches the selected robot from the filter too (the pattern keeps its text)
+        await pilot.press("slash", *"lab-01", "ctrl+k")
+        await app.workers.wait_for_complete()
+        await pilot.pause()
+        assert asked == ["lab-02", "lab-01"]
+        assert app.screen.query_one("#fleet-filter").value == "lab-01"
+        refused = "not stopped: this console may not stop lab-01 (its access control on arbiter/lab-01/stop)"
+        assert refused in shown_row(app, "lab-01")
+        assert [n.message.split(" ", 1)[1] for n in app._notifications][-1:] == [refused]  # one line
+
+
+async def test_stop_all_shown_asks_for_a_second_press_and_stops_the_filtered_robots_not_the_lost():
+    asked = []
+    app = fleet_app(stop=lambda name: asked.append(name) or fleet.StopAnswer(name, W, "nobody", True))
+    async with app.run_test(size=(300, 40)) as pilot:
+        await pilot.press("slash", *"yard", "enter")  # yard-02 and yard-09 lost, yard-07 alive
+        await pilot.press("S")
+        await pilot.pause()
+        assert asked == []
+        confirm = "press S again within 3 s to stop the 1 robots shown matching 'yard'"
+        assert confirm in list(app._notifications)[-1].message
+        await pilot.press("S")
+        await app.workers.wait_for_complete()
+        await pilot.pause()
+        assert asked == ["yard-07"]
+        assert "stopped: nothing was driving, zero sent" in shown_row(app, "yard-07")
 
 
 async def test_a_view_that_shows_the_same_text_repaints_nothing(monkeypatch):
