@@ -16,7 +16,7 @@ from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 
 from rich.text import Text
-from textual import on, work
+from textual import events, on, work
 from textual.app import App, ComposeResult, SuspendNotSupported
 from textual.binding import Binding
 from textual.message import Message
@@ -126,6 +126,7 @@ class FleetList(Widget, can_focus=True):
             self.row = row
 
     _top = 0
+    _drawn: str | None = None  # the robot drawn selected by the last paint
 
     def current(self) -> Row | None:
         rows = self.view.rows
@@ -147,6 +148,23 @@ class FleetList(Widget, can_focus=True):
             self._shown = shown
             self.refresh()
 
+    async def _on_key(self, event: events.Key) -> None:
+        """A key read with the ones before it (one write: a paste, a laggy link) and handled after one of
+        them moved the focus (``/``): it goes where the focus went, not to this list's keys (an Enter
+        that opens a console, an ``h``, a ``q`` typed as part of a pattern)."""
+        target = self.screen.focused
+        if target is not None and target is not self:
+            event.stop()
+            event.prevent_default()
+            target.post_message(events.Key(event.key, event.character))
+            return
+        if event.key == "slash":  # the filter now: its binding would run after the keys read with it
+            event.stop()
+            event.prevent_default()
+            await self.run_action("screen.filter")
+            return
+        await super()._on_key(event)
+
     def watch_selected(self) -> None:
         self.post_message(self.Highlighted(self.current()))
 
@@ -158,9 +176,15 @@ class FleetList(Widget, can_focus=True):
         self.selected = names[max(0, min(len(names) - 1, i + step))]
 
     def action_open(self) -> None:
+        """Enter: the selected robot's console, if the person has seen it selected (it was drawn so):
+        an Enter typed ahead of a move or a filter opens nothing nobody saw."""
         row = self.current()
-        if row is not None:
-            self.post_message(self.Chosen(row))
+        if row is None:
+            return
+        if row.name != self._drawn:
+            self.notify(f"the selection moved to {row.name}: Enter again to open it", severity="warning")
+            return
+        self.post_message(self.Chosen(row))
 
     def render(self) -> Text:
         width, height = self.size.width, max(1, self.size.height)
@@ -176,6 +200,7 @@ class FleetList(Widget, can_focus=True):
         i = names.index(self.selected) if self.selected in names else 0
         room = height - 1
         self._top = min(max(self._top, i - room + 1), i, max(0, len(rows) - room))
+        self._drawn = rows[i].name
         out = [head]
         out += [
             line(r, cols, r.name == self.selected, self.stops.get(r.name))
@@ -261,16 +286,18 @@ class FleetScreen(Screen[None]):
         self.pattern = event.value.strip()
         self.sample()
 
+    # focus moves at once (``set_focus``), not after the keys already read (``focus()`` waits for them):
+    # what is typed after ``/`` in one write (a paste, a laggy link, a throttled Pi) goes to the filter
     @on(Input.Submitted, "#fleet-filter")
     def filter_done(self) -> None:
-        self.query_one(FleetList).focus()
+        self.set_focus(self.query_one(FleetList))
 
     def action_filter(self) -> None:
-        self.query_one("#fleet-filter", Input).focus()
+        self.set_focus(self.query_one("#fleet-filter", Input))
 
     def action_clear(self) -> None:
         self.query_one("#fleet-filter", Input).value = ""
-        self.query_one(FleetList).focus()
+        self.set_focus(self.query_one(FleetList))
 
     def action_history(self) -> None:
         row = self.query_one(FleetList).current()

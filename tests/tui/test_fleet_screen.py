@@ -5,6 +5,7 @@ console on the advertised URLs and coming back, a lost robot not opened, the his
 import time
 
 import pytest
+from textual import events
 from textual.widgets import Static
 
 from arbiter_core import fleet
@@ -207,6 +208,49 @@ async def test_history_of_the_selected_robot_on_h():
         detail = str(app.screen.query_one("#fleet-detail").content)
         assert "history (10 min): 3 summaries, p95 2-5 ms, 1 runs, last stanley completed 30.0 s" in detail
         assert "bad data (2): status: 10.5 MB" in detail
+
+
+def one_write(app, text):
+    """Keys as one read of the terminal brings them (a paste, a laggy SSH link, a throttled Pi): all in
+    the app's queue before any is handled."""
+    names = {"/": "slash", "\r": "enter", "-": "minus"}
+    for ch in text:
+        app.post_message(events.Key(names.get(ch, ch), None if ch == "\r" else ch))
+
+
+async def test_keys_typed_ahead_of_the_filters_focus_go_to_the_filter_and_open_nothing():
+    opened, asked = [], []
+    app = fleet_app(opened, history=lambda name, minutes: asked.append(name) or "none")
+    async with app.run_test(size=(120, 40)) as pilot:
+        app.screen.query_one(FleetList).selected = "lab-01"
+        await pilot.pause()
+        one_write(app, "/lab-02\r")
+        await pilot.pause()
+        await pilot.pause()
+        assert app.screen.query_one("#fleet-filter").value == "lab-02"
+        assert [r.name for r in app.screen.view.rows] == ["lab-02"]
+        assert opened == []  # Enter ended the filter; lab-01's console was opened by nobody
+        one_write(app, "/hq")  # history and quit are letters of a pattern here
+        await pilot.pause()
+        await pilot.pause()
+        assert app.screen.query_one("#fleet-filter").value == "hq"  # the old pattern selected, replaced
+        assert asked == [] and app.is_running
+
+
+async def test_enter_opens_only_a_selection_that_was_drawn():
+    opened = []
+    app = fleet_app(opened)
+    async with app.run_test(size=(120, 40)) as pilot:
+        app.screen.query_one(FleetList).selected = "lab-01"
+        await pilot.pause()
+        app.post_message(events.Key("down", None))
+        app.post_message(events.Key("enter", None))  # lab-02, selected and not yet drawn
+        await pilot.pause()
+        await pilot.pause()
+        assert opened == []
+        await pilot.press("enter")  # now it has been seen
+        await pilot.pause()
+        assert [argv[1] for argv in opened] == ["ws://lab-02.lab:9090"]
 
 
 def shown_row(app, name):
