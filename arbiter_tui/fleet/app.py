@@ -27,7 +27,21 @@ from textual.widgets import Footer, Input, Static
 
 from arbiter_core import fleet
 
-from .rows import COLUMNS, FleetView, Row, cells, console_argv, detail_lines, history_words, stop_words
+from .rows import (
+    BAD,
+    COLUMNS,
+    OK,
+    STALE,
+    FleetView,
+    Row,
+    cells,
+    clock_time,
+    console_argv,
+    detail_lines,
+    history_words,
+    problem_line,
+    stop_words,
+)
 
 REFRESH_S = 0.5
 SEP = 1  # space between columns
@@ -85,6 +99,20 @@ def line(row: Row, cols: list[tuple[int, int]], selected: bool, stop: str | None
     return text
 
 
+def worse_above(rows: tuple[Row, ...], top: int) -> str:
+    """``▲ 3 worse above (2 lost, 1 stale) · Home: the worst first``, or "" when no row above ``top`` is in
+    trouble."""
+    counts: dict[str, int] = {}
+    for r in rows[:top]:
+        if r.severity > OK:
+            what = "bad data" if r.severity == BAD else r.state if r.severity >= STALE else "warning"
+            counts[what] = counts.get(what, 0) + 1
+    if not counts:
+        return ""
+    which = ", ".join(f"{n} {what}" for what, n in counts.items())
+    return f"▲ {sum(counts.values())} worse above ({which}) · Home: the worst first"
+
+
 class FleetList(Widget, can_focus=True):
     """The rows, the worst first; the selected one highlighted. Drawn as text, only what fits."""
 
@@ -94,7 +122,7 @@ class FleetList(Widget, can_focus=True):
         Binding("down", "move(1)", "Down", show=False),
         Binding("pageup", "move(-10)", "Page up", show=False),
         Binding("pagedown", "move(10)", "Page down", show=False),
-        Binding("home", "move(-100000)", "First", show=False),
+        Binding("home", "top", "Worst first"),
         Binding("end", "move(100000)", "Last", show=False),
         Binding("enter", "open", "Open console"),
     ]
@@ -127,6 +155,7 @@ class FleetList(Widget, can_focus=True):
 
     _top = 0
     _drawn: str | None = None  # the robot drawn selected by the last paint
+    follow = True  # the worst rows in sight, the selection on the worst: until the person moves
 
     def current(self) -> Row | None:
         rows = self.view.rows
@@ -136,8 +165,9 @@ class FleetList(Widget, can_focus=True):
         return rows[0] if rows else None
 
     def watch_view(self, view: FleetView) -> None:
-        if view.rows and self.selected not in {r.name for r in view.rows}:
-            self.selected = view.rows[0].name
+        if view.rows and (self.follow or self.selected not in {r.name for r in view.rows}):
+            self.follow = True
+            self.selected = view.rows[0].name  # the worst robot, until the person moves
         self._repaint(view)
         self.post_message(self.Highlighted(self.current()))
 
@@ -169,11 +199,23 @@ class FleetList(Widget, can_focus=True):
         self.post_message(self.Highlighted(self.current()))
 
     def action_move(self, step: int) -> None:
+        """The person moves: the selection stays on that robot as the order changes (until Home, or a
+        move back to the first row, follows the worst again)."""
         names = [r.name for r in self.view.rows]
         if not names:
             return
         i = names.index(self.selected) if self.selected in names else 0
-        self.selected = names[max(0, min(len(names) - 1, i + step))]
+        j = max(0, min(len(names) - 1, i + step))
+        self.follow = j == 0
+        self.selected = names[j]
+        self.refresh()
+
+    def action_top(self) -> None:
+        """Home: back to the worst robots first, the selection on the worst."""
+        self.follow = True
+        if self.view.rows:
+            self.selected = self.view.rows[0].name
+        self.refresh()
 
     def action_open(self) -> None:
         """Enter: the selected robot's console, if the person has seen it selected (it was drawn so):
@@ -199,9 +241,18 @@ class FleetList(Widget, can_focus=True):
         names = [r.name for r in rows]
         i = names.index(self.selected) if self.selected in names else 0
         room = height - 1
-        self._top = min(max(self._top, i - room + 1), i, max(0, len(rows) - room))
+        if self.follow:
+            self._top = 0
+        else:  # the selection kept in sight; a line says what is worse above it
+            self._top = min(max(self._top, i - room + 1), i, max(0, len(rows) - room))
+            if worse_above(rows, self._top):
+                room -= 1
+                self._top = min(max(self._top, i - room + 1), i, max(0, len(rows) - room))
         self._drawn = rows[i].name
         out = [head]
+        above = worse_above(rows, self._top)
+        if above:
+            out.append(Text(above, style="bold reverse red", no_wrap=True, overflow="crop"))
         out += [
             line(r, cols, r.name == self.selected, self.stops.get(r.name))
             for r in rows[self._top : self._top + room]
@@ -229,6 +280,7 @@ class FleetScreen(Screen[None]):
         self.set_reactive(FleetScreen.pattern, pattern)
         self._texts: dict[str, str] = {}
         self._confirm_until = 0.0  # "stop all shown" armed until (monotonic s)
+        self._lost: set[str] | None = None  # the robots lost at the last view (None: no view yet)
 
     def compose(self) -> ComposeResult:
         yield Static(id="fleet-head")
@@ -259,7 +311,18 @@ class FleetScreen(Screen[None]):
         head = f"fleet · {shown} robots: {', '.join(parts)} · {view.session}"
         if view.ignored:
             head += f" · {view.ignored} more names ignored"
-        self._show("#fleet-head", head)
+        self._show("#fleet-head", f"{head}\n{problem_line(view)}")
+        self._announce_lost(view)
+
+    def _announce_lost(self, view: FleetView) -> None:
+        """A robot going lost, said once (with the terminal's bell under ``--bell``)."""
+        lost = set(view.names("lost"))
+        if self._lost is not None and (new := sorted(lost - self._lost)):
+            names = ", ".join(new[:5]) + (f" and {len(new) - 5} more" if len(new) > 5 else "")
+            self.notify(f"{clock_time(view.now)} lost: {names}", severity="error", timeout=10)
+            if self.fleet_app.bell_on_lost:
+                self.app.bell()
+        self._lost = lost
 
     def _show(self, selector: str, text: str) -> None:
         """A Static's new text; nothing (no layout) when it is the text shown."""
@@ -377,11 +440,13 @@ class FleetApp(App[None]):
         history: Callable[[str, float], fleet.History | str] | None = None,
         pattern: str = "",
         stop: Callable[[str], fleet.StopAnswer | str] | None = None,
+        bell_on_lost: bool = False,
         token_file: str | None = None,
         ca_file: str | None = None,
     ) -> None:
         super().__init__()
         self.source, self.opener, self.history, self.stopper = source, opener, history, stop
+        self.bell_on_lost = bell_on_lost
         self.pattern, self.token_file, self.ca_file = pattern, token_file, ca_file
         self.opened: list[list[str]] = []  # the consoles opened, in order (what a test reads)
 

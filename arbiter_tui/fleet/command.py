@@ -74,6 +74,11 @@ def build_parser() -> argparse.ArgumentParser:
         help=f"a robot with no status this long reads 'stale' (default {STALE_AFTER_S:g})",
     )
     p.add_argument(
+        "--bell",
+        action="store_true",
+        help="ring the terminal's bell when a robot goes lost (it is said on the screen once either way)",
+    )
+    p.add_argument(
         "--token-file",
         type=existing_file,
         help="passed to the console Enter opens, for a robot that wants one",
@@ -170,6 +175,7 @@ def _screen(client: FleetClient, args: argparse.Namespace) -> int:
         source=client.view,
         history=client.history,
         stop=client.stop,
+        bell_on_lost=args.bell,
         opener=open_console,
         pattern=args.filter,
         token_file=None if args.token_file is None else str(Path(args.token_file)),

@@ -118,6 +118,12 @@ class FleetView:
     now: float = 0.0  # wall s the view was made at (the screen's "lost since" ages)
     session: str = ""  # where the console's Zenoh session is ("router on tcp/...", "connecting to ...")
     error: str | None = None
+    # the robots in trouble over all robots (not only those the filter shows), by name: lost, bad, stale
+    problems: tuple[tuple[str, tuple[str, ...]], ...] = ()
+
+    def names(self, what: str) -> tuple[str, ...]:
+        """The robots ``lost``, with ``bad`` data, or ``stale`` (over all robots)."""
+        return dict(self.problems).get(what, ())
 
     def to_json(self) -> dict[str, Any]:
         return {
@@ -128,6 +134,7 @@ class FleetView:
             "counts": dict(self.counts),
             "total": self.total,
             "ignored": self.ignored,
+            "problems": {what: list(names) for what, names in self.problems},
             "robots": [r.to_json() for r in self.rows],
         }
 
@@ -307,9 +314,14 @@ class FleetModel:
     ) -> FleetView:
         rows = [self.row(r, wall, mono) for r in self._robots.values()]
         counts = {s: 0 for s in (*STATES, "bad")}
+        trouble: dict[str, list[str]] = {"lost": [], "bad": [], "stale": []}
         for row in rows:
             counts[row.state] += 1
             counts["bad"] += row.bad is not None
+            if row.state != "alive":
+                trouble[row.state].append(row.name)
+            if row.bad is not None:
+                trouble["bad"].append(row.name)
         shown = sorted((r for r in rows if matches(r.name, pattern)), key=lambda r: (-r.severity, r.name))
         return FleetView(
             rows=tuple(shown),
@@ -321,6 +333,7 @@ class FleetModel:
             now=wall,
             session=session,
             error=error,
+            problems=tuple((what, tuple(sorted(names))) for what, names in trouble.items()),
         )
 
 
@@ -456,6 +469,22 @@ def history_words(answer: fleet.History | str) -> str:
     if runs:
         parts.append(f"{len(runs)} runs, last {runs[-1].last.controller} {runs[-1].last.words()}")
     return ", ".join(parts)
+
+
+PROBLEM_WORDS = {"lost": "lost", "bad": "bad data", "stale": "stale"}
+
+
+def problem_line(view: FleetView, most: int = 4) -> str:
+    """The robots in trouble by name, the worst kind first: ``lost 2: yard-02, yard-09 · bad data 1:
+    lab-05 · stale 1: lab-03`` (at most ``most`` names a kind, then how many more)."""
+    parts = []
+    for what, names in view.problems:
+        if names:
+            shown = ", ".join(names[:most]) + (f" +{len(names) - most} more" if len(names) > most else "")
+            parts.append(f"{PROBLEM_WORDS[what]} {len(names)}: {shown}")
+    if parts:
+        return " · ".join(parts)
+    return f"all {view.total} alive, none in trouble" if view.total else "no robot announced yet"
 
 
 def stop_words(answer: fleet.StopAnswer | str, at: float) -> str:

@@ -253,6 +253,79 @@ async def test_enter_opens_only_a_selection_that_was_drawn():
         assert [argv[1] for argv in opened] == ["ws://lab-02.lab:9090"]
 
 
+def many(n=50):
+    """``n`` healthy robots r00, r01, ..."""
+    m = FleetModel(console_sync=TimeSync("chrony", True, 0.01, 0.3))
+    for i in range(n):
+        name = f"r{i:02d}"
+        m.token(name, True, W - 900, MONO - 900)
+        m.accept(status(name), 400, MONO)
+        m.accept(latency(name, 3.0), 200, MONO)
+    return m
+
+
+def drawn(app):
+    return app.screen.query_one(FleetList).render().plain.splitlines()
+
+
+async def test_the_worst_rows_stay_in_sight_and_selected_as_they_sort_above():
+    """30 of 50 robots go lost while the list holds 20: the first rows drawn are lost ones, the worst
+    selected (before: the selection stayed on the first robot at start-up, and the list scrolled down to
+    keep it in sight, the lost rows above it out of sight)."""
+    m = many()
+    app = FleetApp(source=lambda p: m.view(W, MONO, p, SESSION), opener=lambda a: 0)
+    async with app.run_test(size=(120, 33)) as pilot:
+        await pilot.pause()
+        assert drawn(app)[1].startswith("r00")
+        for i in range(20, 50):
+            m.token(f"r{i:02d}", False, W - 5, MONO - 5)
+        app.screen.sample()
+        await pilot.pause()
+        rows = drawn(app)[1:]
+        assert rows[0].startswith("r20") and all("lost since" in r for r in rows)
+        assert app.screen.query_one(FleetList).selected == "r20"
+        head = str(app.screen.query_one("#fleet-head").content)
+        assert "lost 30: r20, r21, r22, r23 +26 more" in head
+
+
+async def test_a_person_who_scrolled_sees_how_many_worse_rows_are_above_and_home_jumps_back():
+    m = many()
+    app = FleetApp(source=lambda p: m.view(W, MONO, p, SESSION), opener=lambda a: 0)
+    async with app.run_test(size=(120, 33)) as pilot:
+        await pilot.press(*["pagedown"] * 3)  # r30, the person's choice
+        assert app.screen.query_one(FleetList).selected == "r30"
+        for name in ("r01", "r02", "r03"):
+            m.token(name, False, W - 5, MONO - 5)
+        m.reject("r04", "status: not JSON", MONO)
+        app.screen.sample()
+        await pilot.pause()
+        lines = drawn(app)
+        assert app.screen.query_one(FleetList).selected == "r30"  # it stays where the person put it
+        assert lines[1] == "▲ 4 worse above (3 lost, 1 bad data) · Home: the worst first"
+        assert any(line.startswith("r30") for line in lines)
+        await pilot.press("home")
+        lines = drawn(app)
+        assert lines[1].startswith("r01") and not any("worse above" in line for line in lines)
+        assert app.screen.query_one(FleetList).selected == "r01"
+
+
+async def test_a_robot_going_lost_is_announced_once_and_rings_the_bell_when_asked(monkeypatch):
+    m = many(5)
+    app = FleetApp(source=lambda p: m.view(W, MONO, p, SESSION), opener=lambda a: 0, bell_on_lost=True)
+    bells = []
+    monkeypatch.setattr(app, "bell", lambda: bells.append(1))
+    async with app.run_test(size=(120, 33)) as pilot:
+        await pilot.pause()
+        assert "all 5 alive, none in trouble" in str(app.screen.query_one("#fleet-head").content)
+        m.token("r03", False, W, MONO)
+        for _ in range(3):
+            app.screen.sample()
+            await pilot.pause()
+        said = [n.message for n in app._notifications if "lost" in n.message]
+        assert said == ["08:00:00 lost: r03"] and bells == [1]
+        assert "lost 1: r03" in str(app.screen.query_one("#fleet-head").content)
+
+
 def shown_row(app, name):
     """The list's line for ``name`` as drawn."""
     drawn = app.screen.query_one(FleetList).render().plain.splitlines()
