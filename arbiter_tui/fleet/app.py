@@ -51,6 +51,7 @@ WIDTHS = {"robot": 12, "state": 20, "driver": 8, "p95": 8, "clock": 9, "worst to
 PRIORITY = ("robot", "state", "driver", "p95", "worst topic", "clock", "controller", "last run", "runs")
 NOTE_MIN = 22
 STATE_STYLES = {"lost": "bold red", "stale": "yellow", "alive": "green"}
+LAST_FIGURES = ("driver", "p95", "clock", "worst topic", "controller", "last run", "runs")
 CONFIRM_S = 3.0  # "stop all shown" asks for a second press within this
 STOPS_AT_ONCE = 32  # stop questions in flight at once (each waits at most fleet.STOP_TIMEOUT_S)
 
@@ -85,10 +86,14 @@ def line(row: Row, cols: list[tuple[int, int]], selected: bool, stop: str | None
         style = ""
         if COLUMNS[i] == "state":
             style = STATE_STYLES.get(row.state, "")
+        elif row.state == "lost" and COLUMNS[i] in LAST_FIGURES:
+            style = "dim"  # its last figures, not current ones
         elif COLUMNS[i] == "note" and stop is not None:
             style = "bold" if " stopped: " in stop else "bold red"
         elif COLUMNS[i] == "note" and row.bad is not None:
             style = "bold magenta"
+        elif COLUMNS[i] == "note" and row.state == "lost":
+            style = "dim"
         elif COLUMNS[i] in ("worst topic", "note") and row.worst_health in ("missing", "below", "silent"):
             style = "yellow"
         text.append(fit(value, w).ljust(w) if COLUMNS[i] != "note" else fit(value, w), style)

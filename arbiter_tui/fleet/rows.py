@@ -88,6 +88,7 @@ class Row:
     auth: str | None = None
     pose: tuple[float, ...] | None = None
     velocity: tuple[float, ...] | None = None
+    figures_at: float | None = None  # lost: the wall time its figures date from (its last payload)
 
     def to_json(self) -> dict[str, Any]:
         out = {f.name: _plain(getattr(self, f.name)) for f in fields(self)}
@@ -257,7 +258,8 @@ class FleetModel:
             severity = OK
         progress = None
         if s is not None and s.run_state is not None and s.waypoints:
-            progress = f"{s.waypoint}/{s.waypoints} {s.run_state}"
+            was = "was " if state == "lost" else ""  # a lost robot's run is not known to run on
+            progress = f"{s.waypoint}/{s.waypoints} {was}{s.run_state}"
         controller = s.controller if s is not None and s.controller else None
         if controller is None and runs is not None:
             controller = runs.last.controller
@@ -290,6 +292,7 @@ class FleetModel:
             auth=None if s is None else s.auth,
             pose=None if s is None else s.pose,
             velocity=None if s is None else s.velocity,
+            figures_at=None if state != "lost" or r.last_mono is None else wall - (mono - r.last_mono),
         )
 
     def row_of(self, name: str, wall: float, mono: float) -> Row | None:
@@ -373,10 +376,17 @@ def state_cell(row: Row) -> str:
     return f"{row.state} {ago(row.age_s)}"
 
 
+def figures_words(row: Row) -> str | None:
+    """A lost row's figures are its last ones: ``figures as of 14:01:58, 2m old``."""
+    if row.figures_at is None:
+        return None
+    return f"figures as of {clock_time(row.figures_at)}, {ago(row.age_s or 0.0)} old"
+
+
 def note_cell(row: Row) -> str:
     if row.bad is not None:
         return f"bad data: {row.bad}"
-    return row.note or ""
+    return figures_words(row) or row.note or ""
 
 
 def cells(row: Row) -> tuple[str, ...]:
@@ -449,6 +459,8 @@ def detail_lines(row: Row, now: float) -> list[str]:
     if row.rosbridge is not None:
         ns = f" --namespace {row.namespace}" if row.namespace else ""
         lines.append(f"Enter opens {row.rosbridge} {row.tracker or ''}{ns}".rstrip())
+    if row.figures_at is not None:
+        lines.append(f"{figures_words(row)}: not current (the robot is lost)")
     if row.bad is not None:
         lines.append(f"bad data ({row.bad_count}): {row.bad}")
     elif row.note:

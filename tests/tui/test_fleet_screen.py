@@ -326,6 +326,31 @@ async def test_a_robot_going_lost_is_announced_once_and_rings_the_bell_when_aske
         assert "lost 1: r03" in str(app.screen.query_one("#fleet-head").content)
 
 
+async def test_a_lost_rows_figures_are_its_last_ones_dimmed_with_their_age_never_current():
+    """yard-02, lost two minutes ago in the middle of a run: its figures read as of then."""
+    from arbiter_tui.fleet.app import layout, line
+
+    m = fleet_model()
+    m.token("yard-02", True, W - 200, MONO - 200)
+    running = status("yard-02", controller="stanley", run_state="running", waypoint=0, waypoints=8)
+    m.accept(running, 400, MONO - 130)
+    m.accept(latency("yard-02", 7.5), 200, MONO - 130)
+    m.token("yard-02", False, W - 125, MONO - 125)
+    row = m.row_of("yard-02", W, MONO)
+    app = FleetApp(source=lambda p: m.view(W, MONO, p, SESSION), opener=lambda a: 0)
+    async with app.run_test(size=(200, 40)) as pilot:
+        await pilot.pause()
+        drawn_line = shown_row(app, "yard-02")
+        assert "stanley 0/8 was running" in drawn_line and "0/8 running" not in drawn_line
+        assert "figures as of 07:57:50, 2m old" in drawn_line
+        detail = str(app.screen.query_one("#fleet-detail").content)
+        assert "figures as of 07:57:50, 2m old: not current (the robot is lost)" in detail
+    text = line(row, layout(200), False)
+    p95 = text.plain.index("7.5 ms")
+    assert any(span.start <= p95 < span.end and span.style == "dim" for span in text.spans)
+    assert row.to_json()["figures_at"] == W - 130
+
+
 def shown_row(app, name):
     """The list's line for ``name`` as drawn."""
     drawn = app.screen.query_one(FleetList).render().plain.splitlines()
