@@ -46,11 +46,11 @@ from .rows import (
 REFRESH_S = 0.5
 SEP = 1  # space between columns
 # column -> width; shown in PRIORITY order while they fit, "note" takes the rest (at least NOTE_MIN)
-WIDTHS = {"robot": 12, "state": 20, "driver": 8, "p95": 8, "clock": 9, "worst topic": 24,
+WIDTHS = {"robot": 12, "state": 22, "driver": 8, "p95": 8, "clock": 9, "worst topic": 24,
           "controller": 24, "last run": 34, "runs": 4}  # fmt: skip
 PRIORITY = ("robot", "state", "driver", "p95", "worst topic", "clock", "controller", "last run", "runs")
 NOTE_MIN = 22
-STATE_STYLES = {"lost": "bold red", "stale": "yellow", "alive": "green"}
+STATE_STYLES = {"lost": "bold red", "stale": "yellow", "alive": "green", "unknown": "bold magenta"}
 LAST_FIGURES = ("driver", "p95", "clock", "worst topic", "controller", "last run", "runs")
 CONFIRM_S = 3.0  # "stop all shown" asks for a second press within this
 STOPS_AT_ONCE = 32  # stop questions in flight at once (each waits at most fleet.STOP_TIMEOUT_S)
@@ -86,13 +86,13 @@ def line(row: Row, cols: list[tuple[int, int]], selected: bool, stop: str | None
         style = ""
         if COLUMNS[i] == "state":
             style = STATE_STYLES.get(row.state, "")
-        elif row.state == "lost" and COLUMNS[i] in LAST_FIGURES:
+        elif row.figures_at is not None and COLUMNS[i] in LAST_FIGURES:
             style = "dim"  # its last figures, not current ones
         elif COLUMNS[i] == "note" and stop is not None:
             style = "bold" if " stopped: " in stop else "bold red"
         elif COLUMNS[i] == "note" and row.bad is not None:
             style = "bold magenta"
-        elif COLUMNS[i] == "note" and row.state == "lost":
+        elif COLUMNS[i] == "note" and row.figures_at is not None:
             style = "dim"
         elif COLUMNS[i] in ("worst topic", "note") and row.worst_health in ("missing", "below", "silent"):
             style = "yellow"
@@ -310,6 +310,8 @@ class FleetScreen(Screen[None]):
     def watch_view(self, view: FleetView) -> None:
         counts = dict(view.counts)
         parts = [f"{counts.get(s, 0)} {s}" for s in ("alive", "stale", "lost")]
+        if counts.get("unknown"):
+            parts.append(f"{counts['unknown']} unknown")
         if counts.get("bad"):
             parts.append(f"{counts['bad']} bad data")
         shown = f"{len(view.rows)} of {view.total}" if view.filter else f"{view.total}"
@@ -392,7 +394,7 @@ class FleetScreen(Screen[None]):
 
     def action_stop_shown(self) -> None:
         """Every robot the filter shows asked to stop, on a second press within CONFIRM_S."""
-        names = [r.name for r in self.view.rows if r.state != "lost"]
+        names = [r.name for r in self.view.rows if r.state not in ("lost", "unknown")]
         if self.fleet_app.stopper is None or not names:
             self.notify("no robot here to stop", severity="warning")
             return

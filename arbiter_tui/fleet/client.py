@@ -27,7 +27,7 @@ from typing import Any
 from arbiter_core import fleet
 from arbiter_core.hostclock import HostClock
 
-from .rows import FleetModel, FleetView, Row
+from .rows import FleetModel, FleetView, Row, clock_time
 
 log = logging.getLogger(__name__)
 SYNC_REFRESH_S = 30.0
@@ -113,6 +113,8 @@ class FleetClient:
         self._closed = threading.Event()
         self._lock = threading.Lock()
         self._keep: list[Any] = []
+        self._routers: set[str] = set()  # the routers this client's session is connected to
+        self._link_since: float | None = None  # wall s the link went up or down (as _routers says)
         self._asked: set[str] = set()  # robots whose history was asked when they first appeared
         self._pending = 0
         # the history questions, off Zenoh's threads: a few at a time (a console that starts beside
@@ -143,6 +145,11 @@ class FleetClient:
             ),
             session.declare_subscriber(fleet.key("*", "*"), self._on_sample),
         ]
+        if self.settings.mode == "client":  # its own link: to its router (a router has none of its own)
+            with self._lock:
+                self._link_since = self.wall()
+            events = session.info.declare_transport_events_listener(self._on_transport, history=True)
+            self._keep.append(events)
         self.opened.set()
         threading.Thread(target=self._sync_loop, name="fleet-clock", daemon=True).start()
 
@@ -196,6 +203,24 @@ class FleetClient:
         except Exception:  # never out of a callback
             log.exception("fleet: a liveliness sample was not taken")
 
+    def _on_transport(self, event: Any) -> None:
+        """This client's link to a router opened or closed (Zenoh's thread): while none is open no robot
+        is lost or alive, the rows say "unknown since" (``FleetModel.link``)."""
+        try:
+            zid = str(event.transport.zid)
+            up = event.kind == self.zenoh.SampleKind.PUT
+            with self._lock:
+                was = bool(self._routers)
+                if up:
+                    self._routers.add(zid)
+                else:
+                    self._routers.discard(zid)
+                if was != bool(self._routers):
+                    self._link_since = self.wall()
+                    self.model.link(bool(self._routers), self._link_since, self.mono())
+        except Exception:  # never out of a callback
+            log.exception("fleet: a transport event was not taken")
+
     def _backfill(self, name: str) -> None:
         try:
             answer = self.history(name, BACKFILL_MINUTES)
@@ -245,11 +270,16 @@ class FleetClient:
 
     # -- what the screen asks ---------------------------------------------------------------------
     def session_words(self) -> str:
+        """Where this console's session is, and for a client whether its link to the router is up:
+        ``client of tcp/... · connected since 14:00:01`` / ``· reconnecting since 14:02:11``."""
         if self.error is not None:
             return self.error
         if not self.opened.is_set():
             return f"connecting: {self.settings.describe()}"
-        return self.settings.describe()
+        if self.settings.mode != "client" or self._link_since is None:
+            return self.settings.describe()
+        link = "connected" if self._routers else "reconnecting"
+        return f"{self.settings.describe()} · {link} since {clock_time(self._link_since)}"
 
     def view(self, pattern: str = "") -> FleetView:
         with self._lock:

@@ -127,6 +127,80 @@ def test_robots_appear_a_killed_one_is_lost_within_its_lease_and_alive_after_a_r
     )
 
 
+def test_while_the_consoles_own_link_is_down_no_robot_is_called_lost_or_alive(cleanup):
+    """The router goes away: the rows read "unknown since" (never "lost": the robots did not go, this
+    console's link did) and the header says the console reconnects; the router back, the robots are
+    alive again and the header says since when it is connected."""
+    procs, clients = cleanup
+    port = free_port()
+    endpoint = f"tcp/127.0.0.1:{port}"
+    r = open_router(port)
+    try:
+        procs += [robot(endpoint, "r1"), robot(endpoint, "r2")]
+        c = console(endpoint)
+        clients.append(c)
+        assert wait_for(lambda: announced(c, "r1") and announced(c, "r2"), timeout=10)
+        assert " · connected since " in c.view().session
+        r.close()
+        closed = time.monotonic()
+        seen: set[str] = set()  # every state a row showed from here on
+
+        def states():
+            now = {x.state for x in c.view().rows}
+            seen.update(now)
+            return now
+
+        # unknown at once, and still so two seconds on (past the robots' lease)
+        assert wait_for(lambda: states() == {"unknown"} and time.monotonic() - closed > 2.0, timeout=6), seen
+        assert " · reconnecting since " in c.view().session
+        r = open_router(port)
+        assert wait_for(lambda: states() == {"alive"}, timeout=15), c.view()
+        assert " · connected since " in c.view().session
+        assert seen == {"alive", "unknown"}, seen  # never "lost": the robots did not go, the link did
+    finally:
+        r.close()
+
+
+def test_a_frozen_router_makes_every_robot_unknown_not_stale_or_lost(cleanup):
+    """The router frozen (SIGSTOP) keeps its links open until its lease: every robot silent at once reads
+    "unknown" (the router is silent, not the robots) within SILENT_S, and alive again when it thaws."""
+    from arbiter_tui.fleet.rows import SILENT_S
+
+    procs, clients = cleanup
+    port = free_port()
+    endpoint = f"tcp/127.0.0.1:{port}"
+    router_proc = subprocess.Popen(
+        [sys.executable, "-m", "arbiter_tui.cli", "fleet", "--listen", endpoint, "--json", "--wait", "120"],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    try:
+        procs += [robot(endpoint, "r1"), robot(endpoint, "r2")]
+        c = FleetClient(ConsoleSettings(connect=(endpoint,)), FleetModel())  # stale after 5 s
+        c.open(connect_timeout_ms=10000)
+        clients.append(c)
+        assert wait_for(lambda: announced(c, "r1") and announced(c, "r2"), timeout=15)
+        seen: set[str] = set()
+
+        def states():
+            now = {x.state for x in c.view().rows}
+            seen.update(now)
+            return now
+
+        os.kill(router_proc.pid, signal.SIGSTOP)
+        frozen = time.monotonic()
+        assert wait_for(lambda: states() == {"unknown"}, timeout=SILENT_S + 3), c.view()
+        took = time.monotonic() - frozen
+        os.kill(router_proc.pid, signal.SIGCONT)
+        assert wait_for(lambda: states() == {"alive"}, timeout=15), c.view()
+        assert seen == {"alive", "unknown"}, seen
+        print(f"router frozen -> every robot unknown in {took:.2f} s")
+    finally:
+        os.kill(router_proc.pid, signal.SIGCONT)
+        router_proc.kill()
+        router_proc.wait()
+
+
 def test_malformed_payloads_mark_their_row_and_nothing_else(router, cleanup):
     procs, clients = cleanup
     procs += [robot(router, "victim"), robot(router, "bystander")]

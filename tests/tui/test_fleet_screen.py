@@ -351,6 +351,23 @@ async def test_a_lost_rows_figures_are_its_last_ones_dimmed_with_their_age_never
     assert row.to_json()["figures_at"] == W - 130
 
 
+async def test_while_the_consoles_link_is_down_every_row_reads_unknown_since_and_the_header_says_why():
+    m = fleet_model()
+    app = FleetApp(source=lambda p: m.view(W, MONO, p, SESSION), opener=lambda a: 0)
+    async with app.run_test(size=(200, 40)) as pilot:
+        await pilot.pause()
+        for name in m.names():  # the router's link closed: every token goes with it
+            m.token(name, False, W - 0.001, MONO - 0.001)
+        m.link(False, W, MONO)
+        app.screen.sample()
+        await pilot.pause()
+        assert {r.state for r in app.screen.view.rows} == {"unknown"}
+        assert "unknown since 08:00:00" in shown_row(app, "lab-01")
+        head = str(app.screen.query_one("#fleet-head").content)
+        assert "8 unknown: this console's link to its router is down" in head
+        assert not [n for n in app._notifications if "lost:" in n.message]  # no robot said lost
+
+
 def shown_row(app, name):
     """The list's line for ``name`` as drawn."""
     drawn = app.screen.query_one(FleetList).render().plain.splitlines()

@@ -112,7 +112,7 @@ def test_severity_orders_rows_lost_bad_stale_warning_ok_then_by_name():
     m.token("lost", False, W + 8, 8.0)
     assert [r.name for r in m.view(W, 10.0).rows] == ["lost", "bad", "stale", "warn", "ok-a", "ok-b"]
     counts = dict(m.view(W, 10.0).counts)
-    assert counts == {"alive": 4, "stale": 1, "lost": 1, "bad": 1}
+    assert counts == {"alive": 4, "stale": 1, "lost": 1, "unknown": 0, "bad": 1}
 
 
 @pytest.mark.parametrize(
