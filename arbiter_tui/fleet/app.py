@@ -324,12 +324,17 @@ class FleetScreen(Screen[None]):
     def _announce_lost(self, view: FleetView) -> None:
         """A robot going lost, said once (with the terminal's bell under ``--bell``)."""
         lost = set(view.names("lost"))
-        if self._lost is not None and (new := sorted(lost - self._lost)):
+        if self._lost is None:  # the first robots heard of: those already lost are not news
+            if view.total:
+                self._lost = lost
+            return
+        if new := sorted(lost - self._lost):
             names = ", ".join(new[:5]) + (f" and {len(new) - 5} more" if len(new) > 5 else "")
             self.notify(f"{clock_time(view.now)} lost: {names}", severity="error", timeout=10)
             if self.fleet_app.bell_on_lost:
                 self.app.bell()
-        self._lost = lost
+        # a robot lost before this console's link went down is not news again when it is back
+        self._lost = lost | (self._lost & set(view.names("unknown")))
 
     def _show(self, selector: str, text: str) -> None:
         """A Static's new text; nothing (no layout) when it is the text shown."""

@@ -132,7 +132,7 @@ class FleetView:
     silent: float | None = None  # wall s since which no robot was heard (FleetModel.silent_since)
 
     def names(self, what: str) -> tuple[str, ...]:
-        """The robots ``lost``, with ``bad`` data, or ``stale`` (over all robots)."""
+        """The robots ``lost``, with ``bad`` data, ``stale`` or ``unknown`` (over all robots)."""
         return dict(self.problems).get(what, ())
 
     def to_json(self) -> dict[str, Any]:
@@ -361,7 +361,7 @@ class FleetModel:
         silent = self.silent_since(wall, mono)
         rows = [self.row(r, wall, mono, silent) for r in self._robots.values()]
         counts = {s: 0 for s in (*STATES, "bad")}
-        trouble: dict[str, list[str]] = {"lost": [], "bad": [], "stale": []}
+        trouble: dict[str, list[str]] = {"lost": [], "bad": [], "stale": [], "unknown": []}
         for row in rows:
             counts[row.state] += 1
             counts["bad"] += row.bad is not None
@@ -537,7 +537,7 @@ def problem_line(view: FleetView, most: int = 4) -> str:
     lab-05 · stale 1: lab-03`` (at most ``most`` names a kind, then how many more)."""
     parts = []
     for what, names in view.problems:
-        if names:
+        if names and what in PROBLEM_WORDS:
             shown = ", ".join(names[:most]) + (f" +{len(names) - most} more" if len(names) > most else "")
             parts.append(f"{PROBLEM_WORDS[what]} {len(names)}: {shown}")
     unknown = dict(view.counts).get("unknown", 0)
