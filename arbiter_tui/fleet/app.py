@@ -123,11 +123,12 @@ class FleetList(Widget, can_focus=True):
 
     DEFAULT_CSS = "FleetList { height: 1fr; }"
     BINDINGS = [
+        Binding("space", "screen.stop", "Stop robot"),  # first in the footer: the key that matters most
         Binding("up", "move(-1)", "Up", show=False),
         Binding("down", "move(1)", "Down", show=False),
         Binding("pageup", "move(-10)", "Page up", show=False),
         Binding("pagedown", "move(10)", "Page down", show=False),
-        Binding("home", "top", "Worst first"),
+        Binding("home", "top", "Worst first", show=False),  # the "worse above" line names it
         Binding("end", "move(100000)", "Last", show=False),
         Binding("enter", "open", "Open console"),
     ]
@@ -267,12 +268,11 @@ class FleetList(Widget, can_focus=True):
 
 class FleetScreen(Screen[None]):
     BINDINGS = [
-        Binding("slash", "filter", "Filter"),
-        Binding("escape", "clear", "Clear filter"),
-        Binding("h", "history", "History"),
-        Binding("space", "stop", "Stop robot"),
         Binding("ctrl+k", "stop", "Stop robot", show=False, priority=True),  # from the filter too
+        Binding("slash", "filter", "Filter"),
         Binding("S", "stop_shown", "Stop all shown"),
+        Binding("h", "history", "History"),
+        Binding("escape", "clear", "Clear filter"),
         Binding("q", "app.quit", "Quit"),
         Binding("ctrl+q", "app.quit", "Quit", show=False, priority=True),
     ]
@@ -315,7 +315,7 @@ class FleetScreen(Screen[None]):
         if counts.get("bad"):
             parts.append(f"{counts['bad']} bad data")
         shown = f"{len(view.rows)} of {view.total}" if view.filter else f"{view.total}"
-        head = f"fleet · {shown} robots: {', '.join(parts)} · {view.session}"
+        head = f"fleet · {view.session} · {shown} robots: {', '.join(parts)}"  # its own link first
         if view.ignored:
             head += f" · {view.ignored} more names ignored"
         self._show("#fleet-head", f"{head}\n{problem_line(view)}")
