@@ -90,7 +90,7 @@ def line(row: Row, cols: list[tuple[int, int]], selected: bool, stop: str | None
             style = "dim"  # its last figures, not current ones
         elif COLUMNS[i] == "note" and stop is not None:
             style = "bold" if " stopped: " in stop else "bold red"
-        elif COLUMNS[i] == "note" and row.bad is not None:
+        elif COLUMNS[i] == "note" and (row.bad is not None or row.flooding is not None):
             style = "bold magenta"
         elif COLUMNS[i] == "note" and row.figures_at is not None:
             style = "dim"
@@ -110,7 +110,8 @@ def worse_above(rows: tuple[Row, ...], top: int) -> str:
     counts: dict[str, int] = {}
     for r in rows[:top]:
         if r.severity > OK:
-            what = "bad data" if r.severity == BAD else r.state if r.severity >= STALE else "warning"
+            bad = "flooding" if r.flooding is not None else "bad data"
+            what = bad if r.severity == BAD else r.state if r.severity >= STALE else "warning"
             counts[what] = counts.get(what, 0) + 1
     if not counts:
         return ""
@@ -318,6 +319,10 @@ class FleetScreen(Screen[None]):
         head = f"fleet · {view.session} · {shown} robots: {', '.join(parts)}"  # its own link first
         if view.ignored:
             head += f" · {view.ignored} more names ignored"
+        dropped = [f"{view.unknown} odd keys"] if view.unknown else []
+        dropped += [f"{view.flood_dropped} over rate"] if view.flood_dropped else []
+        if dropped:
+            head += f" · dropped {', '.join(dropped)}"
         self._show("#fleet-head", f"{head}\n{problem_line(view)}")
         self._announce_lost(view)
 

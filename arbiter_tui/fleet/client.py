@@ -252,6 +252,9 @@ class FleetClient:
                     self.model.unknown_key()
             return
         name, kind = parsed
+        with self._lock:  # over its kind's rate: dropped before a byte is copied or parsed
+            if not self.model.admit(name, kind, self.mono()):
+                return
         size = len(payload)
         try:
             if size > fleet.MAX_BYTES[kind]:

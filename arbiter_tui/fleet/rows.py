@@ -30,6 +30,8 @@ from arbiter_core import fleet
 from arbiter_core.fleet import Latency, Runs, Status, Topics
 from arbiter_core.timesync import TimeSync, one_way_bound_ms
 
+from .flood import Meter
+
 STALE_AFTER_S = 5.0  # five status periods without one: stale
 BAD_HOLD_S = 60.0  # a row says "bad data" this long after the last bad payload
 MAX_ROBOTS = 1000  # names beyond are counted, not listed (a flood of names cannot exhaust the console)
@@ -62,6 +64,7 @@ class _Robot:
     bad_count: int = 0
     received: int = 0  # valid payloads
     received_bytes: int = 0
+    meter: Meter = field(default_factory=Meter)  # payloads over its kinds' rates (flood.py)
 
 
 @dataclass(frozen=True, slots=True)
@@ -97,6 +100,7 @@ class Row:
     pose: tuple[float, ...] | None = None
     velocity: tuple[float, ...] | None = None
     figures_at: float | None = None  # lost: the wall time its figures date from (its last payload)
+    flooding: float | None = None  # payloads a second it sends over its kinds' rates (the excess dropped)
 
     def to_json(self) -> dict[str, Any]:
         out = {f.name: _plain(getattr(self, f.name)) for f in fields(self)}
@@ -123,7 +127,8 @@ class FleetView:
     total: int = 0
     filter: str = ""
     ignored: int = 0  # names beyond MAX_ROBOTS
-    unknown: int = 0  # samples on keys that are not a robot's payload
+    unknown: int = 0  # samples on keys that are not a robot's payload (dropped)
+    flood_dropped: int = 0  # payloads dropped as over their robot's rate
     now: float = 0.0  # wall s the view was made at (the screen's "lost since" ages)
     session: str = ""  # where the console's Zenoh session is ("router on tcp/...", "connecting to ...")
     error: str | None = None
@@ -144,6 +149,7 @@ class FleetView:
             "counts": dict(self.counts),
             "total": self.total,
             "ignored": self.ignored,
+            "dropped": {"odd_keys": self.unknown, "over_rate": self.flood_dropped},
             "problems": {what: list(names) for what, names in self.problems},
             "robots": [r.to_json() for r in self.rows],
         }
@@ -165,6 +171,7 @@ class FleetModel:
     _robots: dict[str, _Robot] = field(default_factory=dict)
     ignored: set[str] = field(default_factory=set)
     unknown: int = 0
+    flood_dropped: int = 0  # payloads dropped as over their robot's rate
     link_down: tuple[float, float] | None = None  # (wall, mono) this console's link to its router went down
     link_back: float | None = None  # mono s it came back (None: down now, or never down)
 
@@ -259,6 +266,17 @@ class FleetModel:
     def unknown_key(self) -> None:
         self.unknown += 1
 
+    def admit(self, name: str, kind: str, mono: float) -> bool:
+        """A payload of ``kind`` on ``name``'s key, before it is copied or parsed: False when it is over
+        its kind's rate (dropped, counted; the row says the robot floods)."""
+        r = self._robot(name)
+        if r is None:
+            return False
+        if r.meter.admit(kind, mono):
+            return True
+        self.flood_dropped += 1
+        return False
+
     # -- what is shown ------------------------------------------------------------------------------
     def names(self) -> list[str]:
         return sorted(self._robots)
@@ -285,13 +303,14 @@ class FleetModel:
             if r.status_mono is None:
                 note = "no status yet"
         bad = r.bad if r.bad_mono is not None and mono - r.bad_mono <= BAD_HOLD_S else None
+        flooding = r.meter.flooding(mono)
         s, lat, top, runs = r.status, r.latency, r.topics, r.runs
         worst = top.worst if top is not None else None
         bound, clock_note = self._clock(lat)
         gone = state in ("lost", "unknown")  # its figures are its last ones
         if state == "lost":
             severity = LOST
-        elif bad is not None:
+        elif bad is not None or flooding is not None:
             severity = BAD
         elif gone or state == "stale":
             severity = STALE
@@ -336,6 +355,7 @@ class FleetModel:
             pose=None if s is None else s.pose,
             velocity=None if s is None else s.velocity,
             figures_at=None if not gone or r.last_mono is None else wall - (mono - r.last_mono),
+            flooding=None if flooding is None else round(flooding, 1),
         )
 
     def row_of(self, name: str, wall: float, mono: float) -> Row | None:
@@ -361,7 +381,7 @@ class FleetModel:
         silent = self.silent_since(wall, mono)
         rows = [self.row(r, wall, mono, silent) for r in self._robots.values()]
         counts = {s: 0 for s in (*STATES, "bad")}
-        trouble: dict[str, list[str]] = {"lost": [], "bad": [], "stale": [], "unknown": []}
+        trouble: dict[str, list[str]] = {"lost": [], "bad": [], "flooding": [], "stale": [], "unknown": []}
         for row in rows:
             counts[row.state] += 1
             counts["bad"] += row.bad is not None
@@ -369,6 +389,8 @@ class FleetModel:
                 trouble[row.state].append(row.name)
             if row.bad is not None:
                 trouble["bad"].append(row.name)
+            if row.flooding is not None:
+                trouble["flooding"].append(row.name)
         shown = sorted((r for r in rows if matches(r.name, pattern)), key=lambda r: (-r.severity, r.name))
         return FleetView(
             rows=tuple(shown),
@@ -377,6 +399,7 @@ class FleetModel:
             filter=pattern,
             ignored=len(self.ignored),
             unknown=self.unknown,
+            flood_dropped=self.flood_dropped,
             now=wall,
             session=session,
             error=error,
@@ -428,7 +451,13 @@ def figures_words(row: Row) -> str | None:
     return f"figures as of {clock_time(row.figures_at)}, {ago(row.age_s or 0.0)} old"
 
 
+def flood_words(row: Row) -> str | None:
+    return None if row.flooding is None else f"flooding: {row.flooding:.0f}/s, the excess dropped"
+
+
 def note_cell(row: Row) -> str:
+    if row.flooding is not None:
+        return flood_words(row) or ""
     if row.bad is not None:
         return f"bad data: {row.bad}"
     return figures_words(row) or row.note or ""
@@ -507,6 +536,8 @@ def detail_lines(row: Row, now: float) -> list[str]:
     if row.figures_at is not None:
         why = "the robot is lost" if row.state == "lost" else "this console's link is down"
         lines.append(f"{figures_words(row)}: not current ({why})")
+    if row.flooding is not None:
+        lines.append(f"{flood_words(row)} (its kinds' rates: one status a second, ...; flood.py)")
     if row.bad is not None:
         lines.append(f"bad data ({row.bad_count}): {row.bad}")
     elif row.note:
@@ -529,7 +560,7 @@ def history_words(answer: fleet.History | str) -> str:
     return ", ".join(parts)
 
 
-PROBLEM_WORDS = {"lost": "lost", "bad": "bad data", "stale": "stale"}
+PROBLEM_WORDS = {"lost": "lost", "bad": "bad data", "flooding": "flooding", "stale": "stale"}
 
 
 def problem_line(view: FleetView, most: int = 4) -> str:
