@@ -73,6 +73,18 @@ def fit(text: str, width: int) -> str:
     return text if len(text) <= width else text[: max(0, width - 1)] + "…"
 
 
+def fit_topic(words: str, width: int) -> str:
+    """A topic's health words at ``width``: the name shortened from its start, never its verdict
+    (``…/camera/image_raw ok``, not ``/lab_w0_000/camera/imag…``, which reads like a problem)."""
+    if len(words) <= width:
+        return words
+    name, _, verdict = words.partition(" ")
+    room = width - len(verdict) - 2  # "…" and the space
+    if not verdict or room < 4:
+        return fit(words, width)
+    return f"…{name[-room:]} {verdict}"
+
+
 def line(row: Row, cols: list[tuple[int, int]], selected: bool, stop: str | None = None) -> Text:
     """One row at the columns ``layout`` gave; ``stop``: what the robot answered a stop, in its note."""
     values = cells(row)
@@ -96,7 +108,9 @@ def line(row: Row, cols: list[tuple[int, int]], selected: bool, stop: str | None
             style = "dim"
         elif COLUMNS[i] in ("worst topic", "note") and row.worst_health in ("missing", "below", "silent"):
             style = "yellow"
-        text.append(fit(value, w).ljust(w) if COLUMNS[i] != "note" else fit(value, w), style)
+        topic = COLUMNS[i] == "worst topic" or (COLUMNS[i] == "note" and value == row.worst_topic)
+        shown_value = fit_topic(value, w) if topic else fit(value, w)
+        text.append(shown_value.ljust(w) if COLUMNS[i] != "note" else shown_value, style)
         if COLUMNS[i] != "note":
             text.append(" " * SEP)
     if selected:

@@ -368,6 +368,21 @@ async def test_while_the_consoles_link_is_down_every_row_reads_unknown_since_and
         assert not [n for n in app._notifications if "lost:" in n.message]  # no robot said lost
 
 
+def test_a_healthy_robots_worst_topic_keeps_its_verdict_when_it_is_cut():
+    """Cut at its end, ``/lab_w0_000/camera/imag…`` read like a problem; its name is cut instead."""
+    from arbiter_tui.fleet.app import fit_topic, layout, line
+
+    m = FleetModel()
+    m.token("lab-w0-000", True, W, MONO)
+    m.accept(status("lab-w0-000"), 400, MONO)
+    m.accept(topics("lab-w0-000", ("/lab_w0_000/camera/image_raw", "ok", 30.0)), 300, MONO)
+    row = m.row_of("lab-w0-000", W, MONO)
+    assert "…000/camera/image_raw ok " in line(row, layout(200), False).plain
+    slow = fleet.TopicHealth("/lab_w0_000/camera/image_raw", "below", 4.1, None, 10.0).words()
+    assert fit_topic(slow, 24) == "…era/image_raw 4.1<10 Hz"
+    assert fit_topic("/scan ok", 24) == "/scan ok"
+
+
 def shown_row(app, name):
     """The list's line for ``name`` as drawn."""
     drawn = app.screen.query_one(FleetList).render().plain.splitlines()
