@@ -28,8 +28,10 @@ def build_parser() -> argparse.ArgumentParser:
     p = OneLineParser(
         prog="arbiter-tui fleet",
         description="One row per robot announcing itself on Zenoh (arbiter-backend --zenoh): alive, stale "
-        "or lost (never dropped), who drives, latency p95, clock offset bound, worst topic, controller and "
-        "its last run, sorted by severity. Enter opens the single-robot console on the selected robot.",
+        "or lost (never dropped; unknown while this console's own link is down), who drives, latency p95, "
+        "clock offset bound, worst topic, controller and its last run, sorted by severity, the worst in "
+        "sight. Enter opens the single-robot console on the selected robot; space stops it (its backend "
+        "answers what it stopped; the router's access control says who may).",
     )
     p.add_argument(
         "--connect",
