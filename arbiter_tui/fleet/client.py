@@ -320,6 +320,10 @@ class FleetClient:
         answer ends it after ``fleet.STOP_TIMEOUT_S``."""
         if self.session is None:
             return f"not stopped: not connected ({self.session_words()})"
+        with self._lock:
+            down = self.settings.mode == "client" and self._link_since is not None and not self._routers
+        if down:
+            return "not stopped: this console's link to its router is down (nothing was asked)"
         asked = self.mono()
         try:
             for reply in self.session.get(fleet.key(name, fleet.STOP), timeout=fleet.STOP_TIMEOUT_S):
