@@ -153,6 +153,7 @@ def test_while_the_consoles_own_link_is_down_no_robot_is_called_lost_or_alive(cl
         # unknown at once, and still so two seconds on (past the robots' lease)
         assert wait_for(lambda: states() == {"unknown"} and time.monotonic() - closed > 2.0, timeout=6), seen
         assert " · reconnecting since " in c.view().session
+        assert c.stop("r1") == "not stopped: this console's link to its router is down (nothing was asked)"
         r = open_router(port)
         assert wait_for(lambda: states() == {"alive"}, timeout=15), c.view()
         assert " · connected since " in c.view().session
