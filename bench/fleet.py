@@ -395,7 +395,7 @@ def kill_restart(endpoint: str, procs: list[subprocess.Popen], obs) -> dict:
             {
                 "screen": lambda n=name: screen_state(n) == "lost",
                 "observer": lambda n=name: obs_state(obs, n) == "lost",
-                "first": lambda n=name: first_row() == n,
+                "first": lambda n=name: first_row() == n and screen_state(n) == "lost",
             },
             10,
         )
