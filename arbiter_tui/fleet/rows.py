@@ -423,6 +423,9 @@ COLUMNS = (
 )
 
 
+AGE_SHOWN_S = 2.0  # two status periods: an alive robot whose last payload is older is late
+
+
 def clock_time(wall: float) -> str:
     return time.strftime("%H:%M:%S", time.localtime(wall))
 
@@ -437,9 +440,12 @@ def ago(seconds: float) -> str:
 
 
 def state_cell(row: Row) -> str:
+    """``alive`` / ``alive 3s`` (its last payload that old: late) / ``stale 12s`` / ``lost since 14:02:11``.
+    An alive robot's age is shown once it is late (AGE_SHOWN_S): 0s and 1s flickering on every row told
+    nothing and repainted the whole list twice a second."""
     if row.state in ("lost", "unknown"):
         return row.state if row.since is None else f"{row.state} since {clock_time(row.since)}"
-    if row.age_s is None:
+    if row.age_s is None or (row.state == "alive" and row.age_s < AGE_SHOWN_S):
         return row.state
     return f"{row.state} {ago(row.age_s)}"
 

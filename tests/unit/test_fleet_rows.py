@@ -14,6 +14,7 @@ from arbiter_tui.fleet.rows import (
     detail_lines,
     history_words,
     matches,
+    state_cell,
 )
 
 W = 1_800_000_000.0  # wall s
@@ -206,7 +207,8 @@ def test_json_rows_carry_the_cells_the_screen_shows():
     assert obj["cells"] == dict(zip(COLUMNS, cells(row), strict=True))
     assert obj["cells"]["controller"] == "pure_pursuit 2/4 running"
     assert obj["cells"]["p95"] == "12.3 ms"
-    assert detail_lines(row, W)[0].startswith("r1  alive 1s")
+    assert detail_lines(row, W)[0].startswith("r1  alive (announced since")  # 1 s old: not late
+    assert state_cell(m.view(W, 2.5).rows[0]) == "alive 2s"
 
 
 def test_history_in_one_line():
