@@ -19,9 +19,11 @@ from rich.text import Text
 from textual import events, on, work
 from textual.app import App, ComposeResult, SuspendNotSupported
 from textual.binding import Binding
+from textual.geometry import Region
 from textual.message import Message
 from textual.reactive import reactive
 from textual.screen import Screen
+from textual.strip import Strip
 from textual.widget import Widget
 from textual.widgets import Footer, Input, Static
 
@@ -134,7 +136,8 @@ def worse_above(rows: tuple[Row, ...], top: int) -> str:
 
 
 class FleetList(Widget, can_focus=True):
-    """The rows, the worst first; the selected one highlighted. Drawn as text, only what fits."""
+    """The rows, the worst first; the selected one highlighted. Drawn line by line, only what fits, and
+    only the lines whose text changed are drawn again (a robot's new figures repaint its row alone)."""
 
     DEFAULT_CSS = "FleetList { height: 1fr; }"
     BINDINGS = [
@@ -150,12 +153,14 @@ class FleetList(Widget, can_focus=True):
     # a new view repaints only when a row's text or style changed (``watch_view``): the views come twice
     # a second, each with its own clock, and the ages shown change once a second at most
     view: reactive[FleetView] = reactive(FleetView, repaint=False)
-    selected: reactive[str | None] = reactive(None)
+    selected: reactive[str | None] = reactive(None, repaint=False)
     _shown: tuple[object, ...] | None = None
 
     def __init__(self, id: str | None = None) -> None:  # Textual's name for it
         super().__init__(id=id)
         self.stops: dict[str, str] = {}  # robot -> what it answered its last stop (its note)
+        self._lines: list[Text] = []  # what each line shows
+        self._selected_at: tuple[int, str] | None = None  # (line, robot) of the selection
 
     def set_stop(self, name: str, words: str) -> None:
         self.stops[name] = words
@@ -197,7 +202,32 @@ class FleetList(Widget, can_focus=True):
         shown = (view.filter, *((cells(r), r.worst_health, self.stops.get(r.name)) for r in view.rows))
         if shown != self._shown:
             self._shown = shown
-            self.refresh()
+            self._redraw()
+
+    def _redraw(self) -> None:
+        """The lines again; the ones whose text changed refreshed, no other."""
+        new, old = self.compose_lines(), self._lines
+        self._lines = new
+        width = self.size.width
+        for y in range(max(len(new), len(old))):
+            if y >= len(new) or y >= len(old) or new[y] != old[y]:
+                self.refresh(Region(0, y, width, 1))
+
+    def shown(self) -> list[str]:
+        """The lines as drawn, as text."""
+        return [t.plain for t in self._lines]
+
+    def on_resize(self) -> None:
+        self._lines = self.compose_lines()
+        self.refresh()
+
+    def render_line(self, y: int) -> Strip:
+        if self._selected_at is not None and self._selected_at[0] == y:
+            self._drawn = self._selected_at[1]  # the person can see it selected now
+        text = self._lines[y] if y < len(self._lines) else Text()
+        width = self.size.width
+        strip = Strip(list(text.render(self.app.console))).crop_extend(0, width, None)
+        return strip.apply_style(self.rich_style)
 
     async def _on_key(self, event: events.Key) -> None:
         """A key read with the ones before it (one write: a paste, a laggy link) and handled after one of
@@ -217,6 +247,7 @@ class FleetList(Widget, can_focus=True):
         await super()._on_key(event)
 
     def watch_selected(self) -> None:
+        self._redraw()
         self.post_message(self.Highlighted(self.current()))
 
     def action_move(self, step: int) -> None:
@@ -229,14 +260,14 @@ class FleetList(Widget, can_focus=True):
         j = max(0, min(len(names) - 1, i + step))
         self.follow = j == 0
         self.selected = names[j]
-        self.refresh()
+        self._redraw()
 
     def action_top(self) -> None:
         """Home: back to the worst robots first, the selection on the worst."""
         self.follow = True
         if self.view.rows:
             self.selected = self.view.rows[0].name
-        self.refresh()
+        self._redraw()
 
     def action_open(self) -> None:
         """Enter: the selected robot's console, if the person has seen it selected (it was drawn so):
@@ -249,16 +280,19 @@ class FleetList(Widget, can_focus=True):
             return
         self.post_message(self.Chosen(row))
 
-    def render(self) -> Text:
+    def compose_lines(self) -> list[Text]:
+        """The lines that fit: the column header, a "worse above" line when the person scrolled past
+        robots in trouble, the rows."""
         width, height = self.size.width, max(1, self.size.height)
         head = Text(no_wrap=True, overflow="crop", style="bold")
         cols = layout(width)
         for i, w in cols:
             head.append(fit(COLUMNS[i], w).ljust(w) + (" " * SEP if COLUMNS[i] != "note" else ""))
         rows = self.view.rows
+        self._selected_at = None
         if not rows:
             what = f"no robot matches {self.view.filter!r}" if self.view.filter else "no robot announced yet"
-            return Text.assemble(head, "\n", Text(what, style="dim"))
+            return [head, Text(what, style="dim")]
         names = [r.name for r in rows]
         i = names.index(self.selected) if self.selected in names else 0
         room = height - 1
@@ -269,18 +303,16 @@ class FleetList(Widget, can_focus=True):
             if worse_above(rows, self._top):
                 room -= 1
                 self._top = min(max(self._top, i - room + 1), i, max(0, len(rows) - room))
-        self._drawn = rows[i].name
         out = [head]
         above = worse_above(rows, self._top)
         if above:
             out.append(Text(above, style="bold reverse red", no_wrap=True, overflow="crop"))
+        self._selected_at = (len(out) + i - self._top, rows[i].name)
         out += [
             line(r, cols, r.name == self.selected, self.stops.get(r.name))
             for r in rows[self._top : self._top + room]
         ]
-        drawn = Text("\n").join(out)
-        drawn.no_wrap, drawn.overflow = True, "crop"  # each row fits already: nothing to wrap
-        return drawn
+        return out
 
 
 class FleetScreen(Screen[None]):

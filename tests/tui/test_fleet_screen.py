@@ -265,7 +265,7 @@ def many(n=50):
 
 
 def drawn(app):
-    return app.screen.query_one(FleetList).render().plain.splitlines()
+    return app.screen.query_one(FleetList).shown()
 
 
 async def test_the_worst_rows_stay_in_sight_and_selected_as_they_sort_above():
@@ -385,7 +385,7 @@ def test_a_healthy_robots_worst_topic_keeps_its_verdict_when_it_is_cut():
 
 def shown_row(app, name):
     """The list's line for ``name`` as drawn."""
-    drawn = app.screen.query_one(FleetList).render().plain.splitlines()
+    drawn = app.screen.query_one(FleetList).shown()
     return next(line for line in drawn if line.startswith(name))
 
 
@@ -436,32 +436,35 @@ async def test_stop_all_shown_asks_for_a_second_press_and_stops_the_filtered_rob
 
 
 async def test_a_view_that_shows_the_same_text_repaints_nothing(monkeypatch):
-    """Views come twice a second, each with its own clock; the list repaints only when a row's text
+    """Views come twice a second, each with its own clock; the list draws again only the lines whose text
     changed (an age shown in whole seconds), and the header and detail are not laid out again."""
     model, clock = fleet_model(), [0.0]
-    renders, updates = [0], [0]
-    real_render, real_update = FleetList.render, Static.update
+    drawn_lines, updates = [], [0]
+    real_render_line, real_update = FleetList.render_line, Static.update
 
-    def render(self):
-        renders[0] += 1
-        return real_render(self)
+    def render_line(self, y):
+        drawn_lines.append(y)
+        return real_render_line(self, y)
 
     def update(self, *args, **kwargs):
         updates[0] += 1
         return real_update(self, *args, **kwargs)
 
-    monkeypatch.setattr(FleetList, "render", render)
+    monkeypatch.setattr(FleetList, "render_line", render_line)
     monkeypatch.setattr(Static, "update", update)
     app = FleetApp(source=lambda p: model.view(W + clock[0], MONO + clock[0], p, SESSION), opener=lambda a: 0)
     async with app.run_test(size=(120, 40)) as pilot:
         await pilot.pause()
-        before = renders[0], updates[0]
+        lst = app.screen.query_one(FleetList)
+        before, shown = (len(drawn_lines), updates[0]), lst.shown()
         for _ in range(3):  # 0.1 s later each time: every age shown is the same whole second
             clock[0] += 0.1
             app.screen.sample()
             await pilot.pause()
-        assert (renders[0], updates[0]) == before
-        clock[0] += 1.0  # the ages shown move on
+        assert (len(drawn_lines), updates[0]) == before
+        clock[0] += 1.0  # the ages shown move on: those lines, and no other, are drawn again
         app.screen.sample()
         await pilot.pause()
-        assert renders[0] > before[0]
+        changed = {y for y, (a, b) in enumerate(zip(shown, lst.shown(), strict=True)) if a != b}
+        assert changed and set(drawn_lines[before[0] :]) == changed
+        assert len(changed) < len(shown) - 1  # not the whole list
