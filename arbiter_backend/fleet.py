@@ -4,7 +4,8 @@ It opens one Zenoh session (client by default, or peer; TLS/QUIC where the endpo
 files and user/password of ``--zenoh-config``), declares the liveliness token ``arbiter/<name>/alive``
 and publishes the payloads of ``arbiter_core.fleet`` at that module's rates, read from the backend's own
 state: the tracker, the topic monitor, the robot-side autonomy and the odometry. A queryable answers
-``arbiter/<name>/history`` with the last minutes of them. Nothing here subscribes: a robot never reads
+``arbiter/<name>/history`` with the last minutes of them, another ``arbiter/<name>/stop`` (a fleet
+console's stop: ``RobotStop``, its own section below). Nothing here subscribes: a robot never reads
 another's keys.
 
 The session is opened on a thread of its own and retried for ever: a robot started before its router
@@ -27,7 +28,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from arbiter_core import fleet, topics
+from arbiter_core import fleet, stopping, topics
 from arbiter_core.hostclock import HostClock
 from arbiter_core.kinematics import pose_of_odometry
 from arbiter_core.mission import Phase
@@ -358,9 +359,12 @@ class FleetLink:
         self._keep: list[Any] = []
         self._closed = False
         self._history: Callable[[float], bytes] | None = None
+        self._stop: Callable[[Any], None] | None = None
 
-    def open_in_background(self, history: Callable[[float], bytes]) -> None:
-        self._history = history
+    def open_in_background(
+        self, history: Callable[[float], bytes], stop: Callable[[Any], None] | None = None
+    ) -> None:
+        self._history, self._stop = history, stop
         threading.Thread(target=self._open, name="zenoh-open", daemon=True).start()
 
     def _open(self) -> None:
@@ -379,6 +383,8 @@ class FleetLink:
             session.liveliness().declare_token(fleet.key(name, fleet.ALIVE)),
             session.declare_queryable(fleet.key(name, fleet.HISTORY), self._on_query),
         ]
+        if self._stop is not None:
+            self._keep.append(session.declare_queryable(fleet.key(name, fleet.STOP), self._stop))
         self.session = session
         self.opened.set()
         log.info("fleet: announcing as %s on %s", name, ",".join(self.settings.endpoints))
@@ -412,6 +418,7 @@ class FleetAnnouncer:
 
     def __init__(self, backend: Any, settings: FleetSettings, link: FleetLink) -> None:
         self.link = link
+        self.backend = backend
         self.host_clock: HostClock = backend.host_clock  # the API's: the host is probed once for both
         self.supervisor: Supervisor = backend.supervisor  # the backend's: its workers in /api/health
         src = sources_of(backend, settings.advertise_host)
@@ -419,7 +426,8 @@ class FleetAnnouncer:
         self._task: asyncio.Task[None] | None = None
 
     def start(self) -> None:
-        self.link.open_in_background(lambda minutes: self.announcer.history(minutes, time.time()))
+        stop = RobotStop(self.backend, self.announcer, asyncio.get_running_loop())
+        self.link.open_in_background(lambda minutes: self.announcer.history(minutes, time.time()), stop.ask)
         self._task = self.supervisor.task(WORKER, self._run)
 
     async def _run(self) -> None:
@@ -448,6 +456,146 @@ class FleetAnnouncer:
             with contextlib.suppress(asyncio.CancelledError):
                 await self._task
         await asyncio.to_thread(self.link.close)
+
+
+# -- the stop a fleet console asks for (arbiter/<name>/stop) ------------------------------------------
+class RobotStop:
+    """A fleet console's stop, done in the robot's backend: the robot-side run aborted (its own zero), every
+    goal of the foreign action servers there cancelled (``arbiter_core.stopping``: what the single-robot
+    console's stop asks, asked from inside the robot), one zero command on the robot's command output, and
+    when a foreign controller drove, zero velocity on its command topic for ``ZERO_FOR_S``. The answer
+    (``fleet.StopAnswer``) says what it did. Asked on Zenoh's thread (:meth:`ask`), done on the backend's
+    event loop, answered from there: Zenoh's thread never waits for it. Who may ask is the router's
+    access control: the robot answers whoever reaches it."""
+
+    def __init__(self, backend: Any, announcer: Announcer, loop: asyncio.AbstractEventLoop) -> None:
+        self.backend = backend
+        self.announcer = announcer
+        self.loop = loop
+        self.asked = 0
+
+    def ask(self, query: Any) -> None:
+        """A stop query (Zenoh's thread): done on the loop, answered when done; never raised out of."""
+        try:
+            done = asyncio.run_coroutine_threadsafe(self.stop(), self.loop)
+            done.add_done_callback(lambda f: self._answer(query, f))
+        except Exception as exc:  # the loop is closing
+            log.warning("fleet: a stop was not done: %s", exc)
+
+    def _answer(self, query: Any, done: Any) -> None:
+        try:
+            answer = done.result()
+            query.reply(fleet.key(self.announcer.name, fleet.STOP), fleet.encode(answer))
+            log.warning("fleet: stopped by a fleet console: %s", answer.words())
+        except Exception as exc:
+            log.warning("fleet: a stop was not answered: %s", exc)
+        finally:
+            with contextlib.suppress(Exception):
+                query.drop()  # the end of the answers, now
+
+    async def stop(self) -> fleet.StopAnswer:
+        self.asked += 1
+        src, now, mono = self.announcer.src, time.time(), time.monotonic()
+        driver, detail = self.announcer.driver(mono, now)
+        cancelling = asyncio.ensure_future(self._cancels())  # they travel while the rest is done
+        aborted = commands = None
+        if src.autonomy is not None:
+            said = src.autonomy.stop()  # the run's own zero goes out on the tracker's path
+            if said.get("stopped"):
+                at = f"{said['waypoint']}/{said['waypoints']}"
+                aborted = f"{said['algorithm']} on {said['mission']} at {at}"
+                commands = said["commands"]
+        zero = self._zero()
+        cancels = await cancelling
+        if driver == "foreign" and self._cmd_type() is not None:
+            self.loop.create_task(self._foreign_zeros())  # after the answer: a second of zeros
+        still = None
+        if driver == "console":  # its next command drives again: the fleet cannot stop a console
+            still = f"a console drives ({detail})" if detail else "a console drives"
+        elif driver == "foreign" and not any(c.outcome == "cancelled" for c in cancels):
+            still = f"a foreign controller may ({detail})" if detail else "a foreign controller may"
+        return fleet.StopAnswer(
+            robot=self.announcer.name,
+            t=round(time.time(), 3),
+            driver=driver,
+            zero=zero,
+            aborted=None if aborted is None else aborted[:120],
+            commands=commands,
+            cancels=cancels,
+            still=None if still is None else still[:120],
+        )
+
+    def _zero(self) -> bool:
+        """One zero command on the robot's output (what the deadman sends), where the backend has one."""
+        publish_zero = getattr(self.backend, "publish_zero", None)
+        if publish_zero is None:
+            return False
+        try:
+            publish_zero()
+        except Exception as exc:
+            log.warning("fleet: the stop's zero was not sent: %s", exc)
+            return False
+        return True
+
+    def _actions(self) -> list[str]:
+        """The action servers a stop cancels (Nav2's, under the robot's namespace) that are there."""
+        room = getattr(getattr(self.backend, "endpoint", None), "service_room", None)
+        if room is None:
+            return []
+        ns = self.announcer.src.namespace
+        wanted = [topics.resolve(a, ns, what="action") for a in stopping.NAV2_ACTIONS]
+        on_graph: set[str] = set()
+        if room.graph is not None:
+            with contextlib.suppress(Exception):
+                on_graph = {name for name, _ in room.graph.service_names_and_types()}
+        there = [a + stopping.CANCEL_SUFFIX for a in wanted]
+        return [a for a, srv in zip(wanted, there, strict=True) if srv in room.provided or srv in on_graph]
+
+    async def _cancels(self) -> tuple[fleet.StopCancel, ...]:
+        actions = self._actions()
+        if not actions:
+            return ()
+        outcomes = await asyncio.gather(*(self._cancel(a) for a in actions))
+        return tuple(fleet.StopCancel(c.action, c.outcome.value, c.goals) for c in outcomes)
+
+    async def _cancel(self, action: str) -> stopping.ActionCancel:
+        """Every goal of ``action`` cancelled: through the bridge's client that provides it, else on the
+        ROS graph; bounded by ``CANCEL_TIMEOUT_S``."""
+        room = self.backend.endpoint.service_room
+        service = action + stopping.CANCEL_SUFFIX
+        try:
+            provided = room.provided.get(service)
+            if provided is not None:
+                ok, values = await provided.call(stopping.CANCEL_ALL, stopping.CANCEL_TIMEOUT_S)
+                if not ok:
+                    return stopping.cancel_failure(action, str(values))
+            else:
+                call = room.graph.call_service(service, stopping.CANCEL_ALL)
+                values = await asyncio.wait_for(call, stopping.CANCEL_TIMEOUT_S)
+        except (TimeoutError, asyncio.TimeoutError):
+            return stopping.cancel_failure(action, f"no answer in {stopping.CANCEL_TIMEOUT_S:g} s")
+        except Exception as exc:
+            return stopping.cancel_failure(action, str(exc) or type(exc).__name__)
+        return stopping.cancel_outcome(action, values)
+
+    def _cmd_type(self) -> str | None:
+        bus = getattr(self.backend, "bus", None)
+        t = None if bus is None else bus.type_of(self.announcer.src.cmd_topic)
+        return t if t in (topics.TYPE_TWIST, topics.TYPE_TWIST_STAMPED) else None
+
+    async def _foreign_zeros(self) -> None:
+        """Zero velocity on the robot's ``cmd_vel`` at ``ZERO_HZ`` for ``ZERO_FOR_S`` (a controller still
+        publishing there overrides it: the answer said so)."""
+        kind = "twist_stamped" if self._cmd_type() == topics.TYPE_TWIST_STAMPED else "twist"
+        end = time.monotonic() + stopping.ZERO_FOR_S
+        while time.monotonic() < end:
+            try:
+                zero = topics.measured_message(0.0, 0.0, kind, time.time_ns())
+                self.backend.bus.publish(self.announcer.src.cmd_topic, zero)
+            except Exception as exc:
+                log.warning("fleet: a zero on %s was not sent: %s", self.announcer.src.cmd_topic, exc)
+                return
+            await asyncio.sleep(1.0 / stopping.ZERO_HZ)
 
 
 def settings_from_args(args: Any, namespace: str) -> FleetSettings | None:

@@ -272,6 +272,12 @@ class Backend(Servers):
             twist = topics.measured_message(v, w, self.config.measured_type, recv_ns)
             self.bus.publish(self.topic_measured, twist)
 
+    def publish_zero(self) -> None:
+        """One zero twist on the robot's command output now, as the deadman sends (a fleet console's
+        stop: arbiter_backend/fleet.py)."""
+        zero = topics.measured_message(0.0, 0.0, self.config.measured_type, time.time_ns())
+        self.bus.publish(self.topic_measured, zero)
+
     async def _watchdog(self) -> None:
         period = min(0.05, self.config.cmd_timeout / 4)
         while True:

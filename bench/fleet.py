@@ -16,12 +16,18 @@ Zenoh client of the console) counts the bytes each robot sends and sees the toke
   reads "lost since", and until the observer's row does (without the screen's 0.5 s refresh);
   restart -> alive: a new backend with the same name until its row reads "alive" again;
 - bytes/s: payload bytes each robot sent over the CPU window, from the observer's counts;
+- ``--quota PCT``: the console under a CPU quota (cgroup v1, ``/sys/fs/cgroup/cpu/fleetbench``: PCT % of a
+  core, as a Raspberry Pi's share might be; root): its CPU as a share of the quota, the periods it was
+  throttled in, and how soon a killed robot's row is the first on the screen;
+- ``--stops K``: at the largest N, the stop from the fleet (``arbiter/<name>/stop``) asked K times of a
+  real backend through the console's router by the observer: its latency, p50/p95/max;
 - ``--netem``: a 4th backend in a network namespace (root) behind a link that delays and drops packets
   both ways (``--delay-ms``, ``--loss``; ``tunlink.py``: this kernel has no ``sch_netem``, so the link is
   impaired in user space, packet by packet), for ``--netem-seconds``: the time its row was not "alive",
   its figures, and its bytes on the link (IP packets: Zenoh, TCP and IP headers included).
 
     nice -n 10 python bench/fleet.py --robots 10,50,200 --seconds 20 --netem
+    python bench/fleet.py --robots 200,500 --seconds 20 --stops 100 --quota 25
 """
 
 from __future__ import annotations
@@ -44,6 +50,7 @@ ROOT = Path(__file__).resolve().parents[1]
 SESSION = "fleetbench"
 NS, HOST_IP, BOT_IP = "fleetbot", "10.201.0.1", "10.201.0.2"
 CLK_TCK = os.sysconf("SC_CLK_TCK")
+CGROUP = Path("/sys/fs/cgroup/cpu/fleetbench")
 
 
 def env() -> dict[str, str]:
@@ -144,6 +151,48 @@ def screen() -> str:
     return tmux("capture-pane", "-p", "-t", SESSION)
 
 
+def first_row() -> str | None:
+    """The name on the list's first row (below its column header; a "worse above" line skipped)."""
+    lines = screen().splitlines()
+    for i, line in enumerate(lines):
+        if line.split()[:1] == ["robot"]:
+            for below in lines[i + 1 :]:
+                cells = below.split()
+                if cells and not cells[0].startswith("▲"):
+                    return cells[0]
+    return None
+
+
+def quota(pid: int, percent: float) -> None:
+    """The console (and its threads) under ``percent`` % of one core: a cgroup v1 CFS quota."""
+    CGROUP.mkdir(exist_ok=True)
+    period = int((CGROUP / "cpu.cfs_period_us").read_text())
+    (CGROUP / "cpu.cfs_quota_us").write_text(str(int(period * percent / 100)))
+    (CGROUP / "cgroup.procs").write_text(str(pid))
+
+
+def throttling() -> tuple[int, int]:
+    """(periods, throttled periods) of the quota's cgroup so far."""
+    stat = dict(line.split() for line in (CGROUP / "cpu.stat").read_text().splitlines())
+    return int(stat["nr_periods"]), int(stat["nr_throttled"])
+
+
+def stop_latency(obs, name: str, count: int) -> dict:
+    """The fleet's stop asked ``count`` times of ``name`` through the router: seconds until its answer."""
+    took, answers = [], set()
+    for _ in range(count):
+        t0 = time.perf_counter()
+        answer = obs.stop(name)
+        took.append(time.perf_counter() - t0)
+        answers.add(answer if isinstance(answer, str) else answer.words())
+        time.sleep(0.05)
+    return {
+        "count": count,
+        "ms_p50_p95_max": [round(1e3 * v, 1) for v in (pct(took, 0.5), pct(took, 0.95), max(took))],
+        "answers": sorted(answers),
+    }
+
+
 def screen_state(name: str) -> str | None:
     for line in screen().splitlines():
         cells = line.split()
@@ -242,6 +291,10 @@ def scale(n: int, seconds: float, size: tuple[int, int]) -> dict:
         # ...then the console's CPU with the observer gone: the console routes to itself alone
         obs.close()
         time.sleep(1.0)
+        if ARGS.quota:
+            quota(pid, ARGS.quota)
+            time.sleep(2.0)  # the quota's first periods
+            p0, th0 = throttling()
         c0, t0 = cpu_s(pid), time.monotonic()
         time.sleep(seconds)
         cpu = 100.0 * (cpu_s(pid) - c0) / (time.monotonic() - t0)
@@ -255,13 +308,16 @@ def scale(n: int, seconds: float, size: tuple[int, int]) -> dict:
         result = {
             "robots": n + 3,
             "console_cpu_percent": round(cpu, 1),
+            **({} if not ARGS.quota else quota_figures(cpu, p0, th0)),
             "rows_on_screen": rows_on_screen,
             "all_rows_after_s": None if shown is None else round(shown, 2),
             "sim_bytes_per_s_p50": round(pct(sim_rates, 0.5) or 0, 1),
             "real_bytes_per_s": [round(v, 1) for v in real_rates],
         }
         wait(lambda: obs.view().total >= n + 3, 10)
-        if n == max(ARGS.robots):
+        if n == max(ARGS.robots) and ARGS.stops:
+            result["stop"] = stop_latency(obs, "real-1", ARGS.stops)
+        if n == max(ARGS.robots) or ARGS.quota:
             result["kill_restart"] = kill_restart(endpoint, procs, obs)
         return result
     finally:
@@ -272,6 +328,15 @@ def scale(n: int, seconds: float, size: tuple[int, int]) -> dict:
         if obs is not None:
             obs.close()
         tmux("kill-session", "-t", SESSION)
+
+
+def quota_figures(cpu: float, p0: int, th0: int) -> dict:
+    periods, throttled = throttling()
+    return {
+        "quota_percent_of_a_core": ARGS.quota,
+        "console_cpu_percent_of_quota": round(100.0 * cpu / ARGS.quota, 1),
+        "throttled_periods_percent": round(100.0 * (throttled - th0) / max(1, periods - p0), 1),
+    }
 
 
 def first_times(t0: float, probes: dict, timeout: float) -> dict:
@@ -294,6 +359,7 @@ def kill_restart(endpoint: str, procs: list[subprocess.Popen], obs) -> dict:
         "restart_to_alive_screen_s": [],
         "restart_to_alive_observer_s": [],
         "restart_to_listening_s": [],
+        "kill_to_first_row_screen_s": [],  # the killed robot's row the first on the screen
     }
     # frozen first (SIGSTOP: its socket stays open, only the lease tells), then thawed
     out["freeze_to_lost_screen_s"], out["freeze_to_lost_observer_s"], out["thaw_to_alive_observer_s"] = (
@@ -329,9 +395,11 @@ def kill_restart(endpoint: str, procs: list[subprocess.Popen], obs) -> dict:
             {
                 "screen": lambda n=name: screen_state(n) == "lost",
                 "observer": lambda n=name: obs_state(obs, n) == "lost",
+                "first": lambda n=name: first_row() == n and screen_state(n) == "lost",
             },
             10,
         )
+        out["kill_to_first_row_screen_s"].append(lost["first"])
         procs[i - 1].wait()
         t1 = time.monotonic()
         procs[i - 1] = start_backend(endpoint, name)
@@ -434,6 +502,8 @@ def main() -> None:
     )
     p.add_argument("--seconds", type=float, default=20.0, help="each CPU window (default 20)")
     p.add_argument("--size", default="200x60")
+    p.add_argument("--quota", type=float, help="the console under this %% of a core (cgroup v1; root)")
+    p.add_argument("--stops", type=int, default=0, help="stops asked of a robot at the largest N")
     p.add_argument("--netem", action="store_true", help="also the robot behind netem (root)")
     p.add_argument("--delay-ms", type=float, default=200.0)
     p.add_argument("--loss", type=float, default=0.05)
@@ -451,7 +521,10 @@ def main() -> None:
         r = scale(n, ARGS.seconds, size)  # type: ignore[arg-type]
         print(json.dumps(r), flush=True)
         rows.append(r)
-    out = {"bench": "fleet", "size": ARGS.size, "seconds": ARGS.seconds, "scale": rows}
+    out = {"bench": "fleet", "size": ARGS.size, "seconds": ARGS.seconds, "quota": ARGS.quota, "scale": rows}
+    if ARGS.quota:
+        with contextlib.suppress(OSError):
+            CGROUP.rmdir()
     if ARGS.netem:
         out["netem"] = netem(ARGS.delay_ms, ARGS.loss, ARGS.netem_seconds, ARGS.netem_lease_ms)
         print(json.dumps(out["netem"]), flush=True)

@@ -118,6 +118,10 @@ class RosBackend(Servers):
         )
         self.topics.start()
 
+    def publish_zero(self) -> None:
+        """One zero twist on the robot's command output now (a fleet console's stop)."""
+        self.tracker_node.publish_zero()
+
     async def stop(self) -> None:
         if self._watch is not None:
             self._watch.cancel()

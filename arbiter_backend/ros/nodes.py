@@ -107,6 +107,11 @@ class TrackerNode(Node):
         msg = topics.measured_message(v, w, self.config.measured_type, stamp_ns)
         self.measured_pub.publish(to_ros(self._measured_cls, msg))
 
+    def publish_zero(self) -> None:
+        """One zero twist on the command output now, as the watchdog sends (any thread: rclpy's publish is
+        thread-safe)."""
+        self._forward(0.0, 0.0, self.get_clock().now().nanoseconds)
+
     def on_local_command(self, text: str) -> None:
         """A command the rosbridge relay of this process received: handled now, on the caller's thread,
         instead of after a DDS round through the executor. The relay still publishes it on DDS for

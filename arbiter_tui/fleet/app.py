@@ -4,39 +4,62 @@ The screen takes a frozen ``FleetView`` from its source every ``REFRESH_S`` (the
 change the model; nothing is drawn on their threads) and hands it to the list by ``data_bind``; the
 list draws only the rows that fit (200 robots cost what 20 do). ``/`` filters by name glob, Enter opens
 the single-robot console on the selected robot (the app suspends, the console runs in this terminal,
-the fleet comes back when it quits), ``h`` asks the robot's history on a worker thread.
+the fleet comes back when it quits), ``h`` asks the robot's history on a worker thread. ``space`` or
+``ctrl+k`` asks the selected robot to stop (``arbiter/<name>/stop``), ``S`` twice every robot shown; the
+row's note says what each answered.
 """
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 
 from rich.cells import cell_len
 from rich.text import Text
-from textual import on, work
+from textual import events, on, work
 from textual.app import App, ComposeResult, SuspendNotSupported
 from textual.binding import Binding
+from textual.geometry import Region
 from textual.message import Message
 from textual.reactive import reactive
 from textual.screen import Screen
+from textual.strip import Strip
 from textual.widget import Widget
 from textual.widgets import Footer, Input, Static
 
 from arbiter_core import fleet
 
 from ..session.views import fit_fields
-from .rows import COLUMNS, FleetView, Row, cells, console_argv, detail_lines, history_words
+from .rows import (
+    BAD,
+    COLUMNS,
+    OK,
+    STALE,
+    FleetView,
+    Row,
+    cells,
+    clock_time,
+    console_argv,
+    detail_lines,
+    history_words,
+    problem_line,
+    stop_words,
+)
 
 REFRESH_S = 0.5
 PARTS = ("  ·  ", " · ")  # where a head or detail line breaks to fit its width (then between words)
 GO_ON = "  "  # a broken line's continuation
 SEP = 1  # space between columns
 # column -> width; shown in PRIORITY order while they fit, "note" takes the rest (at least NOTE_MIN)
-WIDTHS = {"robot": 12, "state": 20, "driver": 8, "p95": 8, "clock": 9, "worst topic": 24,
+WIDTHS = {"robot": 12, "state": 22, "driver": 8, "p95": 8, "clock": 9, "worst topic": 24,
           "controller": 24, "last run": 34, "runs": 4}  # fmt: skip
 PRIORITY = ("robot", "state", "driver", "p95", "worst topic", "clock", "controller", "last run", "runs")
 NOTE_MIN = 22
-STATE_STYLES = {"lost": "bold red", "stale": "yellow", "alive": "green"}
+STATE_STYLES = {"lost": "bold red", "stale": "yellow", "alive": "green", "unknown": "bold magenta"}
+LAST_FIGURES = ("driver", "p95", "clock", "worst topic", "controller", "last run", "runs")
+CONFIRM_S = 3.0  # "stop all shown" asks for a second press within this
+STOPS_AT_ONCE = 32  # stop questions in flight at once (each waits at most fleet.STOP_TIMEOUT_S)
 
 
 def layout(width: int) -> list[tuple[int, int]]:
@@ -56,11 +79,23 @@ def fit(text: str, width: int) -> str:
     return text if len(text) <= width else text[: max(0, width - 1)] + "…"
 
 
-def line(row: Row, cols: list[tuple[int, int]], selected: bool) -> Text:
-    """One row at the columns ``layout`` gave."""
+def fit_topic(words: str, width: int) -> str:
+    """A topic's health words at ``width``: the name shortened from its start, never its verdict
+    (``…/camera/image_raw ok``, not ``/lab_w0_000/camera/imag…``, which reads like a problem)."""
+    if len(words) <= width:
+        return words
+    name, _, verdict = words.partition(" ")
+    room = width - len(verdict) - 2  # "…" and the space
+    if not verdict or room < 4:
+        return fit(words, width)
+    return f"…{name[-room:]} {verdict}"
+
+
+def line(row: Row, cols: list[tuple[int, int]], selected: bool, stop: str | None = None) -> Text:
+    """One row at the columns ``layout`` gave; ``stop``: what the robot answered a stop, in its note."""
     values = cells(row)
     shown = {i for i, _ in cols}
-    note = values[-1]
+    note = values[-1] if stop is None else stop
     if not note and COLUMNS.index("worst topic") not in shown and row.worst_topic:
         note = row.worst_topic  # no room for its column: the note says it
     text = Text(no_wrap=True, overflow="crop")
@@ -69,11 +104,19 @@ def line(row: Row, cols: list[tuple[int, int]], selected: bool) -> Text:
         style = ""
         if COLUMNS[i] == "state":
             style = STATE_STYLES.get(row.state, "")
-        elif COLUMNS[i] == "note" and row.bad is not None:
+        elif row.figures_at is not None and COLUMNS[i] in LAST_FIGURES:
+            style = "dim"  # its last figures, not current ones
+        elif COLUMNS[i] == "note" and stop is not None:
+            style = "bold" if " stopped: " in stop else "bold red"
+        elif COLUMNS[i] == "note" and (row.bad is not None or row.flooding is not None):
             style = "bold magenta"
+        elif COLUMNS[i] == "note" and row.figures_at is not None:
+            style = "dim"
         elif COLUMNS[i] in ("worst topic", "note") and row.worst_health in ("missing", "below", "silent"):
             style = "yellow"
-        text.append(fit(value, w).ljust(w) if COLUMNS[i] != "note" else fit(value, w), style)
+        topic = COLUMNS[i] == "worst topic" or (COLUMNS[i] == "note" and value == row.worst_topic)
+        shown_value = fit_topic(value, w) if topic else fit(value, w)
+        text.append(shown_value.ljust(w) if COLUMNS[i] != "note" else shown_value, style)
         if COLUMNS[i] != "note":
             text.append(" " * SEP)
     if selected:
@@ -101,24 +144,54 @@ def fit_lines(lines: list[str], width: int) -> list[str]:
     return out
 
 
+
+
+def worse_above(rows: tuple[Row, ...], top: int) -> str:
+    """``▲ 3 worse above (2 lost, 1 stale) · Home: the worst first``, or "" when no row above ``top`` is in
+    trouble."""
+    counts: dict[str, int] = {}
+    for r in rows[:top]:
+        if r.severity > OK:
+            bad = "flooding" if r.flooding is not None else "bad data"
+            what = bad if r.severity == BAD else r.state if r.severity >= STALE else "warning"
+            counts[what] = counts.get(what, 0) + 1
+    if not counts:
+        return ""
+    which = ", ".join(f"{n} {what}" for what, n in counts.items())
+    return f"▲ {sum(counts.values())} worse above ({which}) · Home: the worst first"
+
+
 class FleetList(Widget, can_focus=True):
-    """The rows, the worst first; the selected one highlighted. Drawn as text, only what fits."""
+    """The rows, the worst first; the selected one highlighted. Drawn line by line, only what fits, and
+    only the lines whose text changed are drawn again (a robot's new figures repaint its row alone)."""
 
     DEFAULT_CSS = "FleetList { height: 1fr; }"
     BINDINGS = [
+        Binding("space", "screen.stop", "Stop robot"),  # first in the footer: the key that matters most
         Binding("up", "move(-1)", "Up", show=False),
         Binding("down", "move(1)", "Down", show=False),
         Binding("pageup", "move(-10)", "Page up", show=False),
         Binding("pagedown", "move(10)", "Page down", show=False),
-        Binding("home", "move(-100000)", "First", show=False),
+        Binding("home", "top", "Worst first", show=False),  # the "worse above" line names it
         Binding("end", "move(100000)", "Last", show=False),
         Binding("enter", "open", "Open console"),
     ]
     # a new view repaints only when a row's text or style changed (``watch_view``): the views come twice
     # a second, each with its own clock, and the ages shown change once a second at most
     view: reactive[FleetView] = reactive(FleetView, repaint=False)
-    selected: reactive[str | None] = reactive(None)
+    selected: reactive[str | None] = reactive(None, repaint=False)
     _shown: tuple[object, ...] | None = None
+
+    def __init__(self, id: str | None = None) -> None:  # Textual's name for it
+        super().__init__(id=id)
+        self.stops: dict[str, str] = {}  # robot -> what it answered its last stop (its note)
+        self._lines: list[Text] = []  # what each line shows
+        self._selected_at: tuple[int, str] | None = None  # (line, robot) of the selection
+
+    def set_stop(self, name: str, words: str) -> None:
+        self.stops[name] = words
+        self._repaint(self.view)
+        self.post_message(self.Highlighted(self.current()))
 
     class Chosen(Message):
         """Enter on a row: open its console."""
@@ -133,6 +206,8 @@ class FleetList(Widget, can_focus=True):
             self.row = row
 
     _top = 0
+    _drawn: str | None = None  # the robot drawn selected by the last paint
+    follow = True  # the worst rows in sight, the selection on the worst: until the person moves
 
     def current(self) -> Row | None:
         rows = self.view.rows
@@ -142,64 +217,152 @@ class FleetList(Widget, can_focus=True):
         return rows[0] if rows else None
 
     def watch_view(self, view: FleetView) -> None:
-        if view.rows and self.selected not in {r.name for r in view.rows}:
-            self.selected = view.rows[0].name
-        shown = (view.filter, *((cells(r), r.worst_health) for r in view.rows))
-        if shown != self._shown:
-            self._shown = shown
-            self.refresh()
+        if view.rows and (self.follow or self.selected not in {r.name for r in view.rows}):
+            self.follow = True
+            self.selected = view.rows[0].name  # the worst robot, until the person moves
+        self._repaint(view)
         self.post_message(self.Highlighted(self.current()))
 
+    def _repaint(self, view: FleetView) -> None:
+        """A refresh only when what the rows show changed."""
+        shown = (view.filter, *((cells(r), r.worst_health, self.stops.get(r.name)) for r in view.rows))
+        if shown != self._shown:
+            self._shown = shown
+            self._redraw()
+
+    def _redraw(self) -> None:
+        """The lines again; the ones whose text changed refreshed, no other."""
+        new, old = self.compose_lines(), self._lines
+        self._lines = new
+        width = self.size.width
+        for y in range(max(len(new), len(old))):
+            if y >= len(new) or y >= len(old) or new[y] != old[y]:
+                self.refresh(Region(0, y, width, 1))
+
+    def shown(self) -> list[str]:
+        """The lines as drawn, as text."""
+        return [t.plain for t in self._lines]
+
+    def on_resize(self) -> None:
+        self._lines = self.compose_lines()
+        self.refresh()
+
+    def render_line(self, y: int) -> Strip:
+        if self._selected_at is not None and self._selected_at[0] == y:
+            self._drawn = self._selected_at[1]  # the person can see it selected now
+        text = self._lines[y] if y < len(self._lines) else Text()
+        width = self.size.width
+        strip = Strip(list(text.render(self.app.console))).crop_extend(0, width, None)
+        return strip.apply_style(self.rich_style)
+
+    async def _on_key(self, event: events.Key) -> None:
+        """A key read with the ones before it (one write: a paste, a laggy link) and handled after one of
+        them moved the focus (``/``): it goes where the focus went, not to this list's keys (an Enter
+        that opens a console, an ``h``, a ``q`` typed as part of a pattern)."""
+        target = self.screen.focused
+        if target is not None and target is not self:
+            event.stop()
+            event.prevent_default()
+            target.post_message(events.Key(event.key, event.character))
+            return
+        if event.key == "slash":  # the filter now: its binding would run after the keys read with it
+            event.stop()
+            event.prevent_default()
+            await self.run_action("screen.filter")
+            return
+        await super()._on_key(event)
+
     def watch_selected(self) -> None:
+        self._redraw()
         self.post_message(self.Highlighted(self.current()))
 
     def action_move(self, step: int) -> None:
+        """The person moves: the selection stays on that robot as the order changes (until Home, or a
+        move back to the first row, follows the worst again)."""
         names = [r.name for r in self.view.rows]
         if not names:
             return
         i = names.index(self.selected) if self.selected in names else 0
-        self.selected = names[max(0, min(len(names) - 1, i + step))]
+        j = max(0, min(len(names) - 1, i + step))
+        self.follow = j == 0
+        self.selected = names[j]
+        self._redraw()
+
+    def action_top(self) -> None:
+        """Home: back to the worst robots first, the selection on the worst."""
+        self.follow = True
+        if self.view.rows:
+            self.selected = self.view.rows[0].name
+        self._redraw()
 
     def action_open(self) -> None:
+        """Enter: the selected robot's console, if the person has seen it selected (it was drawn so):
+        an Enter typed ahead of a move or a filter opens nothing nobody saw."""
         row = self.current()
-        if row is not None:
-            self.post_message(self.Chosen(row))
+        if row is None:
+            return
+        if row.name != self._drawn:
+            self.notify(f"the selection moved to {row.name}: Enter again to open it", severity="warning")
+            return
+        self.post_message(self.Chosen(row))
 
-    def render(self) -> Text:
+    def compose_lines(self) -> list[Text]:
+        """The lines that fit: the column header, a "worse above" line when the person scrolled past
+        robots in trouble, the rows."""
         width, height = self.size.width, max(1, self.size.height)
         head = Text(no_wrap=True, overflow="crop", style="bold")
         cols = layout(width)
         for i, w in cols:
             head.append(fit(COLUMNS[i], w).ljust(w) + (" " * SEP if COLUMNS[i] != "note" else ""))
         rows = self.view.rows
+        self._selected_at = None
         if not rows:
             what = f"no robot matches {self.view.filter!r}" if self.view.filter else "no robot announced yet"
-            return Text.assemble(head, "\n", Text(what, style="dim"))
+            return [head, Text(what, style="dim")]
         names = [r.name for r in rows]
         i = names.index(self.selected) if self.selected in names else 0
         room = height - 1
-        self._top = min(max(self._top, i - room + 1), i, max(0, len(rows) - room))
+        if self.follow:
+            self._top = 0
+        else:  # the selection kept in sight; a line says what is worse above it
+            self._top = min(max(self._top, i - room + 1), i, max(0, len(rows) - room))
+            if worse_above(rows, self._top):
+                room -= 1
+                self._top = min(max(self._top, i - room + 1), i, max(0, len(rows) - room))
         out = [head]
-        out += [line(r, cols, r.name == self.selected) for r in rows[self._top : self._top + room]]
-        return Text("\n").join(out)
+        above = worse_above(rows, self._top)
+        if above:
+            out.append(Text(above, style="bold reverse red", no_wrap=True, overflow="crop"))
+        self._selected_at = (len(out) + i - self._top, rows[i].name)
+        out += [
+            line(r, cols, r.name == self.selected, self.stops.get(r.name))
+            for r in rows[self._top : self._top + room]
+        ]
+        return out
 
 
 class FleetScreen(Screen[None]):
     BINDINGS = [
+        Binding("ctrl+k", "stop", "Stop robot", show=False, priority=True),  # from the filter too
         Binding("slash", "filter", "Filter"),
-        Binding("escape", "clear", "Clear filter"),
+        Binding("S", "stop_shown", "Stop all shown"),
         Binding("h", "history", "History"),
+        Binding("escape", "clear", "Clear filter"),
         Binding("q", "app.quit", "Quit"),
         Binding("ctrl+q", "app.quit", "Quit", show=False, priority=True),
     ]
-    view: reactive[FleetView] = reactive(FleetView)
-    pattern: reactive[str] = reactive("")
-    history_line: reactive[str] = reactive("")
+    # the screen draws nothing itself (its widgets do): a new view must not repaint the whole screen (a
+    # full update, twice a second, was most of the console's CPU at 200 robots)
+    view: reactive[FleetView] = reactive(FleetView, repaint=False)
+    pattern: reactive[str] = reactive("", repaint=False)
+    history_line: reactive[str] = reactive("", repaint=False)
 
     def __init__(self, pattern: str = "") -> None:
         super().__init__()
         self.set_reactive(FleetScreen.pattern, pattern)
         self._texts: dict[str, str] = {}
+        self._confirm_until = 0.0  # "stop all shown" armed until (monotonic s)
+        self._lost: set[str] | None = None  # the robots lost at the last view (None: no view yet)
 
     def compose(self) -> ComposeResult:
         yield Static(id="fleet-head")
@@ -224,22 +387,48 @@ class FleetScreen(Screen[None]):
     def watch_view(self, view: FleetView) -> None:
         counts = dict(view.counts)
         parts = [f"{counts.get(s, 0)} {s}" for s in ("alive", "stale", "lost")]
+        if counts.get("unknown"):
+            parts.append(f"{counts['unknown']} unknown")
         if counts.get("bad"):
             parts.append(f"{counts['bad']} bad data")
         shown = f"{len(view.rows)} of {view.total}" if view.filter else f"{view.total}"
-        head = f"fleet · {shown} robots: {', '.join(parts)} · {view.session}"
+        head = f"fleet · {view.session} · {shown} robots: {', '.join(parts)}"  # its own link first
         if view.ignored:
             head += f" · {view.ignored} more names ignored"
-        self._show("#fleet-head", head)
+        dropped = [f"{view.unknown} odd keys"] if view.unknown else []
+        dropped += [f"{view.flood_dropped} over rate"] if view.flood_dropped else []
+        if dropped:
+            head += f" · dropped {', '.join(dropped)}"
+        self._show("#fleet-head", f"{head}\n{problem_line(view)}")
+        self._announce_lost(view)
+
+    def _announce_lost(self, view: FleetView) -> None:
+        """A robot going lost, said once (with the terminal's bell under ``--bell``)."""
+        lost = set(view.names("lost"))
+        if self._lost is None:  # the first robots heard of: those already lost are not news
+            if view.total:
+                self._lost = lost
+            return
+        if new := sorted(lost - self._lost):
+            names = ", ".join(new[:5]) + (f" and {len(new) - 5} more" if len(new) > 5 else "")
+            self.notify(f"{clock_time(view.now)} lost: {names}", severity="error", timeout=10)
+            if self.fleet_app.bell_on_lost:
+                self.app.bell()
+        # a robot lost before this console's link went down is not news again when it is back
+        self._lost = lost | (self._lost & set(view.names("unknown")))
 
     def _show(self, selector: str, text: str) -> None:
-        """A Static's new text, each line broken to fit its width (``fit_lines``); nothing (no layout)
-        when it is the text shown at this width."""
+        """A Static's new text, each line broken to fit its width (``fit_lines``: at 80 columns the head
+        and the detail were cut); nothing when it is the text shown at this width. A layout only when
+        the number of lines changes: a layout renders the whole screen again (with an age in the detail
+        pane, once a second, it was most of the screen's cost at 200 robots)."""
         static = self.query_one(selector, Static)
         fitted = "\n".join(fit_lines(text.splitlines(), static.content_size.width))
-        if self._texts.get(selector) != fitted:
+        was = self._texts.get(selector)
+        if was != fitted:
             self._texts[selector] = fitted
-            static.update(Text(fitted, no_wrap=True, overflow="ellipsis"))
+            grew = was is None or was.count("\n") != fitted.count("\n")
+            static.update(Text(fitted, no_wrap=True, overflow="ellipsis"), layout=grew)
 
     def on_resize(self) -> None:
         """Another width: the head and the detail fitted to it again."""
@@ -253,6 +442,9 @@ class FleetScreen(Screen[None]):
     def show_detail(self, event: FleetList.Highlighted) -> None:
         row = event.row
         lines = [] if row is None else detail_lines(row, self.view.now)
+        stopped = None if row is None else self.query_one(FleetList).stops.get(row.name)
+        if stopped is not None:
+            lines.append(f"stop: {stopped}")
         if row is not None and self.history_line.startswith(f"{row.name}: "):
             lines.append(self.history_line.removeprefix(f"{row.name}: "))
         self._show("#fleet-detail", "\n".join(lines))
@@ -265,16 +457,18 @@ class FleetScreen(Screen[None]):
         self.pattern = event.value.strip()
         self.sample()
 
+    # focus moves at once (``set_focus``), not after the keys already read (``focus()`` waits for them):
+    # what is typed after ``/`` in one write (a paste, a laggy link, a throttled Pi) goes to the filter
     @on(Input.Submitted, "#fleet-filter")
     def filter_done(self) -> None:
-        self.query_one(FleetList).focus()
+        self.set_focus(self.query_one(FleetList))
 
     def action_filter(self) -> None:
-        self.query_one("#fleet-filter", Input).focus()
+        self.set_focus(self.query_one("#fleet-filter", Input))
 
     def action_clear(self) -> None:
         self.query_one("#fleet-filter", Input).value = ""
-        self.query_one(FleetList).focus()
+        self.set_focus(self.query_one(FleetList))
 
     def action_history(self) -> None:
         row = self.query_one(FleetList).current()
@@ -287,6 +481,56 @@ class FleetScreen(Screen[None]):
         assert self.fleet_app.history is not None
         words = history_words(self.fleet_app.history(name, fleet.HISTORY_MINUTES))
         self.app.call_from_thread(setattr, self, "history_line", f"{name}: {words}")
+
+    # -- the stop --------------------------------------------------------------------------------
+    def action_stop(self) -> None:
+        """The selected robot asked to stop; its row says what it answered."""
+        row = self.query_one(FleetList).current()
+        if row is None:
+            return
+        if self.fleet_app.stopper is None:
+            self.notify("this fleet view cannot stop robots", severity="warning")
+            return
+        self.ask_stops([row.name])
+
+    def action_stop_shown(self) -> None:
+        """Every robot the filter shows asked to stop, on a second press within CONFIRM_S."""
+        names = [r.name for r in self.view.rows if r.state not in ("lost", "unknown")]
+        if self.fleet_app.stopper is None or not names:
+            self.notify("no robot here to stop", severity="warning")
+            return
+        now = time.monotonic()
+        if now > self._confirm_until:
+            self._confirm_until = now + CONFIRM_S
+            which = f" matching {self.view.filter!r}" if self.view.filter else ""
+            self.notify(f"press S again within {CONFIRM_S:g} s to stop the {len(names)} robots shown{which}")
+            return
+        self._confirm_until = 0.0
+        self.ask_stops(names)
+
+    def ask_stops(self, names: list[str]) -> None:
+        lst = self.query_one(FleetList)
+        for name in names:
+            lst.set_stop(name, stop_words("asking it to stop...", time.time()))
+        self._stop_many(names)
+
+    @work(thread=True, group="stop")
+    def _stop_many(self, names: list[str]) -> None:
+        stop = self.fleet_app.stopper
+        assert stop is not None
+
+        def one(name: str) -> None:
+            at = time.time()
+            answer = stop(name)
+            self.app.call_from_thread(self._stopped, name, stop_words(answer, at), isinstance(answer, str))
+
+        with ThreadPoolExecutor(min(STOPS_AT_ONCE, len(names)), thread_name_prefix="fleet-stop") as pool:
+            list(pool.map(one, names))
+
+    def _stopped(self, name: str, words: str, failed: bool) -> None:
+        self.query_one(FleetList).set_stop(name, words)
+        if failed:
+            self.notify(words, severity="error")
 
     @on(FleetList.Chosen)
     def open_console(self, event: FleetList.Chosen) -> None:
@@ -303,11 +547,14 @@ class FleetApp(App[None]):
         opener: Callable[[list[str]], int],
         history: Callable[[str, float], fleet.History | str] | None = None,
         pattern: str = "",
+        stop: Callable[[str], fleet.StopAnswer | str] | None = None,
+        bell_on_lost: bool = False,
         token_file: str | None = None,
         ca_file: str | None = None,
     ) -> None:
         super().__init__()
-        self.source, self.opener, self.history = source, opener, history
+        self.source, self.opener, self.history, self.stopper = source, opener, history, stop
+        self.bell_on_lost = bell_on_lost
         self.pattern, self.token_file, self.ca_file = pattern, token_file, ca_file
         self.opened: list[list[str]] = []  # the consoles opened, in order (what a test reads)
 

@@ -2,7 +2,8 @@
 
 A client of the site's router (``--connect``), or the router itself (``--listen``, for a site with
 none). It subscribes to ``arbiter/*/alive`` liveliness (with history: the robots already there are
-listed at once) and to ``arbiter/*/*`` payloads, and asks ``arbiter/<name>/history`` on demand. Every
+listed at once) and to ``arbiter/*/*`` payloads, and asks ``arbiter/<name>/history`` on demand, and
+``arbiter/<name>/stop`` when the person stops a robot (who may is the router's access control). Every
 payload is checked by ``arbiter_core.fleet.decode`` (its size before it is copied) on Zenoh's thread,
 outside the model's lock; the model is then changed under the lock, and the screen takes frozen views.
 Nothing a robot sends can raise out of a callback: it marks that robot's row, or is counted.
@@ -26,7 +27,7 @@ from typing import Any
 from arbiter_core import fleet
 from arbiter_core.hostclock import HostClock
 
-from .rows import FleetModel, FleetView, Row
+from .rows import FleetModel, FleetView, Row, clock_time
 
 log = logging.getLogger(__name__)
 SYNC_REFRESH_S = 30.0
@@ -112,6 +113,8 @@ class FleetClient:
         self._closed = threading.Event()
         self._lock = threading.Lock()
         self._keep: list[Any] = []
+        self._routers: set[str] = set()  # the routers this client's session is connected to
+        self._link_since: float | None = None  # wall s the link went up or down (as _routers says)
         self._asked: set[str] = set()  # robots whose history was asked when they first appeared
         self._pending = 0
         # the history questions, off Zenoh's threads: a few at a time (a console that starts beside
@@ -142,6 +145,11 @@ class FleetClient:
             ),
             session.declare_subscriber(fleet.key("*", "*"), self._on_sample),
         ]
+        if self.settings.mode == "client":  # its own link: to its router (a router has none of its own)
+            with self._lock:
+                self._link_since = self.wall()
+            events = session.info.declare_transport_events_listener(self._on_transport, history=True)
+            self._keep.append(events)
         self.opened.set()
         threading.Thread(target=self._sync_loop, name="fleet-clock", daemon=True).start()
 
@@ -195,6 +203,24 @@ class FleetClient:
         except Exception:  # never out of a callback
             log.exception("fleet: a liveliness sample was not taken")
 
+    def _on_transport(self, event: Any) -> None:
+        """This client's link to a router opened or closed (Zenoh's thread): while none is open no robot
+        is lost or alive, the rows say "unknown since" (``FleetModel.link``)."""
+        try:
+            zid = str(event.transport.zid)
+            up = event.kind == self.zenoh.SampleKind.PUT
+            with self._lock:
+                was = bool(self._routers)
+                if up:
+                    self._routers.add(zid)
+                else:
+                    self._routers.discard(zid)
+                if was != bool(self._routers):
+                    self._link_since = self.wall()
+                    self.model.link(bool(self._routers), self._link_since, self.mono())
+        except Exception:  # never out of a callback
+            log.exception("fleet: a transport event was not taken")
+
     def _backfill(self, name: str) -> None:
         try:
             answer = self.history(name, BACKFILL_MINUTES)
@@ -226,6 +252,9 @@ class FleetClient:
                     self.model.unknown_key()
             return
         name, kind = parsed
+        with self._lock:  # over its kind's rate: dropped before a byte is copied or parsed
+            if not self.model.admit(name, kind, self.mono()):
+                return
         size = len(payload)
         try:
             if size > fleet.MAX_BYTES[kind]:
@@ -244,11 +273,16 @@ class FleetClient:
 
     # -- what the screen asks ---------------------------------------------------------------------
     def session_words(self) -> str:
+        """Where this console's session is, and for a client whether its link to the router is up:
+        ``client of tcp/... · connected since 14:00:01`` / ``· reconnecting since 14:02:11``."""
         if self.error is not None:
             return self.error
         if not self.opened.is_set():
             return f"connecting: {self.settings.describe()}"
-        return self.settings.describe()
+        if self.settings.mode != "client" or self._link_since is None:
+            return self.settings.describe()
+        link = "connected" if self._routers else "reconnecting"
+        return f"{self.settings.describe()} · {link} since {clock_time(self._link_since)}"
 
     def view(self, pattern: str = "") -> FleetView:
         with self._lock:
@@ -278,3 +312,36 @@ class FleetClient:
         except Exception as exc:
             return f"{name}'s history: {str(exc).splitlines()[0][:120]}"
         return f"{name} did not answer in {HISTORY_TIMEOUT_S:g} s"
+
+    def stop(self, name: str) -> fleet.StopAnswer | str:
+        """Ask ``name`` to stop whatever drives it (``arbiter/<name>/stop``): its answer, or why there is
+        none, in one line. A query the router lets through to no robot ends at once with no answer:
+        refused by its access control (or the robot is not there); a robot that took it and did not
+        answer ends it after ``fleet.STOP_TIMEOUT_S``."""
+        if self.session is None:
+            return f"not stopped: not connected ({self.session_words()})"
+        with self._lock:
+            down = self.settings.mode == "client" and self._link_since is not None and not self._routers
+        if down:
+            return "not stopped: this console's link to its router is down (nothing was asked)"
+        asked = self.mono()
+        try:
+            for reply in self.session.get(fleet.key(name, fleet.STOP), timeout=fleet.STOP_TIMEOUT_S):
+                if reply.ok is None:
+                    return f"not stopped: {name} answered with an error"
+                answer = fleet.decode(reply.ok.payload.to_bytes(), fleet.STOP, name)
+                assert isinstance(answer, fleet.StopAnswer)
+                return answer
+        except fleet.FleetPayloadError as exc:
+            return f"stop: {name}'s answer is not one this console reads ({exc})"
+        except Exception as exc:
+            return f"not stopped: {str(exc).splitlines()[0][:120]}"
+        if self.mono() - asked < fleet.STOP_TIMEOUT_S * 0.8:
+            current = self.row(name)
+            if current is None or current.state == "lost":
+                return f"not stopped: {name} is not there to take a stop"
+            return (
+                f"not stopped: this console may not stop {name} (the router let the stop through to "
+                f"nobody: its access control on {fleet.key(name, fleet.STOP)})"
+            )
+        return f"not stopped: {name} did not answer within {fleet.STOP_TIMEOUT_S:g} s"

@@ -28,8 +28,10 @@ def build_parser() -> argparse.ArgumentParser:
     p = OneLineParser(
         prog="arbiter-tui fleet",
         description="One row per robot announcing itself on Zenoh (arbiter-backend --zenoh): alive, stale "
-        "or lost (never dropped), who drives, latency p95, clock offset bound, worst topic, controller and "
-        "its last run, sorted by severity. Enter opens the single-robot console on the selected robot.",
+        "or lost (never dropped; unknown while this console's own link is down), who drives, latency p95, "
+        "clock offset bound, worst topic, controller and its last run, sorted by severity, the worst in "
+        "sight. Enter opens the single-robot console on the selected robot; space stops it (its backend "
+        "answers what it stopped; the router's access control says who may).",
     )
     p.add_argument(
         "--connect",
@@ -72,6 +74,11 @@ def build_parser() -> argparse.ArgumentParser:
         default=STALE_AFTER_S,
         metavar="S",
         help=f"a robot with no status this long reads 'stale' (default {STALE_AFTER_S:g})",
+    )
+    p.add_argument(
+        "--bell",
+        action="store_true",
+        help="ring the terminal's bell when a robot goes lost (it is said on the screen once either way)",
     )
     p.add_argument(
         "--token-file",
@@ -169,6 +176,8 @@ def _screen(client: FleetClient, args: argparse.Namespace) -> int:
     app = FleetApp(
         source=client.view,
         history=client.history,
+        stop=client.stop,
+        bell_on_lost=args.bell,
         opener=open_console,
         pattern=args.filter,
         token_file=None if args.token_file is None else str(Path(args.token_file)),

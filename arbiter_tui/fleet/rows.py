@@ -8,6 +8,10 @@ A robot is listed from the first thing heard of it (its liveliness token or a pa
   arrive without a token (an ACL or a robot that does not announce one);
 - ``lost``: its token went away (its session closed, or its router dropped it after its lease): "lost
   since 14:02:11", until the token comes back.
+- ``unknown``: this console's own link to its router is down (``link``): nobody can tell, "unknown since
+  14:02:11", until the link is back and the tokens have had ``LINK_SETTLE_S`` to come back with it; or
+  every robot (two or more) went silent at once for ``SILENT_S`` with its token still there (a frozen
+  router keeps its links open until its lease): unknown since the last payload heard.
 
 A payload that fails ``arbiter_core.fleet.decode`` marks its robot's row with the reason for
 ``BAD_HOLD_S`` after the last such payload (the count stays); the row's other figures are the last good
@@ -26,10 +30,16 @@ from arbiter_core import fleet
 from arbiter_core.fleet import Latency, Runs, Status, Topics
 from arbiter_core.timesync import TimeSync, one_way_bound_ms
 
+from .flood import Meter
+
 STALE_AFTER_S = 5.0  # five status periods without one: stale
 BAD_HOLD_S = 60.0  # a row says "bad data" this long after the last bad payload
 MAX_ROBOTS = 1000  # names beyond are counted, not listed (a flood of names cannot exhaust the console)
-STATES = ("alive", "stale", "lost")
+STATES = ("alive", "stale", "lost", "unknown")
+LINK_GRACE_S = 1.0  # tokens that went this long before the console's link went down went with it
+LINK_SETTLE_S = 1.0  # the link back: the tokens there come back within this (the router sends them)
+SILENT_S = 3.0  # no payload from any of two or more robots this long: the link is silent, not the robots
+SILENT_MIN_ROBOTS = 2
 LOST, BAD, STALE, WARN, OK = 4, 3, 2, 1, 0
 WARN_HEALTH = ("missing", "below", "silent", "slow", "unknown")
 
@@ -54,6 +64,7 @@ class _Robot:
     bad_count: int = 0
     received: int = 0  # valid payloads
     received_bytes: int = 0
+    meter: Meter = field(default_factory=Meter)  # payloads over its kinds' rates (flood.py)
 
 
 @dataclass(frozen=True, slots=True)
@@ -88,6 +99,8 @@ class Row:
     auth: str | None = None
     pose: tuple[float, ...] | None = None
     velocity: tuple[float, ...] | None = None
+    figures_at: float | None = None  # lost: the wall time its figures date from (its last payload)
+    flooding: float | None = None  # payloads a second it sends over its kinds' rates (the excess dropped)
 
     def to_json(self) -> dict[str, Any]:
         out = {f.name: _plain(getattr(self, f.name)) for f in fields(self)}
@@ -124,10 +137,18 @@ class FleetView:
     total: int = 0
     filter: str = ""
     ignored: int = 0  # names beyond MAX_ROBOTS
-    unknown: int = 0  # samples on keys that are not a robot's payload
+    unknown: int = 0  # samples on keys that are not a robot's payload (dropped)
+    flood_dropped: int = 0  # payloads dropped as over their robot's rate
     now: float = 0.0  # wall s the view was made at (the screen's "lost since" ages)
     session: str = ""  # where the console's Zenoh session is ("router on tcp/...", "connecting to ...")
     error: str | None = None
+    # the robots in trouble over all robots (not only those the filter shows), by name: lost, bad, stale
+    problems: tuple[tuple[str, tuple[str, ...]], ...] = ()
+    silent: float | None = None  # wall s since which no robot was heard (FleetModel.silent_since)
+
+    def names(self, what: str) -> tuple[str, ...]:
+        """The robots ``lost``, with ``bad`` data, ``stale`` or ``unknown`` (over all robots)."""
+        return dict(self.problems).get(what, ())
 
     def to_json(self) -> dict[str, Any]:
         return {
@@ -138,6 +159,8 @@ class FleetView:
             "counts": dict(self.counts),
             "total": self.total,
             "ignored": self.ignored,
+            "dropped": {"odd_keys": self.unknown, "over_rate": self.flood_dropped},
+            "problems": {what: list(names) for what, names in self.problems},
             "robots": [r.to_json() for r in self.rows],
         }
 
@@ -158,6 +181,37 @@ class FleetModel:
     _robots: dict[str, _Robot] = field(default_factory=dict)
     ignored: set[str] = field(default_factory=set)
     unknown: int = 0
+    flood_dropped: int = 0  # payloads dropped as over their robot's rate
+    link_down: tuple[float, float] | None = None  # (wall, mono) this console's link to its router went down
+    link_back: float | None = None  # mono s it came back (None: down now, or never down)
+
+    def link(self, up: bool, wall: float, mono: float) -> None:
+        """This console's own link to its router (a client's; a router's own console has none) went down
+        or came back."""
+        if not up and (self.link_down is None or self.link_back is not None):
+            self.link_down, self.link_back = (wall, mono), None
+        elif up and self.link_down is not None and self.link_back is None:
+            self.link_back = mono
+
+    def silent_since(self, wall: float, mono: float) -> float | None:
+        """Since when (wall) no robot has been heard, when two or more with a token have been silent for
+        SILENT_S at once: the router (or this console's network) is silent, not the robots."""
+        heard = [r.last_mono for r in self._robots.values() if r.token and r.last_mono is not None]
+        if len(heard) < SILENT_MIN_ROBOTS or mono - max(heard) < SILENT_S:
+            return None
+        return wall - (mono - max(heard))
+
+    def _unknown(self, r: _Robot, mono: float, silent: float | None = None) -> float | None:
+        """Since when (wall) nobody can tell ``r``'s state because this console's link was down."""
+        if silent is not None and r.token:
+            return silent
+        if self.link_down is None:
+            return None
+        down_wall, _ = self.link_down
+        if self.link_back is None:
+            return down_wall  # down now: no robot is lost or alive
+        went_with_it = not r.token and r.lost_at is not None and r.lost_at >= down_wall - LINK_GRACE_S
+        return down_wall if went_with_it and mono - self.link_back < LINK_SETTLE_S else None
 
     def _robot(self, name: str) -> _Robot | None:
         r = self._robots.get(name)
@@ -222,6 +276,17 @@ class FleetModel:
     def unknown_key(self) -> None:
         self.unknown += 1
 
+    def admit(self, name: str, kind: str, mono: float) -> bool:
+        """A payload of ``kind`` on ``name``'s key, before it is copied or parsed: False when it is over
+        its kind's rate (dropped, counted; the row says the robot floods)."""
+        r = self._robot(name)
+        if r is None:
+            return False
+        if r.meter.admit(kind, mono):
+            return True
+        self.flood_dropped += 1
+        return False
+
     # -- what is shown ------------------------------------------------------------------------------
     def names(self) -> list[str]:
         return sorted(self._robots)
@@ -229,9 +294,12 @@ class FleetModel:
     def received_bytes(self) -> dict[str, int]:
         return {n: r.received_bytes for n, r in self._robots.items()}
 
-    def row(self, r: _Robot, wall: float, mono: float) -> Row:
+    def row(self, r: _Robot, wall: float, mono: float, silent: float | None = None) -> Row:
         note = None
-        if not r.token and r.lost_at is not None:
+        unknown = self._unknown(r, mono, silent)
+        if unknown is not None:
+            state, since = "unknown", unknown
+        elif not r.token and r.lost_at is not None:
             state, since = "lost", r.lost_at
         elif not r.token:
             state, since, note = "stale", None, "no liveliness token (payloads only)"
@@ -245,14 +313,16 @@ class FleetModel:
             if r.status_mono is None:
                 note = "no status yet"
         bad = r.bad if r.bad_mono is not None and mono - r.bad_mono <= BAD_HOLD_S else None
+        flooding = r.meter.flooding(mono)
         s, lat, top, runs = r.status, r.latency, r.topics, r.runs
         worst = top.worst if top is not None else None
         bound, clock_note = self._clock(lat)
+        gone = state in ("lost", "unknown")  # its figures are its last ones
         if state == "lost":
             severity = LOST
-        elif bad is not None:
+        elif bad is not None or flooding is not None:
             severity = BAD
-        elif state == "stale":
+        elif gone or state == "stale":
             severity = STALE
         elif worst is not None and worst.health in WARN_HEALTH:
             severity = WARN
@@ -260,7 +330,8 @@ class FleetModel:
             severity = OK
         progress = None
         if s is not None and s.run_state is not None and s.waypoints:
-            progress = f"{s.waypoint}/{s.waypoints} {s.run_state}"
+            was = "was " if gone else ""  # a lost robot's run is not known to run on
+            progress = f"{s.waypoint}/{s.waypoints} {was}{s.run_state}"
         controller = s.controller if s is not None and s.controller else None
         if controller is None and runs is not None:
             controller = runs.last.controller
@@ -270,8 +341,8 @@ class FleetModel:
             severity=severity,
             since=since,
             age_s=None if r.last_mono is None else max(0.0, mono - r.last_mono),
-            driver=None if s is None or state == "lost" else s.driver,  # lost: nobody can tell
-            driver_detail=None if s is None or state == "lost" else s.driver_detail,
+            driver=None if s is None or gone else s.driver,  # lost: nobody can tell
+            driver_detail=None if s is None or gone else s.driver_detail,
             mode=None if s is None else s.mode,
             p50_ms=None if lat is None else lat.p50_ms,
             p95_ms=None if lat is None else lat.p95_ms,
@@ -293,11 +364,13 @@ class FleetModel:
             auth=None if s is None else s.auth,
             pose=None if s is None else s.pose,
             velocity=None if s is None else s.velocity,
+            figures_at=None if not gone or r.last_mono is None else wall - (mono - r.last_mono),
+            flooding=None if flooding is None else round(flooding, 1),
         )
 
     def row_of(self, name: str, wall: float, mono: float) -> Row | None:
         r = self._robots.get(name)
-        return None if r is None else self.row(r, wall, mono)
+        return None if r is None else self.row(r, wall, mono, self.silent_since(wall, mono))
 
     def _clock(self, lat: Latency | None) -> tuple[float | None, str | None]:
         if lat is None:
@@ -315,11 +388,19 @@ class FleetModel:
     def view(
         self, wall: float, mono: float, pattern: str = "", session: str = "", error: str | None = None
     ) -> FleetView:
-        rows = [self.row(r, wall, mono) for r in self._robots.values()]
+        silent = self.silent_since(wall, mono)
+        rows = [self.row(r, wall, mono, silent) for r in self._robots.values()]
         counts = {s: 0 for s in (*STATES, "bad")}
+        trouble: dict[str, list[str]] = {"lost": [], "bad": [], "flooding": [], "stale": [], "unknown": []}
         for row in rows:
             counts[row.state] += 1
             counts["bad"] += row.bad is not None
+            if row.state in trouble:
+                trouble[row.state].append(row.name)
+            if row.bad is not None:
+                trouble["bad"].append(row.name)
+            if row.flooding is not None:
+                trouble["flooding"].append(row.name)
         shown = sorted((r for r in rows if matches(r.name, pattern)), key=lambda r: (-r.severity, r.name))
         return FleetView(
             rows=tuple(shown),
@@ -328,9 +409,12 @@ class FleetModel:
             filter=pattern,
             ignored=len(self.ignored),
             unknown=self.unknown,
+            flood_dropped=self.flood_dropped,
             now=wall,
             session=session,
             error=error,
+            problems=tuple((what, tuple(sorted(names))) for what, names in trouble.items()),
+            silent=silent,
         )
 
 
@@ -349,6 +433,9 @@ COLUMNS = (
 )
 
 
+AGE_SHOWN_S = 2.0  # two status periods: an alive robot whose last payload is older is late
+
+
 def clock_time(wall: float) -> str:
     return time.strftime("%H:%M:%S", time.localtime(wall))
 
@@ -363,17 +450,33 @@ def ago(seconds: float) -> str:
 
 
 def state_cell(row: Row) -> str:
-    if row.state == "lost":
-        return "lost" if row.since is None else f"lost since {clock_time(row.since)}"
-    if row.age_s is None:
+    """``alive`` / ``alive 3s`` (its last payload that old: late) / ``stale 12s`` / ``lost since 14:02:11``.
+    An alive robot's age is shown once it is late (AGE_SHOWN_S): 0s and 1s flickering on every row told
+    nothing and repainted the whole list twice a second."""
+    if row.state in ("lost", "unknown"):
+        return row.state if row.since is None else f"{row.state} since {clock_time(row.since)}"
+    if row.age_s is None or (row.state == "alive" and row.age_s < AGE_SHOWN_S):
         return row.state
     return f"{row.state} {ago(row.age_s)}"
 
 
+def figures_words(row: Row) -> str | None:
+    """A lost row's figures are its last ones: ``figures as of 14:01:58, 2m old``."""
+    if row.figures_at is None:
+        return None
+    return f"figures as of {clock_time(row.figures_at)}, {ago(row.age_s or 0.0)} old"
+
+
+def flood_words(row: Row) -> str | None:
+    return None if row.flooding is None else f"flooding: {row.flooding:.0f}/s, the excess dropped"
+
+
 def note_cell(row: Row) -> str:
+    if row.flooding is not None:
+        return flood_words(row) or ""
     if row.bad is not None:
         return f"bad data: {row.bad}"
-    return row.note or ""
+    return figures_words(row) or row.note or ""
 
 
 def cells(row: Row) -> tuple[str, ...]:
@@ -421,8 +524,8 @@ def console_argv(row: Row, token_file: str | None = None, ca_file: str | None = 
 
 def detail_lines(row: Row, now: float) -> list[str]:
     """The selected robot in full, for the screen's detail pane."""
-    if row.state == "lost" and row.since is not None:
-        state = f"lost since {clock_time(row.since)} ({ago(max(0.0, now - row.since))} ago)"
+    if row.state in ("lost", "unknown") and row.since is not None:
+        state = f"{state_cell(row)} ({ago(max(0.0, now - row.since))} ago)"
     elif row.since is not None:
         state = f"{state_cell(row)} (announced since {clock_time(row.since)})"
     else:
@@ -446,6 +549,11 @@ def detail_lines(row: Row, now: float) -> list[str]:
     if row.rosbridge is not None:
         ns = f" --namespace {row.namespace}" if row.namespace else ""
         lines.append(f"Enter opens {row.rosbridge} {row.tracker or ''}{ns}".rstrip())
+    if row.figures_at is not None:
+        why = "the robot is lost" if row.state == "lost" else "this console's link is down"
+        lines.append(f"{figures_words(row)}: not current ({why})")
+    if row.flooding is not None:
+        lines.append(f"{flood_words(row)} (its kinds' rates: one status a second, ...; flood.py)")
     if row.bad is not None:
         lines.append(f"bad data ({row.bad_count}): {row.bad}")
     elif row.note:
@@ -466,3 +574,31 @@ def history_words(answer: fleet.History | str) -> str:
     if runs:
         parts.append(f"{len(runs)} runs, last {runs[-1].last.controller} {runs[-1].last.words()}")
     return ", ".join(parts)
+
+
+PROBLEM_WORDS = {"lost": "lost", "bad": "bad data", "flooding": "flooding", "stale": "stale"}
+
+
+def problem_line(view: FleetView, most: int = 4) -> str:
+    """The robots in trouble by name, the worst kind first: ``lost 2: yard-02, yard-09 · bad data 1:
+    lab-05 · stale 1: lab-03`` (at most ``most`` names a kind, then how many more)."""
+    parts = []
+    for what, names in view.problems:
+        if names and what in PROBLEM_WORDS:
+            shown = ", ".join(names[:most]) + (f" +{len(names) - most} more" if len(names) > most else "")
+            parts.append(f"{PROBLEM_WORDS[what]} {len(names)}: {shown}")
+    unknown = dict(view.counts).get("unknown", 0)
+    if unknown and view.silent is not None:
+        quiet = f"no robot heard since {clock_time(view.silent)}: the router or this network is silent"
+        parts.insert(0, f"{unknown} unknown: {quiet}")
+    elif unknown:
+        parts.insert(0, f"{unknown} unknown: this console's link to its router is down")
+    if parts:
+        return " · ".join(parts)
+    return f"all {view.total} alive, none in trouble" if view.total else "no robot announced yet"
+
+
+def stop_words(answer: fleet.StopAnswer | str, at: float) -> str:
+    """One line of what a robot answered a stop (or why it did not), with the time it was asked."""
+    said = answer if isinstance(answer, str) else answer.words()
+    return f"{clock_time(at)} {said}"

@@ -4,7 +4,8 @@
 Robots appear; one killed reads "lost" within its lease and "alive" again after a restart; a robot's
 payloads never show under another's name; malformed payloads mark that robot's row and nothing else; a
 console the router's access control does not allow a robot never sees it; ``fleet --json`` prints the
-rows the screen shows."""
+rows the screen shows; a console the router allows stops a robot (its controller aborted, a foreign
+action's goal cancelled, the robot standing), one it does not allow gets one line and the robot drives on."""
 
 import json
 import os
@@ -20,7 +21,8 @@ from arbiter_core import fleet
 from arbiter_tui.fleet.client import ConsoleSettings, FleetClient
 from arbiter_tui.fleet.rows import COLUMNS, FleetModel, cells
 
-from ..support.backend import free_port, start_backend
+from ..support.backend import free_port, get_json, start_backend
+from ..support.foreign import FakeNav2
 from ..support.waits import wait_for
 
 LEASE_MS = 1000  # the robots' liveliness lease in these tests
@@ -125,6 +127,81 @@ def test_robots_appear_a_killed_one_is_lost_within_its_lease_and_alive_after_a_r
     )
 
 
+def test_while_the_consoles_own_link_is_down_no_robot_is_called_lost_or_alive(cleanup):
+    """The router goes away: the rows read "unknown since" (never "lost": the robots did not go, this
+    console's link did) and the header says the console reconnects; the router back, the robots are
+    alive again and the header says since when it is connected."""
+    procs, clients = cleanup
+    port = free_port()
+    endpoint = f"tcp/127.0.0.1:{port}"
+    r = open_router(port)
+    try:
+        procs += [robot(endpoint, "r1"), robot(endpoint, "r2")]
+        c = console(endpoint)
+        clients.append(c)
+        assert wait_for(lambda: announced(c, "r1") and announced(c, "r2"), timeout=10)
+        assert " · connected since " in c.view().session
+        r.close()
+        closed = time.monotonic()
+        seen: set[str] = set()  # every state a row showed from here on
+
+        def states():
+            now = {x.state for x in c.view().rows}
+            seen.update(now)
+            return now
+
+        # unknown at once, and still so two seconds on (past the robots' lease)
+        assert wait_for(lambda: states() == {"unknown"} and time.monotonic() - closed > 2.0, timeout=6), seen
+        assert " · reconnecting since " in c.view().session
+        assert c.stop("r1") == "not stopped: this console's link to its router is down (nothing was asked)"
+        r = open_router(port)
+        assert wait_for(lambda: states() == {"alive"}, timeout=15), c.view()
+        assert " · connected since " in c.view().session
+        assert seen == {"alive", "unknown"}, seen  # never "lost": the robots did not go, the link did
+    finally:
+        r.close()
+
+
+def test_a_frozen_router_makes_every_robot_unknown_not_stale_or_lost(cleanup):
+    """The router frozen (SIGSTOP) keeps its links open until its lease: every robot silent at once reads
+    "unknown" (the router is silent, not the robots) within SILENT_S, and alive again when it thaws."""
+    from arbiter_tui.fleet.rows import SILENT_S
+
+    procs, clients = cleanup
+    port = free_port()
+    endpoint = f"tcp/127.0.0.1:{port}"
+    router_proc = subprocess.Popen(
+        [sys.executable, "-m", "arbiter_tui.cli", "fleet", "--listen", endpoint, "--json", "--wait", "120"],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    try:
+        procs += [robot(endpoint, "r1"), robot(endpoint, "r2")]
+        c = FleetClient(ConsoleSettings(connect=(endpoint,)), FleetModel())  # stale after 5 s
+        c.open(connect_timeout_ms=10000)
+        clients.append(c)
+        assert wait_for(lambda: announced(c, "r1") and announced(c, "r2"), timeout=15)
+        seen: set[str] = set()
+
+        def states():
+            now = {x.state for x in c.view().rows}
+            seen.update(now)
+            return now
+
+        os.kill(router_proc.pid, signal.SIGSTOP)
+        frozen = time.monotonic()
+        assert wait_for(lambda: states() == {"unknown"}, timeout=SILENT_S + 3), c.view()
+        took = time.monotonic() - frozen
+        os.kill(router_proc.pid, signal.SIGCONT)
+        assert wait_for(lambda: states() == {"alive"}, timeout=15), c.view()
+        assert seen == {"alive", "unknown"}, seen
+        print(f"router frozen -> every robot unknown in {took:.2f} s")
+    finally:
+        os.kill(router_proc.pid, signal.SIGCONT)
+        router_proc.kill()
+        router_proc.wait()
+
+
 def test_malformed_payloads_mark_their_row_and_nothing_else(router, cleanup):
     procs, clients = cleanup
     procs += [robot(router, "victim"), robot(router, "bystander")]
@@ -148,12 +225,25 @@ def test_malformed_payloads_mark_their_row_and_nothing_else(router, cleanup):
         ]
         for data, reason in cases:
             before = row(c, "victim").bad_count
-            rogue.put(fleet.key("victim", "status"), data)
-            assert wait_for(lambda b=before: row(c, "victim").bad_count == b + 1, timeout=5), reason
+
+            def marked(data=data, before=before):  # sent again if it came over the robot's status rate
+                if row(c, "victim").bad_count > before:
+                    return True
+                rogue.put(fleet.key("victim", "status"), data)
+                return False
+
+            assert wait_for(marked, timeout=5, interval=0.5), reason
             assert reason in row(c, "victim").bad
         rogue.put("arbiter/victim/unknown-kind", b"{}")
         rogue.put("arbiter/not a name/status", b"{}")
         assert wait_for(lambda: c.view().unknown >= 2, timeout=5)
+        assert c.view().to_json()["dropped"]["odd_keys"] >= 2
+        # a flood of valid statuses (the rogue's own robot, "flooder"): named on its row, the excess dropped
+        flood = fleet.encode(fleet.Status("flooder", time.time(), time.time(), "nobody", "flood"))
+        for _ in range(3000):
+            rogue.put(fleet.key("flooder", "status"), flood)
+        assert wait_for(lambda: c.view().flood_dropped > 2000, timeout=5), c.view().flood_dropped
+        assert row(c, "flooder").flooding > 50 and c.model.received_bytes()["flooder"] <= 20 * len(flood)
     finally:
         rogue.close()
     rows = {r.name: r for r in c.view().rows}
@@ -162,11 +252,11 @@ def test_malformed_payloads_mark_their_row_and_nothing_else(router, cleanup):
     assert rows["bystander"].mode != "forged"  # the forgery never reached the bystander's row
     t = row(c, "bystander").age_s
     assert wait_for(lambda: row(c, "bystander").age_s < t or row(c, "bystander").age_s < 1.5, timeout=5)
-    assert c.view().rows[0].name == "victim"  # bad data sorts first
+    assert [x.name for x in c.view().rows[:2]] == ["flooder", "victim"]  # bad data and floods sort first
 
 
 ROBOT_KEYS = ["put", "delete", "declare_queryable", "liveliness_token", "reply"]
-CONSOLE_ASKS = ["declare_subscriber", "declare_liveliness_subscriber", "query", "liveliness_query"]
+CONSOLE_ASKS = ["declare_subscriber", "declare_liveliness_subscriber", "liveliness_query"]
 SEES = ["put", "delete", "reply", "liveliness_token"]
 
 
@@ -198,6 +288,23 @@ def site_acl():
                 "permission": "allow",
                 "key_exprs": ["arbiter/**"],
             },
+            {  # every console may ask any robot's history (the robot's answer still passes see-<robot>)
+                "id": "console-history",
+                "messages": ["query"],
+                "flows": ["ingress"],
+                "permission": "allow",
+                "key_exprs": ["arbiter/*/history"],
+            },
+        ]
+        + [
+            {  # who may stop a robot: a rule per robot, granted to named consoles
+                "id": f"stop-{r}",
+                "messages": ["query"],
+                "flows": ["ingress"],
+                "permission": "allow",
+                "key_exprs": [f"arbiter/{r}/stop"],
+            }
+            for r in ("robot1", "robot2")
         ]
         + [
             {
@@ -210,7 +317,7 @@ def site_acl():
             for r in ("robot1", "robot2")
         ]
     )
-    users = ("robot1", "robot2", "console-a", "console-all")
+    users = ("robot1", "robot2", "console-a", "console-all", "supervisor")
     return {
         "enabled": True,
         "default_permission": "deny",
@@ -219,8 +326,15 @@ def site_acl():
         "policies": [
             {"rules": ["robot1-own", "to-robots"], "subjects": ["robot1"]},
             {"rules": ["robot2-own", "to-robots"], "subjects": ["robot2"]},
-            {"rules": ["console-asks", "see-robot1"], "subjects": ["console-a"]},
-            {"rules": ["console-asks", "see-robot1", "see-robot2"], "subjects": ["console-all"]},
+            {"rules": ["console-asks", "console-history", "see-robot1"], "subjects": ["console-a"]},
+            {
+                "rules": ["console-asks", "console-history", "see-robot1", "see-robot2"],
+                "subjects": ["console-all"],
+            },
+            {  # sees both robots, may stop robot1 only
+                "rules": ["console-asks", "console-history", "see-robot1", "see-robot2", "stop-robot1"],
+                "subjects": ["supervisor"],
+            },
         ],
     }
 
@@ -235,16 +349,19 @@ def open_as(endpoint: str, user: str, password: str):
     return zenoh.open(zenoh.Config.from_json5(json.dumps(config)))
 
 
-def test_a_console_without_permission_to_a_robot_never_sees_it(tmp_path, cleanup):
-    procs, clients = cleanup
-    users = {"robot1": "pw-r1", "robot2": "pw-r2", "console-a": "pw-a", "console-all": "pw-all"}
-    (tmp_path / "users.txt").write_text("".join(f"{u}:{p}\n" for u, p in users.items()))
-    for u, p in users.items():
+USERS = {
+    "robot1": "pw-r1", "robot2": "pw-r2", "console-a": "pw-a", "console-all": "pw-all", "supervisor": "pw-s"
+}  # fmt: skip
+
+
+def acl_router(tmp_path):
+    """The site's router with the users and access control above; each user's config file in tmp_path."""
+    (tmp_path / "users.txt").write_text("".join(f"{u}:{p}\n" for u, p in USERS.items()))
+    for u, p in USERS.items():
         (tmp_path / f"{u}.json5").write_text(
             json.dumps({"transport": {"auth": {"usrpwd": {"user": u, "password": p}}}})
         )
     port = free_port()
-    endpoint = f"tcp/127.0.0.1:{port}"
     r = open_router(
         port,
         {
@@ -252,6 +369,12 @@ def test_a_console_without_permission_to_a_robot_never_sees_it(tmp_path, cleanup
             "access_control": site_acl(),
         },
     )
+    return r, f"tcp/127.0.0.1:{port}"
+
+
+def test_a_console_without_permission_to_a_robot_never_sees_it(tmp_path, cleanup):
+    procs, clients = cleanup
+    r, endpoint = acl_router(tmp_path)
     try:
         for name in ("robot1", "robot2"):
             procs.append(robot(endpoint, name, "--zenoh-config", str(tmp_path / f"{name}.json5")))
@@ -291,6 +414,88 @@ def test_a_console_without_permission_to_a_robot_never_sees_it(tmp_path, cleanup
         with pytest.raises(Exception, match="Unable to connect"):  # a wrong password is no session at all
             open_as(endpoint, "console-a", "guess")
     finally:
+        r.close()
+
+
+def post_json(url, body):
+    import httpx
+
+    return httpx.post(url, json=body, timeout=5).json()
+
+
+def test_a_stop_from_the_fleet_reaches_the_robots_its_console_may_stop_and_no_other(tmp_path, cleanup):
+    """Two robots each running a mission: the supervisor's console may stop robot1 (the router's ACL),
+    not robot2. Stopping robot1 aborts its controller, cancels the foreign action goal there, and the
+    robot stands within a second; stopping robot2 is one line saying so, and robot2 drives on."""
+    procs, clients = cleanup
+    r, endpoint = acl_router(tmp_path)
+    nav2 = None
+    try:
+        bots = {}
+        for name in ("robot1", "robot2"):
+            bots[name] = start_backend(
+                "--autonomy", "--zenoh", endpoint, "--robot-name", name, "--zenoh-lease", str(LEASE_MS),
+                "--zenoh-config", str(tmp_path / f"{name}.json5"),
+            )  # fmt: skip
+        procs += bots.values()
+        c = console(endpoint, tmp_path / "supervisor.json5")
+        clients.append(c)
+        assert wait_for(lambda: announced(c, "robot1") and announced(c, "robot2"), timeout=15)
+        nav2 = FakeNav2(bots["robot1"].bridge_port, "/cmd_vel")  # a foreign action server on robot1
+        nav2.start_goal()
+        for b in bots.values():
+            started = post_json(f"{b.api}/api/autonomy", {"algorithm": "stanley", "mission": "figure_eight"})
+            assert started["state"] == "running", started
+        # both drive (the robots' own statuses say so), watched on the router as a console sees them
+        statuses: dict[str, list[fleet.Status]] = {"robot1": [], "robot2": []}
+        watcher = open_as(endpoint, "console-all", "pw-all")
+        clients.append(watcher)
+
+        def heard(sample):
+            s = fleet.decode(sample.payload.to_bytes(), "status", str(sample.key_expr).split("/")[1])
+            statuses[s.robot].append(s)
+
+        watcher.declare_subscriber("arbiter/*/status", heard)
+
+        def moving(name, after=0.0):
+            return any(s.t > after and s.velocity and abs(s.velocity[0]) > 0.05 for s in statuses[name])
+
+        assert wait_for(lambda: moving("robot1") and moving("robot2"), timeout=10), statuses
+
+        # allowed: the answer within a second says what it stopped; the robot stands
+        t0, asked = time.monotonic(), time.time()
+        answer = c.stop("robot1")
+        took = time.monotonic() - t0
+        assert isinstance(answer, fleet.StopAnswer), answer
+        assert took < 1.0, took
+        words = answer.words()
+        assert words.startswith("stopped: stanley aborted")
+        assert "1 goal of /navigate_to_pose cancelled" in words
+        assert answer.driver == "robot" and answer.zero
+        assert get_json(f"{bots['robot1'].api}/api/autonomy")["state"] == "aborted"
+        assert wait_for(lambda: not nav2.active, timeout=2) and len(nav2.cancels) == 1
+
+        def stood(name):
+            later = [s for s in statuses[name] if s.t > asked + 0.05]
+            return later and later[0].velocity and max(map(abs, later[0].velocity)) < 1e-3 and later[0]
+
+        assert wait_for(lambda: stood("robot1"), timeout=3), statuses["robot1"][-3:]
+        assert stood("robot1").t - asked < 1.0 + 0.3  # its first status after the stop (one a second)
+
+        # not allowed: one line at once, and robot2 drives on
+        t0, asked = time.monotonic(), time.time()
+        refused = c.stop("robot2")
+        assert refused == (
+            "not stopped: this console may not stop robot2 (the router let the stop through to nobody: "
+            "its access control on arbiter/robot2/stop)"
+        )
+        assert time.monotonic() - t0 < 0.8
+        assert wait_for(lambda: moving("robot2", after=asked + 1.0), timeout=5)
+        assert get_json(f"{bots['robot2'].api}/api/autonomy")["state"] == "running"
+        print(f"stop answered in {took * 1e3:.0f} ms: {words}")
+    finally:
+        if nav2 is not None:
+            nav2.close()
         r.close()
 
 

@@ -15,6 +15,7 @@ from arbiter_tui.fleet.rows import (
     detail_lines,
     history_words,
     matches,
+    state_cell,
 )
 
 W = 1_800_000_000.0  # wall s
@@ -113,7 +114,7 @@ def test_severity_orders_rows_lost_bad_stale_warning_ok_then_by_name():
     m.token("lost", False, W + 8, 8.0)
     assert [r.name for r in m.view(W, 10.0).rows] == ["lost", "bad", "stale", "warn", "ok-a", "ok-b"]
     counts = dict(m.view(W, 10.0).counts)
-    assert counts == {"alive": 4, "stale": 1, "lost": 1, "bad": 1}
+    assert counts == {"alive": 4, "stale": 1, "lost": 1, "unknown": 0, "bad": 1}
 
 
 @pytest.mark.parametrize(
@@ -209,7 +210,8 @@ def test_json_rows_carry_the_cells_the_screen_shows():
     assert obj["cells"] == dict(zip(COLUMNS, cells(row), strict=True))
     assert obj["cells"]["controller"] == "pure_pursuit 2/4 running"
     assert obj["cells"]["p95"] == "12.3 ms"
-    assert detail_lines(row, W)[0].startswith("r1  alive 1s")
+    assert detail_lines(row, W)[0].startswith("r1  alive (announced since")  # 1 s old: not late
+    assert state_cell(m.view(W, 2.5).rows[0]) == "alive 2s"
 
 
 def test_history_in_one_line():

@@ -182,11 +182,30 @@ json_values = st.recursive(
 
 
 @settings(max_examples=300, deadline=None)
-@given(json_values, st.sampled_from([*fleet.KINDS, fleet.HISTORY]))
+@given(json_values, st.sampled_from([*fleet.KINDS, fleet.HISTORY, fleet.STOP]))
 def test_any_json_with_the_right_header_is_a_payload_or_one_fleet_error(body, kind):
     obj = {"v": 1, "kind": kind, "robot": "r1", **(body if isinstance(body, dict) else {"x": body})}
     with contextlib.suppress(FleetPayloadError):
         fleet.decode_obj(obj, kind, "r1")
+
+
+def test_a_stop_answer_round_trips_and_says_what_the_robot_did_in_one_line():
+    cancel = fleet.StopCancel("/navigate_to_pose", "cancelled", 1)
+    answer = fleet.StopAnswer("r1", T, "robot", True, "stanley on square at 2/4", 0, (cancel,))
+    data = fleet.encode(answer)
+    assert len(data) <= fleet.MAX_BYTES[fleet.STOP] and fleet.decode(data, fleet.STOP, "r1") == answer
+    words = "stopped: stanley aborted, 0 commands, 1 goal of /navigate_to_pose cancelled, zero sent"
+    assert answer.words() == words
+    idle = fleet.StopAnswer("r1", T, "nobody", True)
+    assert idle.words() == "stopped: nothing was driving, zero sent"
+    driven = fleet.StopAnswer("r1", T, "console", True, still="a console drives (last command 40 ms ago)")
+    assert driven.words() == "asked: zero sent; still: a console drives (last command 40 ms ago)"
+    failed = fleet.StopAnswer("r1", T, "foreign", False, cancels=(fleet.StopCancel("/spin", "failed"),))
+    assert failed.words() == "asked: /spin not cancelled"
+    bad = json.loads(data)
+    bad["cancels"][0]["outcome"] = "maybe"
+    with pytest.raises(FleetPayloadError, match=r"stop.cancels\[0\].outcome must be one of cancelled"):
+        fleet.decode(json.dumps(bad).encode(), fleet.STOP, "r1")
 
 
 def test_history_holds_payloads_checked_as_they_were():
