@@ -37,10 +37,6 @@ def is_command(topic: str, type_name: str) -> bool:
     return topic.rstrip("/").rsplit("/", 1)[-1] in COMMAND_NAMES or type_name in COMMAND_TYPES
 
 
-def absolute(name: str) -> str:
-    return name if name.startswith("/") else "/" + name
-
-
 def is_hidden(name: str) -> bool:
     """A hidden topic or service (rclpy's ``topic_or_service_is_hidden``): a part starts with ``_``,
     as an action's ``/fibonacci/_action/status`` does; ``ros2 topic list`` and rosapi leave them out."""
@@ -113,6 +109,8 @@ def resolve(name: str, ns: str = "", what: str = "topic", node: str | None = Non
         raise TopicNameError(f"a {what} name cannot be empty")
     if "~" in name[1:]:
         raise TopicNameError(f"{what} {name!r}: '~' may only be the first character")
+    if name.startswith("~") and len(name) > 2 and name[1] != "/":  # rcl's rule: "~x" passes, "~xy" not
+        raise TopicNameError(f"{what} {name!r}: '~' must be followed by '/'")
     if name.startswith("~") and node is None:
         raise TopicNameError(f"{what} {name!r}: a private (~) name belongs to a node; give the full name")
     root = ns.rstrip("/")

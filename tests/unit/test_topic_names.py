@@ -62,7 +62,7 @@ CLIENT_NAMES = [
     "odom", "/odom", "rosapi/topics", "/rosapi/topics", "diff_drive_controller/odom", "~", "~/x",
     "~x", "{node}/x", "{ns}/x", "{namespace}/x", "x{node}", "_hidden/x", "a__b", "a/_b",
     # refused by both
-    "", "/", "a/", "1a", "/a/1b", "a-b", "a/~", "{foo}", "a//b", "/a//b", "a b", "{node",
+    "", "/", "a/", "1a", "/a/1b", "a-b", "a/~", "{foo}", "a//b", "/a//b", "a b", "{node", "~foo", "~ab",
 ]  # fmt: skip
 
 
