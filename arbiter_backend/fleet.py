@@ -23,7 +23,7 @@ import socket
 import threading
 import time
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Callable, Coroutine
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -136,13 +136,16 @@ def sources_of(backend: Any, advertise_host: str | None = None) -> Sources:
     if host in ("0.0.0.0", "::", ""):
         host = socket.gethostname()
     topic_source = getattr(backend, "topics", None)
+    # ROS: the tracker node's namespace as rcl resolved it (a ``--ros-args -r __ns:=/robot1`` remap)
+    tracker_node = getattr(backend, "tracker_node", None)
+    namespace = config.namespace if tracker_node is None else tracker_node.get_namespace().rstrip("/")
     return Sources(
         tracker=backend.tracker,
         watch=getattr(topic_source, "watch", None),
         autonomy=autonomy,
         odometry=lambda: last.get("odom"),
-        cmd_topic=topics.resolve("cmd_vel", config.namespace),
-        namespace=config.namespace,
+        cmd_topic=topics.resolve("cmd_vel", namespace),
+        namespace=namespace,
         mode=", ".join(words)[:40],
         token=config.token is not None,
         secure=config.tls_cert is not None,
@@ -190,7 +193,11 @@ class Announcer:
         self._due = dict.fromkeys(self._due, 0.0)
 
     # -- who drives -------------------------------------------------------------------------------
-    def driver(self, mono: float, now: float) -> tuple[str, str | None]:
+    def driver(
+        self, mono: float, now: float, figures: list[TopicFigures] | None = None
+    ) -> tuple[str, str | None]:
+        """Who drives: a robot-side run, a console's commands, a foreign controller's on ``cmd_vel``
+        (in ``figures``, a fresh snapshot; default the last payload's), or nobody."""
         svc = self.src.autonomy
         mission = None if svc is None else svc.autonomy.mission
         if mission is not None and (
@@ -200,7 +207,7 @@ class Announcer:
         since = self.src.tracker.health()["seconds_since_last_command"]
         if since is not None and since < DRIVER_RECENT_S:
             return "console", f"last command {since * 1e3:.0f} ms ago"
-        for f in self._figures:
+        for f in self._figures if figures is None else figures:
             if f.name == self.src.cmd_topic and f.age_ms is not None and f.age_ms < DRIVER_RECENT_S * 1e3:
                 rate = "" if f.rate_hz is None else f" at {f.rate_hz:.3g} Hz"
                 return "foreign", f"commands on {f.name}{rate}"[:120]
@@ -424,9 +431,11 @@ class FleetAnnouncer:
         src = sources_of(backend, settings.advertise_host)
         self.announcer = Announcer(settings, src, time.time(), self.host_clock)
         self._task: asyncio.Task[None] | None = None
+        self.robot_stop: RobotStop | None = None
 
     def start(self) -> None:
         stop = RobotStop(self.backend, self.announcer, asyncio.get_running_loop())
+        self.robot_stop = stop
         self.link.open_in_background(lambda minutes: self.announcer.history(minutes, time.time()), stop.ask)
         self._task = self.supervisor.task(WORKER, self._run)
 
@@ -455,16 +464,19 @@ class FleetAnnouncer:
             self._task.cancel()
             with contextlib.suppress(asyncio.CancelledError):
                 await self._task
+        if self.robot_stop is not None:
+            self.robot_stop.close()
         await asyncio.to_thread(self.link.close)
 
 
 # -- the stop a fleet console asks for (arbiter/<name>/stop) ------------------------------------------
 class RobotStop:
-    """A fleet console's stop, done in the robot's backend: the robot-side run aborted (its own zero), every
-    goal of the foreign action servers there cancelled (``arbiter_core.stopping``: what the single-robot
-    console's stop asks, asked from inside the robot), one zero command on the robot's command output, and
-    when a foreign controller drove, zero velocity on its command topic for ``ZERO_FOR_S``. The answer
-    (``fleet.StopAnswer``) says what it did. Asked on Zenoh's thread (:meth:`ask`), done on the backend's
+    """A fleet console's stop, done in the robot's backend: first one zero command on the robot's command
+    output, then the robot-side run aborted (its own zero), every goal of the foreign action servers there
+    cancelled (``arbiter_core.stopping``: what the single-robot console's stop asks, asked from inside the
+    robot), and when a foreign controller drove, zero velocity on its command topic for ``ZERO_FOR_S``.
+    The answer (``fleet.StopAnswer``) says what it did, by ``fleet.STOP_ANSWER_S``: a cancel still under
+    way is ``pending`` (and goes on). Asked on Zenoh's thread (:meth:`ask`), done on the backend's
     event loop, answered from there: Zenoh's thread never waits for it. Who may ask is the router's
     access control: the robot answers whoever reaches it."""
 
@@ -473,6 +485,7 @@ class RobotStop:
         self.announcer = announcer
         self.loop = loop
         self.asked = 0
+        self._tasks: set[asyncio.Task[Any]] = set()  # cancels and zeros that outlive their answer
 
     def ask(self, query: Any) -> None:
         """A stop query (Zenoh's thread): done on the loop, answered when done; never raised out of."""
@@ -494,21 +507,44 @@ class RobotStop:
                 query.drop()  # the end of the answers, now
 
     async def stop(self) -> fleet.StopAnswer:
+        """The zero first; then each step in its own try, so that none can keep the zero or the answer
+        from going out; answered by ``fleet.STOP_ANSWER_S`` whatever is still under way."""
         self.asked += 1
-        src, now, mono = self.announcer.src, time.time(), time.monotonic()
-        driver, detail = self.announcer.driver(mono, now)
-        cancelling = asyncio.ensure_future(self._cancels())  # they travel while the rest is done
+        start = time.monotonic()
+        zero = self._zero()
+        cmd_topic = self.announcer.src.cmd_topic
+        try:  # a fresh look at the topics: the announcer's figures may be a second old
+            watch = self.announcer.src.watch
+            figures = None if watch is None else watch.snapshot()[0]
+            driver, detail = self.announcer.driver(time.monotonic(), time.time(), figures)
+        except Exception as exc:
+            log.warning("fleet: the stop could not tell who drives: %s", exc)
+            driver, detail = "nobody", None
+        try:
+            actions = self._actions()
+        except Exception as exc:
+            log.warning("fleet: the stop could not list the action servers: %s", exc)
+            actions = []
+        cancelling = {a: self._keep(self._cancel(a)) for a in actions}  # they travel while the rest is done
         aborted = commands = None
-        if src.autonomy is not None:
-            said = src.autonomy.stop()  # the run's own zero goes out on the tracker's path
+        try:
+            autonomy = self.announcer.src.autonomy
+            said = {} if autonomy is None else autonomy.stop()  # its own zero goes out on the tracker's path
             if said.get("stopped"):
                 at = f"{said['waypoint']}/{said['waypoints']}"
                 aborted = f"{said['algorithm']} on {said['mission']} at {at}"
                 commands = said["commands"]
-        zero = self._zero()
-        cancels = await cancelling
-        if driver == "foreign" and self._cmd_type() is not None:
-            self.loop.create_task(self._foreign_zeros())  # after the answer: a second of zeros
+        except Exception as exc:
+            log.warning("fleet: the stop could not abort the robot-side run: %s", exc)
+        left = max(0.0, fleet.STOP_ANSWER_S - (time.monotonic() - start))
+        if cancelling:
+            await asyncio.wait(cancelling.values(), timeout=left)
+        cancels = tuple(self._cancel_of(a, task) for a, task in cancelling.items())
+        try:
+            if driver == "foreign" and self._cmd_type(cmd_topic) is not None:
+                self._keep(self._foreign_zeros(cmd_topic))  # after the answer: a second of zeros
+        except Exception as exc:
+            log.warning("fleet: the stop's zeros on %s were not started: %s", cmd_topic, exc)
         still = None
         if driver == "console":  # its next command drives again: the fleet cannot stop a console
             still = f"a console drives ({detail})" if detail else "a console drives"
@@ -524,6 +560,28 @@ class RobotStop:
             cancels=cancels,
             still=None if still is None else still[:120],
         )
+
+    def _keep(self, work: Coroutine[Any, Any, Any]) -> asyncio.Task[Any]:
+        """A task of the stop's that may outlive its answer: held until done, cancelled by :meth:`close`."""
+        task = self.loop.create_task(work)
+        self._tasks.add(task)
+        task.add_done_callback(self._tasks.discard)
+        return task
+
+    @staticmethod
+    def _cancel_of(action: str, task: asyncio.Task[stopping.ActionCancel]) -> fleet.StopCancel:
+        """``action``'s cancel as the answer says it: its outcome, or ``pending`` (it goes on)."""
+        if not task.done():
+            return fleet.StopCancel(action, stopping.Cancel.PENDING.value)
+        if task.cancelled() or task.exception() is not None:
+            return fleet.StopCancel(action, stopping.Cancel.FAILED.value)
+        c = task.result()
+        return fleet.StopCancel(c.action, c.outcome.value, c.goals)
+
+    def close(self) -> None:
+        """The backend stops: the zeros and cancels still under way end."""
+        for task in list(self._tasks):
+            task.cancel()
 
     def _zero(self) -> bool:
         """One zero command on the robot's output (what the deadman sends), where the backend has one."""
@@ -551,13 +609,6 @@ class RobotStop:
         there = [a + stopping.CANCEL_SUFFIX for a in wanted]
         return [a for a, srv in zip(wanted, there, strict=True) if srv in room.provided or srv in on_graph]
 
-    async def _cancels(self) -> tuple[fleet.StopCancel, ...]:
-        actions = self._actions()
-        if not actions:
-            return ()
-        outcomes = await asyncio.gather(*(self._cancel(a) for a in actions))
-        return tuple(fleet.StopCancel(c.action, c.outcome.value, c.goals) for c in outcomes)
-
     async def _cancel(self, action: str) -> stopping.ActionCancel:
         """Every goal of ``action`` cancelled: through the bridge's client that provides it, else on the
         ROS graph; bounded by ``CANCEL_TIMEOUT_S``."""
@@ -578,22 +629,22 @@ class RobotStop:
             return stopping.cancel_failure(action, str(exc) or type(exc).__name__)
         return stopping.cancel_outcome(action, values)
 
-    def _cmd_type(self) -> str | None:
+    def _cmd_type(self, cmd_topic: str) -> str | None:
         bus = getattr(self.backend, "bus", None)
-        t = None if bus is None else bus.type_of(self.announcer.src.cmd_topic)
+        t = None if bus is None else bus.type_of(cmd_topic)
         return t if t in (topics.TYPE_TWIST, topics.TYPE_TWIST_STAMPED) else None
 
-    async def _foreign_zeros(self) -> None:
+    async def _foreign_zeros(self, cmd_topic: str) -> None:
         """Zero velocity on the robot's ``cmd_vel`` at ``ZERO_HZ`` for ``ZERO_FOR_S`` (a controller still
         publishing there overrides it: the answer said so)."""
-        kind = "twist_stamped" if self._cmd_type() == topics.TYPE_TWIST_STAMPED else "twist"
+        kind = "twist_stamped" if self._cmd_type(cmd_topic) == topics.TYPE_TWIST_STAMPED else "twist"
         end = time.monotonic() + stopping.ZERO_FOR_S
         while time.monotonic() < end:
             try:
                 zero = topics.measured_message(0.0, 0.0, kind, time.time_ns())
-                self.backend.bus.publish(self.announcer.src.cmd_topic, zero)
+                self.backend.bus.publish(cmd_topic, zero)
             except Exception as exc:
-                log.warning("fleet: a zero on %s was not sent: %s", self.announcer.src.cmd_topic, exc)
+                log.warning("fleet: a zero on %s was not sent: %s", cmd_topic, exc)
                 return
             await asyncio.sleep(1.0 / stopping.ZERO_HZ)
 

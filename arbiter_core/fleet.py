@@ -511,7 +511,11 @@ HISTORY_TOPICS_S = 30.0
 
 # -- the stop ---------------------------------------------------------------------------------------
 STOP_TIMEOUT_S = 1.0  # a robot that has not answered a stop by then: the console says so
-CANCEL_OUTCOMES = ("cancelled", "no goal", "no server", "failed")  # arbiter_core.stopping.Cancel's values
+# the robot answers by then, whatever is still under way (a cancel not answered yet is "pending" and
+# goes on): half the console's wait, so the answer arrives within it over a slow link
+STOP_ANSWER_S = STOP_TIMEOUT_S / 2
+# arbiter_core.stopping.Cancel's values
+CANCEL_OUTCOMES = ("cancelled", "no goal", "no server", "failed", "pending")
 
 
 @dataclass(frozen=True, slots=True)
@@ -558,13 +562,15 @@ class StopAnswer:
                 parts.append(f"{c.goals} goal{'s' if c.goals != 1 else ''} of {c.action} cancelled")
             elif c.outcome == "failed":
                 parts.append(f"{c.action} not cancelled")
+            elif c.outcome == "pending":
+                parts.append(f"{c.action} cancel pending")
         if not parts and self.still is None:
             parts.append("nothing was driving" if self.driver == "nobody" else f"{self.driver} was driving")
         if self.zero:
             parts.append("zero sent")
         if not parts:
             parts.append("nothing done")
-        sure = self.still is None and all(c.outcome != "failed" for c in self.cancels)
+        sure = self.still is None and all(c.outcome not in ("failed", "pending") for c in self.cancels)
         head = "stopped" if sure else "asked"
         return f"{head}: {', '.join(parts)}" + ("" if self.still is None else f"; still: {self.still}")
 

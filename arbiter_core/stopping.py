@@ -33,6 +33,7 @@ class Cancel(Enum):
     NO_GOAL = "no goal"  # the server answered: nothing to cancel
     NO_SERVER = "no server"  # no such action server (its cancel service does not exist)
     FAILED = "failed"  # refused, or no answer in CANCEL_TIMEOUT_S
+    PENDING = "pending"  # not answered yet when the robot answered a fleet stop (still asked)
 
 
 @dataclass(frozen=True, slots=True)

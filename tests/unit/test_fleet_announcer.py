@@ -1,15 +1,18 @@
 """What a robot announces (arbiter_backend.fleet.Announcer), read from the backend's own state: who drives,
 the run grades, the rates, the history. No Zenoh: the clocks and the backend's parts are real or passed in."""
 
+import asyncio
 import json
+import time
+import types
 
 import pytest
 
 from arbiter_backend.autonomy import AutonomyService
-from arbiter_backend.fleet import Announcer, FleetSettings, Sources
+from arbiter_backend.fleet import Announcer, FleetSettings, RobotStop, Sources
 from arbiter_backend.topicwatch import TopicWatch
 from arbiter_backend.tracker import LatencyTracker
-from arbiter_core import envelope, fleet
+from arbiter_core import envelope, fleet, stopping
 from arbiter_core.kinematics import Pose
 from arbiter_core.mission import Mission, Phase
 from arbiter_core.timesync import TimeSync
@@ -164,3 +167,81 @@ def test_history_thins_the_status_and_keeps_what_fits():
     last_minute = json.loads(a.history(1.0, W + mono.t - 100))
     assert 0 < len(last_minute["entries"]) < len(answer["entries"])
     assert fleet.decode(a.history(10.0, W + mono.t - 100), "history", "r1").minutes == 10.0
+
+
+# -- the stop a fleet console asks for, done in the robot's backend (arbiter_backend.fleet.RobotStop) -----
+class SlowCancel:
+    """An action server's cancel service, provided by a bridge client, that answers after ``delay``."""
+
+    def __init__(self, delay):
+        self.delay, self.answered = delay, asyncio.Event()
+
+    async def call(self, args, timeout):
+        await asyncio.sleep(min(self.delay, timeout))
+        self.answered.set()
+        return True, {"return_code": 0, "goals_canceling": [{"goal_id": {}}]}
+
+
+class Room:
+    def __init__(self, provided):
+        self.provided, self.graph = provided, None
+
+
+class Robot:
+    """The backend as RobotStop uses it: its zero, its endpoint's provided services, its bus."""
+
+    def __init__(self, provided=None):
+        self.done: list[str] = []
+        self.endpoint = types.SimpleNamespace(service_room=Room(provided or {}))
+        self.bus = types.SimpleNamespace(type_of=lambda topic: "geometry_msgs/msg/Twist", publish=self.zero)
+
+    def publish_zero(self):
+        self.done.append("zero")
+
+    def zero(self, topic, msg):
+        self.done.append(f"zero on {topic}")
+
+
+def test_a_fleet_stop_sends_its_zero_first_and_answers_when_a_step_fails():
+    a, mono, *_ = make(autonomy=True)
+    robot = Robot()
+
+    def broken():
+        robot.done.append("abort")
+        raise RuntimeError("the run's state is torn")
+
+    a.src.autonomy.stop = broken
+
+    async def run():
+        return await RobotStop(robot, a, asyncio.get_running_loop()).stop()
+
+    answer = asyncio.run(run())
+    assert robot.done == ["zero", "abort"]
+    assert answer.zero and answer.aborted is None and answer.words() == "stopped: nothing was driving, zero sent"
+
+
+def test_a_fleet_stop_sees_who_drives_now_and_answers_in_time_with_a_slow_cancel_pending():
+    a, mono, tracker, watch, _ = make()
+    a.status(mono(), W)  # the announcer's figures: nothing on /cmd_vel yet
+    watch.watch("/cmd_vel", "geometry_msgs/msg/Twist")  # then a foreign controller drives
+    for i in range(20):
+        watch.note("/cmd_vel", 48, at=mono.t - 1.0 + i * 0.05)
+    slow = SlowCancel(stopping.CANCEL_TIMEOUT_S * 0.9)
+    robot = Robot({"/lab/r1/follow_path" + stopping.CANCEL_SUFFIX: slow})  # under its namespace
+
+    async def run():
+        stop = RobotStop(robot, a, asyncio.get_running_loop())
+        t0 = time.monotonic()
+        answer = await stop.stop()
+        took = time.monotonic() - t0
+        await asyncio.wait_for(slow.answered.wait(), 5)  # the pending cancel goes on after the answer
+        stop.close()  # the backend stops: the zeros still under way end
+        await asyncio.sleep(0)
+        return answer, took, stop
+
+    answer, took, stop = asyncio.run(run())
+    assert took < fleet.STOP_TIMEOUT_S, took
+    assert answer.driver == "foreign" and answer.cancels == (fleet.StopCancel("/lab/r1/follow_path", "pending"),)
+    assert answer.words().startswith("asked: /lab/r1/follow_path cancel pending, zero sent")
+    assert robot.done[0] == "zero" and "zero on /cmd_vel" in robot.done
+    assert all(t.done() for t in stop._tasks)
