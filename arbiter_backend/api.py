@@ -86,7 +86,8 @@ def make_app(
     ``/api/health`` as its ``bridge`` key. ``autonomy``: the robot-side controller ``/api/autonomy``
     starts (POST), stops (DELETE) and reports (GET); None: 403 (the backend runs without
     ``--autonomy``: nothing that moves the robot is reachable). ``workers``: the backend's long-lived
-    workers (``supervise.Supervisor.workers``), added to ``/api/health`` as its ``workers`` key."""
+    workers (``supervise.Supervisor.workers``), added to ``/api/health`` as its ``workers`` key; when one
+    is ``failed``, ``status`` is ``degraded`` and ``failed_workers`` names them."""
     clock = HostClock() if host_clock is None else host_clock
 
     def _int(request: web.Request, name: str, lo: int, hi: int) -> int | None:
@@ -119,7 +120,11 @@ def make_app(
         if bridge is not None:
             body = {**body, "bridge": bridge()}
         if workers is not None:
-            body = {**body, "workers": workers()}
+            listed = workers()
+            body = {**body, "workers": listed}
+            failed = [w["name"] for w in listed if w["state"] == "failed"]
+            if failed:  # a worker given up (supervise.py): loud, at the top
+                body["status"], body["failed_workers"] = "degraded", failed
         return _json(body)
 
     async def topic_figures(request: web.Request) -> web.Response:

@@ -319,7 +319,7 @@ class Backend(Servers):
         )
         sup = self.supervisor
         follow(sup, "topic-monitor", self.topics.watch, "monitor")
-        self._tasks.append(sup.task("watchdog", self._watchdog))
+        self._tasks.append(sup.task("watchdog", self._watchdog, give_up=False))  # the robot's stop
         self._tasks.append(sup.task("topic-monitor", self._topics_loop))
         if self.simulator is not None:
             self._tasks.append(sup.task("simulator", self._sim_loop))

@@ -6,8 +6,13 @@ watchdog, simulator and topic monitor, the relay's QoS follower, the fleet annou
 raises, the supervisor logs the error once (a traceback the first time an error is seen, nothing more
 while the same error repeats), waits (from ``MIN_BACKOFF_S``, doubling, at most ``MAX_BACKOFF_S``; back
 to the minimum after a run of ``STABLE_S``) and runs it again. After ``GIVE_UP_AFTER`` failures in a
-row, none of them after a stable run, the worker is ``failed`` and left stopped: a body that fails that
-fast fails for a reason a restart does not mend.
+row, none of them after a stable run, a worker that may give up is ``failed`` and left stopped (a body
+that fails that fast fails for a reason a restart does not mend), loudly: a critical log line, and
+``/api/health`` says ``"status": "degraded"`` and names it in ``failed_workers``. The workers on the
+command path (``give_up=False``: the rclpy executor that spins the tracker, the embedded watchdog) never
+give up: they restart every ``MAX_BACKOFF_S`` for as long as they fail. A body that raises what is not an
+``Exception`` (``SystemExit``, ``KeyboardInterrupt``) ends the worker ``failed`` with that error, never
+leaves it ``running``.
 
 Each worker calls :meth:`Supervisor.beat` once a round: the first beat of a run says it is running again
 (its listeners are told: the topic monitor's answers say "monitor restarted: …" until then), and it is
@@ -92,6 +97,7 @@ class WorkerRecord:
     in_a_row: int = 0  # failures since the last stable run
     fault: Fault | None = None  # injected failures still to come
     fault_at: float | None = None  # monotonic time from which they come (set by the first ``begin``)
+    give_up: bool = True  # False: restarted for as long as it fails (the command path)
 
     def begin(self, mono: float) -> None:
         self.started = mono
@@ -117,12 +123,17 @@ class WorkerRecord:
         self.in_a_row += 1
         self.error_type, self.error_message = type(exc).__name__, str(exc)[:300]
         self.since = wall
-        if self.in_a_row >= GIVE_UP_AFTER:
+        if self.give_up and self.in_a_row >= GIVE_UP_AFTER:
             self.state = "failed"
             return None
         self.state = "restarting"
         self.restarts += 1
         return min(MAX_BACKOFF_S, MIN_BACKOFF_S * 2.0 ** (self.in_a_row - 1))
+
+    def die(self, exc: BaseException, wall: float) -> None:
+        """The run ended with what is not an ``Exception`` (``SystemExit``...): ``failed``, not restarted."""
+        self.error_type, self.error_message = type(exc).__name__, str(exc)[:300]
+        self.state, self.since = "failed", wall
 
     def stop(self, wall: float) -> None:
         if self.state != "failed":
@@ -178,11 +189,11 @@ class Supervisor:
             log.debug("%s: running", name)
             self._tell(w)
 
-    def _register(self, name: str) -> WorkerRecord:
+    def _register(self, name: str, give_up: bool) -> WorkerRecord:
         with self._lock:
             if name in self._workers:
                 raise ValueError(f"a worker called {name} runs already")
-            w = WorkerRecord(name, since=self.wall(), fault=self.faults.get(name))
+            w = WorkerRecord(name, since=self.wall(), fault=self.faults.get(name), give_up=give_up)
             self._workers[name] = w
         return w
 
@@ -198,7 +209,10 @@ class Supervisor:
         with self._lock:
             delay = w.fail(exc, self.clock(), self.wall())
         if delay is None:
-            log.error("%s failed %d times in a row (%s): given up", w.name, w.in_a_row, w.error)
+            log.critical(
+                "%s failed %d times in a row (%s): given up, it stays stopped (GET /api/health: failed)",
+                w.name, w.in_a_row, w.error, exc_info=exc,
+            )  # fmt: skip
         elif w.error != before:  # a new error: its traceback, once
             log.error("%s failed, restarting in %.1f s", w.name, delay, exc_info=exc)
         else:
@@ -206,16 +220,25 @@ class Supervisor:
         self._tell(w)
         return delay
 
+    def _died(self, w: WorkerRecord, exc: BaseException) -> None:
+        with self._lock:
+            w.die(exc, self.wall())
+        log.critical("%s ended by %s: not restarted (GET /api/health: failed)", w.name, w.error)
+        self._tell(w)
+
     def _stopped(self, w: WorkerRecord) -> None:
         with self._lock:
             w.stop(self.wall())
         self._tell(w)
 
     # -- threads ----------------------------------------------------------------------------------
-    def thread(self, name: str, body: Callable[[], None], stop: threading.Event) -> threading.Thread:
+    def thread(
+        self, name: str, body: Callable[[], None], stop: threading.Event, give_up: bool = True
+    ) -> threading.Thread:
         """Run ``body`` on a daemon thread called ``name`` until it returns (``stop`` set: it should
-        return soon after), again after each failure; ``stop`` also ends a wait between runs."""
-        w = self._register(name)
+        return soon after), again after each failure; ``stop`` also ends a wait between runs.
+        ``give_up=False``: never given up (the command path)."""
+        w = self._register(name, give_up)
 
         def run() -> None:
             while not stop.is_set():
@@ -227,6 +250,9 @@ class Supervisor:
                     if delay is None:
                         return
                     stop.wait(delay)
+                except BaseException as exc:
+                    self._died(w, exc)
+                    raise
                 else:
                     break
             self._stopped(w)
@@ -236,9 +262,12 @@ class Supervisor:
         return thread
 
     # -- asyncio tasks ----------------------------------------------------------------------------
-    def task(self, name: str, body: Callable[[], Coroutine[Any, Any, None]]) -> asyncio.Task[None]:
-        """Run ``body()`` as an asyncio task until it returns or is cancelled, again after each failure."""
-        w = self._register(name)
+    def task(
+        self, name: str, body: Callable[[], Coroutine[Any, Any, None]], give_up: bool = True
+    ) -> asyncio.Task[None]:
+        """Run ``body()`` as an asyncio task until it returns or is cancelled, again after each failure.
+        ``give_up=False``: never given up (the command path)."""
+        w = self._register(name, give_up)
 
         async def run() -> None:
             try:
@@ -251,6 +280,11 @@ class Supervisor:
                         if delay is None:
                             return
                         await asyncio.sleep(delay)
+                    except asyncio.CancelledError:
+                        raise
+                    except BaseException as exc:
+                        self._died(w, exc)
+                        raise
                     else:
                         break
             finally:

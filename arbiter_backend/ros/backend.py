@@ -34,6 +34,7 @@ from .spin import spin_in_thread
 log = logging.getLogger(__name__)
 
 BRIDGE_NODE_NAME = topics.BRIDGE_NODE
+EXECUTOR_WORKER = topicwatch.EXECUTOR_WORKER  # the worker that spins the tracker, simulator and relay
 
 
 def _init(context: Context, args: list[str]) -> None:
@@ -113,8 +114,10 @@ class RosBackend(Servers):
             self.bridge_node.declare_parameter(
                 "actual_port", self.bridge_port, ParameterDescriptor(read_only=True)
             )
+        # the tracker's watchdog is one of its callbacks: while it is down the robot is held stopped
+        self.supervisor.listen(EXECUTOR_WORKER, self.tracker_node.executor_changed)
         self._thread = spin_in_thread(
-            self.executor, self.tracker_node, "rclpy-executor", self.supervisor, self._stop_spin
+            self.executor, self.tracker_node, EXECUTOR_WORKER, self.supervisor, self._stop_spin, give_up=False
         )
         self.topics.start()
 

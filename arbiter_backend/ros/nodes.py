@@ -2,7 +2,10 @@
 
 ``latency_tracker``: ``stamped_cmd_vel`` (std_msgs/String) in; ``latency_report``
 (String) and ``cmd_vel_measured`` (Twist, or TwistStamped stamped with the receive
-time) out; a watchdog timer sends one zero when commands stop. ``arbiter_simulator``:
+time) out; a watchdog timer sends one zero when commands stop. That timer is a callback of the rclpy
+executor: while the executor is down (restarting after a failure, ``executor_changed``) a zero goes
+out at once and every command that reaches the tracker from the rosbridge relay's event loop is
+forwarded as a zero, until the executor runs again. ``arbiter_simulator``:
 ``cmd_vel_measured`` in, ``odom`` (nav_msgs/Odometry) out at ``rate_hz``. Every
 subscription is reliable and VOLATILE, so a node that starts late never receives
 old commands. Flags become parameter defaults; ``--ros-args -p name:=value``
@@ -25,6 +28,7 @@ from arbiter_core.kinematics import Limits
 
 from .. import tracker
 from ..server import BackendConfig
+from ..supervise import WorkerRecord
 from .bus import default_qos
 from .convert import message_class, to_json, to_ros
 from .local import HandledLocally
@@ -102,6 +106,7 @@ class TrackerNode(Node):
         # set by the backend when the rosbridge relay runs in this process (RosBus.deliver_local)
         self.local_report: Callable[[str, str], None] | None = None
         self._local = HandledLocally()  # commands handled in-process whose DDS copy is still to come
+        self.halted: str | None = None  # why commands are forwarded as zeros (the executor is down)
 
     def _forward(self, v: float, w: float, stamp_ns: int) -> None:
         msg = topics.measured_message(v, w, self.config.measured_type, stamp_ns)
@@ -111,6 +116,19 @@ class TrackerNode(Node):
         """One zero twist on the command output now, as the watchdog sends (any thread: rclpy's publish is
         thread-safe)."""
         self._forward(0.0, 0.0, self.get_clock().now().nanoseconds)
+
+    def executor_changed(self, w: WorkerRecord) -> None:
+        """The supervisor's listener of the executor that spins this node (its watchdog): when it goes
+        down, one zero now and commands forwarded as zeros (no watchdog would end them); when it runs
+        again, commands drive again."""
+        if w.state in ("restarting", "failed"):
+            if self.halted is None:
+                log.error("latency_tracker: the executor is down (%s): zero sent, commands held", w.error)
+            self.halted = f"the rclpy executor is {w.state}: {w.error}"
+            self.publish_zero()
+        elif w.state == "running" and self.halted is not None:
+            self.halted = None
+            log.warning("latency_tracker: the executor runs again: commands drive again")
 
     def on_local_command(self, text: str) -> None:
         """A command the rosbridge relay of this process received: handled now, on the caller's thread,
@@ -135,7 +153,8 @@ class TrackerNode(Node):
                 self.local_report(self.report_pub.topic_name, accepted.text)
             self.report_pub.publish(self._string(data=accepted.text))
             if accepted.forward is not None:
-                self._forward(*accepted.forward, recv_ns)
+                # no watchdog runs while the executor is down: nothing may drive then
+                self._forward(*(accepted.forward if self.halted is None else (0.0, 0.0)), recv_ns)
         except Exception:  # a callback that raises would stop the executor, and with it the robot's stop
             log.exception("latency_tracker: command handling failed")
 

@@ -16,7 +16,9 @@ callback) is what made watching as dear as deserialising; it never sees these su
 type whose first field is a ``std_msgs/Header`` the stamp is read from the bytes right after the
 4-byte encapsulation header (``int32 sec, uint32 nanosec``, in the byte order the encapsulation
 names). A type not installed here cannot be subscribed (rclpy has no generic subscription): it is
-listed with its type, counts and "type not installed here". A service's introspection topic
+listed with its type, counts and "type not installed here". A topic whose messages cannot be taken is
+listed with the reason until its type or QoS change (its reader dropped, the others taken all the same).
+A service's introspection topic
 (``pkg/srv/Name_Event``) and an action's feedback (``pkg/action/Name_FeedbackMessage``) are message
 types like any other (``arbiter_core.msgtypes.normalize_type``). A topic that cannot be looked at for
 any other reason is listed with the reason ("cannot be read here: …"), and the others are followed all
@@ -57,6 +59,7 @@ log = logging.getLogger(__name__)
 
 NODE_NAME = "arbiter_topic_monitor"
 WORKER = "topic-monitor"  # its name among the backend's supervised workers
+EXECUTOR_WORKER = "rclpy-executor"  # the relay's: the topics measured on its reader (``took``) stop with it
 GRAPH_S = 1.0  # how often the graph is looked at: topics that appear are watched within a second
 TAKE_S = 0.1  # how often the subscriptions are emptied: up to DEPTH / TAKE_S = 1 kHz per topic
 DEPTH = 100
@@ -113,6 +116,8 @@ class RosTopics:
 
     def start(self) -> None:
         follow(self.supervisor, WORKER, self.watch, "monitor")
+        # a topic measured on the relay's reader gets no message while its executor is down: unknown
+        follow(self.supervisor, EXECUTOR_WORKER, self.watch, "executor")
         self._thread = self.supervisor.thread(WORKER, self._run, self._stop)
 
     def _run(self) -> None:
@@ -135,13 +140,19 @@ class RosTopics:
         """Everything each subscription holds: size, receive time and, when stamped, the delay."""
         offset = time.monotonic() - time.time()  # middleware receive times are system time
         note = self.watch.note
-        for topic, (_, _, sub, stamped) in list(self._subs.items()):
+        for topic, (type_name, best_effort, sub, stamped) in list(self._subs.items()):
             if sub is None:
                 continue
-            with sub.handle:
-                while (taken := sub.handle.take_message(sub.msg_type, True)) is not None:
-                    raw, info = taken
-                    self._note(note, topic, raw, info.get("received_timestamp", 0), stamped, offset)
+            try:
+                with sub.handle:
+                    while (taken := sub.handle.take_message(sub.msg_type, True)) is not None:
+                        raw, info = taken
+                        self._note(note, topic, raw, info.get("received_timestamp", 0), stamped, offset)
+            except Exception as exc:  # this topic only: listed with the reason, the others taken all the same
+                self._subs[topic] = (type_name, best_effort, None, stamped)  # no reader: not retried
+                with contextlib.suppress(Exception):
+                    self.node.destroy_subscription(sub)
+                self._unreadable(topic, type_name, exc)
 
     @staticmethod
     def _note(
@@ -208,9 +219,9 @@ class RosTopics:
         nodes = (_node_names(pubs), _node_names(subs))
         self.watch.set_graph(name, len(pubs), len(subs), qos_mismatch(offered, requested), nodes)
         best_effort = any(r == "best_effort" for r, _ in offered)
-        self._unread.pop(name, None)
         if relayed.get(name) == (type_name, best_effort):
             self._share(name, type_name)
+            self._unread.pop(name, None)
             return
         self._shared.pop(name, None)  # the relay stopped reading it, or reads it otherwise
         have = self._subs.get(name)
@@ -221,6 +232,7 @@ class RosTopics:
                     self.node.destroy_subscription(have[2])
             sub, stamped = self._subscribe(name, type_name, best_effort)
             self._subs[name] = (type_name, best_effort, sub, stamped)
+            self._unread.pop(name, None)  # after a success only: a refusal is warned once, not each look
 
     def _unreadable(self, topic: str, graph_type: str, exc: Exception) -> None:
         """List ``topic`` with why it cannot be measured; logged once per topic and reason."""

@@ -203,7 +203,7 @@ class Robot:
 
 
 def test_a_fleet_stop_sends_its_zero_first_and_answers_when_a_step_fails():
-    a, mono, *_ = make(autonomy=True)
+    a, *_ = make(autonomy=True)
     robot = Robot()
 
     def broken():
@@ -217,11 +217,12 @@ def test_a_fleet_stop_sends_its_zero_first_and_answers_when_a_step_fails():
 
     answer = asyncio.run(run())
     assert robot.done == ["zero", "abort"]
-    assert answer.zero and answer.aborted is None and answer.words() == "stopped: nothing was driving, zero sent"
+    assert answer.zero and answer.aborted is None
+    assert answer.words() == "stopped: nothing was driving, zero sent"
 
 
 def test_a_fleet_stop_sees_who_drives_now_and_answers_in_time_with_a_slow_cancel_pending():
-    a, mono, tracker, watch, _ = make()
+    a, mono, _, watch, _ = make()
     a.status(mono(), W)  # the announcer's figures: nothing on /cmd_vel yet
     watch.watch("/cmd_vel", "geometry_msgs/msg/Twist")  # then a foreign controller drives
     for i in range(20):
@@ -241,7 +242,8 @@ def test_a_fleet_stop_sees_who_drives_now_and_answers_in_time_with_a_slow_cancel
 
     answer, took, stop = asyncio.run(run())
     assert took < fleet.STOP_TIMEOUT_S, took
-    assert answer.driver == "foreign" and answer.cancels == (fleet.StopCancel("/lab/r1/follow_path", "pending"),)
+    assert answer.driver == "foreign"
+    assert answer.cancels == (fleet.StopCancel("/lab/r1/follow_path", "pending"),)
     assert answer.words().startswith("asked: /lab/r1/follow_path cancel pending, zero sent")
     assert robot.done[0] == "zero" and "zero on /cmd_vel" in robot.done
     assert all(t.done() for t in stop._tasks)

@@ -6,10 +6,13 @@ import re
 import threading
 
 import pytest
+from aiohttp.test_utils import TestClient, TestServer
 
 from arbiter_backend import supervise
+from arbiter_backend.api import make_app
 from arbiter_backend.supervise import Fault, InjectedFault, Supervisor, WorkerRecord, parse_faults
 from arbiter_backend.topicwatch import TopicWatch, follow
+from arbiter_backend.tracker import LatencyTracker
 
 from ..support.waits import async_until, wait_for
 
@@ -43,6 +46,33 @@ def test_a_worker_that_keeps_failing_at_once_is_given_up():
     assert w.state == "failed"
     w.stop(1.0)
     assert w.state == "failed"  # a failed worker stays failed when the backend stops
+
+
+def test_a_worker_on_the_command_path_is_never_given_up():
+    w = WorkerRecord("rclpy-executor", give_up=False)
+    delays = []
+    for i in range(supervise.GIVE_UP_AFTER * 3):
+        w.begin(float(i))
+        delays.append(w.fail(RuntimeError("boom"), float(i), 0.0))
+    assert w.state == "restarting" and delays[-1] == supervise.MAX_BACKOFF_S
+
+
+class Fatal(BaseException):
+    """Not an Exception, as SystemExit and KeyboardInterrupt are not (those would end pytest itself)."""
+
+
+@pytest.mark.filterwarnings("ignore::pytest.PytestUnhandledThreadExceptionWarning")  # re-raised: loud
+def test_a_body_ended_by_a_base_exception_leaves_its_worker_failed_not_running():
+    sup = Supervisor(faults={})
+    stop = threading.Event()
+
+    def body() -> None:
+        sup.beat("x")
+        raise Fatal("asked to exit")
+
+    sup.thread("x", body, stop).join(5)
+    w = sup.workers()[0]
+    assert (w["state"], w["last_error"]) == ("failed", {"type": "Fatal", "message": "asked to exit"})
 
 
 def test_an_injected_fault_comes_after_its_delay_from_the_first_start_as_many_runs_as_asked():
@@ -151,3 +181,19 @@ async def test_a_task_is_restarted_after_an_injected_fault_and_stopped_when_canc
     with pytest.raises(asyncio.CancelledError):
         await task
     assert sup.workers()[0]["state"] == "stopped"
+
+
+async def test_a_task_ended_by_a_base_exception_is_failed_and_health_says_degraded():
+    sup = Supervisor(faults={})
+
+    async def body() -> None:
+        sup.beat("loop")
+        raise Fatal("asked to exit")
+
+    with pytest.raises(Fatal):
+        await sup.task("loop", body)
+    assert sup.workers()[0]["state"] == "failed"
+    app = make_app(LatencyTracker(), workers=sup.workers)
+    async with TestClient(TestServer(app)) as client:
+        health = await (await client.get("/api/health")).json()
+    assert (health["status"], health["failed_workers"]) == ("degraded", ["loop"])
