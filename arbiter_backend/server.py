@@ -31,6 +31,7 @@ from . import api, bridge, rosapi
 from . import autonomy as autonomy_mod
 from .autonomy import AutonomyService
 from .bridge import MAX_FRAME_BYTES, WS_PING_S, RosbridgeEndpoint
+from .bridge.exposure import Exposure
 from .bus import Bus, TopicBus
 from .pacing import WAIT_S as PACED_WAIT_S
 from .supervise import Supervisor
@@ -79,9 +80,7 @@ class BackendConfig:
         relative names resolve under ``namespace`` (the bridge node's; default --namespace), ``~``
         under ``node``, as rosbridge_suite's node resolves them."""
         ns = self.namespace if namespace is None else namespace
-
-        def resolve(name: str, what: str) -> str:
-            return topics.resolve(name, ns, what=what, node=node)
+        resolve = Exposure(namespace=ns, node=node).resolve  # as the endpoint's own: one definition
 
         expose = TopicFilter.parse(self.topics_glob, None) if self.topics_glob else None
         services = TopicFilter.parse(self.services_glob, None) if self.services_glob else None

@@ -4,6 +4,8 @@ names resolve: under the bridge node's namespace, as rosbridge_suite's node reso
 
 from __future__ import annotations
 
+from arbiter_core import topics as topics_mod
+
 from ..topicwatch import TopicFilter
 from .frames import BRIDGE_NODE_NAME, BadFrame, Frame, name
 
@@ -27,6 +29,11 @@ class Exposure:
     def name(self, frame: Frame, key: str = "topic") -> str:
         """The frame's topic, service or action name (``key``), resolved as rosbridge resolves it."""
         return name(frame, key, self.namespace, self.node)
+
+    def resolve(self, given: str, what: str) -> str:
+        """A name given in rosapi's arguments (a topic, service or node), resolved the same way;
+        TopicNameError (a ValueError) says why it is not one."""
+        return topics_mod.resolve(given, self.namespace, what=what, node=self.node)
 
     def topic_ok(self, topic: str) -> bool:
         return self.topics is None or self.topics.wants(topic)
