@@ -99,6 +99,9 @@ class ServiceRoom:
                 values = handler(frame.get("args"))
             except (BadFrame, MessageError, ValueError) as exc:
                 reply.update(result=False, values=f"{service}: {exc}")
+            except Exception as exc:  # a bug, or the graph changed under it: answered all the same
+                log.exception("%s failed", service)
+                reply.update(result=False, values=f"{service}: {type(exc).__name__}: {exc}"[:300])
             else:
                 if inspect.isawaitable(values):  # rosapi that asks the graph (parameters)
                     client.track(

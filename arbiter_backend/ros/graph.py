@@ -10,7 +10,7 @@ from collections.abc import Callable
 from importlib import metadata
 from typing import Any
 
-from rclpy.node import Node
+from rclpy.node import Node, NodeNameNonExistentError
 
 from arbiter_core.msgtypes import MessageError
 
@@ -59,19 +59,24 @@ class RosGraph:
         return pubs, subs
 
     def node_endpoints(self, node: str) -> tuple[list[str], list[str], list[str]]:
+        """The node's topics it subscribes and publishes, and its services; all empty when it left the
+        graph since it was listed (rosapi's answer then, as the stock node's)."""
         ns, _, name = node.rpartition("/")
         ns = ns or "/"
-        return (
-            [t for t, _ in self.node.get_subscriber_names_and_types_by_node(name, ns)],
-            [t for t, _ in self.node.get_publisher_names_and_types_by_node(name, ns)],
-            [s for s, _ in self.node.get_service_names_and_types_by_node(name, ns)],
-        )
+        try:
+            return (
+                [t for t, _ in self.node.get_subscriber_names_and_types_by_node(name, ns)],
+                [t for t, _ in self.node.get_publisher_names_and_types_by_node(name, ns)],
+                [s for s, _ in self.node.get_service_names_and_types_by_node(name, ns)],
+            )
+        except NodeNameNonExistentError:
+            return [], [], []
 
     def node_services(self, node: str) -> list[tuple[str, list[str]]]:
         ns, _, name = node.rpartition("/")
         try:
             found = self.node.get_service_names_and_types_by_node(name, ns or "/")
-        except Exception:  # rclpy's NodeNameNonExistentError: the node left since it was listed
+        except NodeNameNonExistentError:  # the node left since it was listed
             return []
         return [(service, list(types)) for service, types in found]
 

@@ -187,6 +187,15 @@ async def test_call_service_rosapi_and_unknown_service(server, session):
     frame = await next_frame(ws)
     assert frame["result"] is False and frame["values"] == "Service /nope does not exist"
 
+    def broken(args):  # as a rosapi handler whose graph changed under it (a node that left mid-call)
+        raise RuntimeError("the graph changed")
+
+    server.endpoint.services["/rosapi/nodes"] = broken
+    await ws.send_str('{"op": "call_service", "id": "c4", "service": "/rosapi/nodes"}')
+    frame = await next_frame(ws)  # a response, never a client left waiting
+    assert frame["op"] == "service_response" and frame["id"] == "c4" and frame["result"] is False
+    assert frame["values"] == "/rosapi/nodes: RuntimeError: the graph changed"
+
 
 async def test_client_state_is_cleaned_up_on_disconnect(server, session):
     before = server.bus.subscriber_count("/odom")

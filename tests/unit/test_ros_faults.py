@@ -5,6 +5,7 @@ a zero at once, then every command from the relay's event loop forwarded as a ze
 The topic monitor (``ros/topicwatch.RosTopics.take``) when one topic's messages cannot be taken: that
 topic is listed with the reason, logged once, and the topics after it are taken all the same."""
 
+import asyncio
 import logging
 
 import pytest
@@ -100,3 +101,19 @@ def test_a_topic_that_cannot_be_taken_is_listed_once_and_the_others_are_taken(no
     finally:
         rt.close()
         monitor.destroy_node()
+
+
+def test_a_node_that_left_the_graph_has_no_endpoints_not_an_error(node_context):
+    """rosapi's node_details on a node that left between the listing and the call: empty lists, as the
+    stock node answers, not rclpy's NodeNameNonExistentError out of the handler."""
+    from rclpy.node import Node
+
+    from arbiter_backend.ros.graph import RosGraph
+
+    node = Node("arbiter_faults_graph", context=node_context, start_parameter_services=False)
+    try:
+        graph = RosGraph(node, asyncio.new_event_loop(), list)
+        assert graph.node_endpoints("/arbiter_left_already") == ([], [], [])
+        assert graph.node_services("/arbiter_left_already") == []
+    finally:
+        node.destroy_node()
