@@ -3,7 +3,8 @@
 The tracker while the executor that runs its watchdog is down (``nodes.TrackerNode.executor_changed``):
 a zero at once, then every command from the relay's event loop forwarded as a zero until it runs again.
 The topic monitor (``ros/topicwatch.RosTopics.take``) when one topic's messages cannot be taken: that
-topic is listed with the reason, logged once, and the topics after it are taken all the same."""
+topic is listed with the reason, logged once, and the topics after it are taken all the same. rosapi on a
+node that left the graph mid-call; the fleet stop's names in a remapped namespace."""
 
 import asyncio
 import logging
@@ -117,3 +118,19 @@ def test_a_node_that_left_the_graph_has_no_endpoints_not_an_error(node_context):
         assert graph.node_services("/arbiter_left_already") == []
     finally:
         node.destroy_node()
+
+
+def test_the_fleet_stop_resolves_its_names_in_the_namespace_a_remap_gave_the_tracker():
+    """``--ros-args -r __ns:=/robot1``: the fleet stop's ``cmd_vel`` and Nav2 actions are the robot's
+    (``/robot1/cmd_vel``), as the tracker node resolves its own names, not ``--namespace``'s root."""
+    from arbiter_backend.fleet import sources_of
+    from arbiter_backend.ros.backend import RosBackend
+
+    backend = RosBackend(
+        BackendConfig(sim=False, bridge=False, api_port=0), ["--ros-args", "-r", "__ns:=/robot1"]
+    )
+    try:
+        src = sources_of(backend)
+        assert (src.cmd_topic, src.namespace) == ("/robot1/cmd_vel", "/robot1")
+    finally:
+        backend._shutdown_ros()
