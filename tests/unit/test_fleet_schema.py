@@ -202,6 +202,9 @@ def test_a_stop_answer_round_trips_and_says_what_the_robot_did_in_one_line():
     assert driven.words() == "asked: zero sent; still: a console drives (last command 40 ms ago)"
     failed = fleet.StopAnswer("r1", T, "foreign", False, cancels=(fleet.StopCancel("/spin", "failed"),))
     assert failed.words() == "asked: /spin not cancelled"
+    pending = fleet.StopAnswer("r1", T, "foreign", True, cancels=(fleet.StopCancel("/spin", "pending"),))
+    assert fleet.decode(fleet.encode(pending), fleet.STOP, "r1") == pending  # a cancel still under way
+    assert pending.words().startswith("asked: /spin cancel pending, zero sent")
     bad = json.loads(data)
     bad["cancels"][0]["outcome"] = "maybe"
     with pytest.raises(FleetPayloadError, match=r"stop.cancels\[0\].outcome must be one of cancelled"):
