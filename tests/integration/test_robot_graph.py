@@ -114,18 +114,31 @@ def topics(api: str) -> dict[str, dict]:
     return {t["name"]: t for t in httpx.get(f"{api}/api/topics", timeout=5).json()["topics"]}
 
 
+def steady(times: list[float], start: float, end: float) -> float | None:
+    """The true rate over [start, end] of a topic that flowed through the whole of it (its messages span
+    most of the window and the last is recent); None for one that started, stopped or is too sparse in
+    it (a goal's topics, a latched one), whose rate over a window says little."""
+    rate = truth_rate(times, start, end)
+    if rate is None:
+        return None
+    t = [x for x in times if start <= x <= end]
+    if t[-1] - t[0] < 0.7 * (end - start) or end - t[-1] > 2.5 / rate:
+        return None
+    return rate
+
+
 def off_rates(got: dict[str, dict], sent: dict, asked_at: float, window: float) -> dict[str, tuple]:
-    """The topics whose measured rate is not within ``REL`` of the truth over the window ending when
-    they were asked for: name -> (truth, measured)."""
+    """The steadily flowing topics whose measured rate is not within ``REL`` of the truth over the window
+    ending when they were asked for, or that were called silent: name -> (truth, measured, state)."""
     bad = {}
     for name, times in sent["times"].items():
-        rate = truth_rate(times, asked_at - window, asked_at)
+        rate = steady(times, asked_at - window, asked_at)
         if rate is None:
             continue
-        row = got.get(name)
-        measured = row and row.get("rate_hz")
-        if not measured or abs(measured - rate) > REL * rate:
-            bad[name] = (round(rate, 2), measured)
+        row = got.get(name) or {}
+        measured = row.get("rate_hz")
+        if not measured or abs(measured - rate) > REL * rate or row.get("state") in ("silent", "unknown"):
+            bad[name] = (round(rate, 2), measured, row.get("state"))
     return bad
 
 
@@ -186,15 +199,23 @@ def test_beside_a_nav2_shaped_graph_every_topic_is_measured_and_a_foreign_goal_i
         assert len(samples) > 20 and run.tracking is not None, (len(samples), run)
         assert any(p.latencyMs is not None for p in samples), "the TwistStamped's age is the latency"
 
-        # -- every rate within 10 % of the truth (a later window is asked for on a loaded machine) ----
-        bad: dict = {}
-        for asked_at, got in polls[-10:]:
-            bad = off_rates(got, sent, asked_at, window)
-            if not bad:
-                break
-        assert not bad, f"measured off the truth by over {REL:.0%}: {bad}"
+        # -- the whole minute: every steadily flowing topic within 10 % of the truth, none called silent;
+        # a poll or two may be off on a loaded machine (a burst of late deliveries moves a few messages
+        # across the window's edge: test_topics_ros), never a topic for long ---------------------------
+        settled = [(at, got) for at, got in polls if at - start > window + 1.0]
+        offs = [off_rates(got, sent, at, window) for at, got in settled]
+        counted = {
+            name
+            for at, _ in settled
+            for name in sent["times"]
+            if steady(sent["times"][name], at - window, at)
+        }
+        # Nav2's thirteen periodic topics, the hub's hundred, the second robot's three, /odom; the goal's
+        assert len(counted) >= 117 and {"/odom", "/scan", "/imu/data", "/robot2/odom", "/cmd_vel"} <= counted
+        for name in counted:
+            off = [o[name] for o in offs if name in o]
+            assert len(off) <= 0.1 * len(settled), f"{name} off the truth by over {REL:.0%} or silent: {off}"
         final = polls[-1][1]
-        assert final["/odom"]["rate_hz"] == pytest.approx(50.0, rel=REL)
 
         # -- what is not a plain topic is listed, with its type --------------------------------------
         for action in ("/follow_path", "/robot2/follow_path", "/spin", "/navigate_to_pose"):

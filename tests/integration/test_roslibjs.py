@@ -12,6 +12,7 @@ The script runs once per transport (module-scoped); each helper is its own test,
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import json
 from typing import Any
 
@@ -169,7 +170,11 @@ def embedded(node_bin: str):
         "getParams": {"ok": []},  # asked before Param.set
         "Param.get": {"ok": 2.5},  # after Param.set: the value set, as JSON, parsed by roslibjs
     }
-    # the rest: what the same service answers under its absolute name (today "does not exist")
+    # the TypeDefs as rosapi builds them from the installed classes, where ROS is installed (else the
+    # absolute name's answer below)
+    with contextlib.suppress(ImportError):
+        want["getMessageDetails"] = {"ok": expected.message_details(DETAILS_TYPE)}
+    # the rest: what the same service answers under its absolute name ("does not exist": no ROS graph)
     for helper in HELPERS:
         if helper in absolute:
             want.setdefault(helper, as_roslibjs(helper, absolute[helper]))
@@ -188,6 +193,15 @@ def test_embedded_helper(embedded, helper):
         assert dict(zip(got["ok"]["topics"], got["ok"]["types"], strict=True)) == EMBEDDED_TOPICS
         return
     assert_helper(helper, embedded)
+    if helper not in EMBEDDED_ANSWERS:  # no meaning without a ROS graph: said so, as an unknown service
+        assert "does not exist" in str(embedded["out"]["helpers"][helper].get("error")), helper
+
+
+# what the embedded transport's rosapi answers (docs/rosbridge.md); any other helper's service does not exist
+EMBEDDED_ANSWERS = {
+    "getTopics", "getParams", "getTopicType", "getTopicsForType", "getMessageDetails", "Param.set",
+    "Param.get",
+}  # fmt: skip
 
 
 def test_embedded_rounds(embedded):

@@ -256,6 +256,7 @@ class Graph:
             self.lifecycle_up(self.nodes[f"/{name}"])  # type: ignore[arg-type]
         self.hub("sensor_hub", range(0, hub // 2))
         odom = self.node("odom_listener")  # the pose the controller follows: the backend's simulated base
+        self.times["/odom"] = []
         odom.create_subscription(Odometry, "/odom", self._on_odom, 10)
 
     def wave2(self) -> None:
@@ -313,6 +314,7 @@ class Graph:
 
     # -- the controller behind follow_path ----------------------------------------------------------
     def _on_odom(self, m: Odometry) -> None:
+        self.times["/odom"].append(time.monotonic())  # the truth of the backend's /odom, as heard here
         q = m.pose.pose.orientation
         yaw = math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
         self.pose = (m.pose.pose.position.x, m.pose.pose.position.y, yaw)
