@@ -11,12 +11,16 @@ watching everything) on a ROS domain of its own, in phases alternated ``--repeat
 
 CPU is the backend process's user + system time (/proc) over the phase, as a % of one core; the graph
 runs in its own process and is not counted. Each phase also prints how many topics the backend listed
-and its workers' states (``/api/health``), so a run shows the graph was seen whole.
+and its workers' states (``/api/health``), so a run shows the graph was seen whole, and in the graph
+phases how far each steadily flowing topic's measured rate is from its truth (the graph's own publish
+times over the monitor's window: ``tests/support/truth.py``): the median and worst relative error, and
+a few topics' rates side by side.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import random
 import statistics
@@ -32,9 +36,41 @@ from _common import emit  # noqa: E402
 from topics import measure  # noqa: E402
 
 from tests.support.backend import get_json, start_backend  # noqa: E402
+from tests.support.truth import steady  # noqa: E402
 
 GRAPH = ROOT / "tests" / "support" / "robotgraph.py"
 PHASES = {"small": None, "robot": 100, "robot 300": 300}
+SHOWN = ("/odom", "/imu/data", "/joint_states", "/scan", "/local_plan", "/diagnostics", "/robot2/odom")
+
+
+def rates(graph: subprocess.Popen[str], api: str) -> dict[str, object]:
+    """Measured against true rates, for every topic that flowed through the whole window."""
+    answer = get_json(f"{api}/api/topics")
+    asked_at = time.monotonic()
+    assert graph.stdin is not None and graph.stdout is not None
+    graph.stdin.write("dump\n")
+    graph.stdin.flush()
+    line = graph.stdout.readline()
+    while not line.startswith("{"):  # "ready 2" came first
+        line = graph.stdout.readline()
+    sent = json.loads(line)
+    window = answer["window_s"]
+    got = {t["name"]: t for t in answer["topics"]}
+    errors, shown = [], {}
+    for name, times in sent["times"].items():
+        truth = steady(times, asked_at - window, asked_at)
+        measured = (got.get(name) or {}).get("rate_hz")
+        if truth is None or measured is None:
+            continue
+        errors.append(abs(measured - truth) / truth)
+        if name in SHOWN:
+            shown[name] = (round(truth, 2), round(measured, 2))
+    return {
+        "topics_compared": len(errors),
+        "median_rel_error": round(statistics.median(errors), 4) if errors else None,
+        "max_rel_error": round(max(errors), 4) if errors else None,
+        "shown": shown,
+    }
 
 
 def main() -> int:
@@ -66,6 +102,8 @@ def main() -> int:
                 print(
                     f"{name}: {cpu[name][-1]:.1f} % of a core, {listed} topics, workers {states}", flush=True
                 )
+                if graph is not None:
+                    print(json.dumps({"phase": name, "rates": rates(graph, backend.api)}), flush=True)
             finally:
                 backend.stop()
                 if graph is not None:

@@ -36,6 +36,7 @@ from arbiter_tui.session.settings import Settings
 
 from ..support.backend import start_backend
 from ..support.ros import domain, use_test_domain
+from ..support.truth import steady
 from ..support.waits import wait_for
 
 ros_domain = pytest.fixture(scope="module", autouse=True)(use_test_domain)
@@ -102,29 +103,8 @@ class GraphProc:
                 self.proc.wait(5)
 
 
-def truth_rate(times: list[float], start: float, end: float) -> float | None:
-    """(n - 1) / span of the publishes inside [start, end]: the monitor's definition, on what was sent."""
-    t = [x for x in times if start <= x <= end]
-    if len(t) < 3:
-        return None
-    return (len(t) - 1) / (t[-1] - t[0])
-
-
 def topics(api: str) -> dict[str, dict]:
     return {t["name"]: t for t in httpx.get(f"{api}/api/topics", timeout=5).json()["topics"]}
-
-
-def steady(times: list[float], start: float, end: float) -> float | None:
-    """The true rate over [start, end] of a topic that flowed through the whole of it (its messages span
-    most of the window and the last is recent); None for one that started, stopped or is too sparse in
-    it (a goal's topics, a latched one), whose rate over a window says little."""
-    rate = truth_rate(times, start, end)
-    if rate is None:
-        return None
-    t = [x for x in times if start <= x <= end]
-    if t[-1] - t[0] < 0.7 * (end - start) or end - t[-1] > 2.5 / rate:
-        return None
-    return rate
 
 
 def off_rates(got: dict[str, dict], sent: dict, asked_at: float, window: float) -> dict[str, tuple]:
