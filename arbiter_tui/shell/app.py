@@ -108,7 +108,7 @@ class ArbiterApp(RegistryTheme):
         self.session.autonomy = None if tracker is None else tracker.autonomy()
         self.sampler = FrameSampler(self.session, settings, tracker=tracker)
         self.frame_clock: FrameClock | None = None  # live only: frames after control ticks
-        self.keys = KeyRouter(self.session.key, lambda: self.session.stop_all("stop key"))
+        self.keys = KeyRouter(self.session.key, lambda: self.session.stop_all("stop key"), self.session.clock)
         self.dialogs = Dialogs(self, self)
         self._shown_state: tuple[object, ...] = ()
         self._theme_loaded = False
