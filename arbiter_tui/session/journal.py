@@ -44,7 +44,7 @@ from . import journal_files as F
 log = logging.getLogger(__name__)
 
 FLUSH_S = 0.5  # a chunk handed to the kernel (and synced) at least this often
-CLOSE_WAIT_S = 2.0  # close() waits this long for the thread, then this long for the file (a stalled disk)
+CLOSE_WAIT_S = 2.0  # close() waits at most this long for the thread and the file (a stalled disk)
 # The run summaries: at once when a run begins or ends, else this often. A running run's summary is
 # computed over all its samples (2-8 ms for an hour's run on the dev box, several times that on a Pi;
 # on a copy, outside the store's lock): not every chunk.
@@ -144,9 +144,11 @@ class Journal:
         self._stopped = True
         self._latency.clear()
         thread, self._thread = self._thread, None
+        deadline = time.monotonic() + CLOSE_WAIT_S  # a quit, a hang-up: never longer than this
         if thread is not None and thread is not threading.current_thread():
             thread.join(timeout=CLOSE_WAIT_S)
-        if not self._lock.acquire(timeout=CLOSE_WAIT_S):  # the thread is stuck in a write or an fsync
+        wait = max(0.0, deadline - time.monotonic())
+        if not self._lock.acquire(timeout=wait):  # the thread is stuck in a write or an fsync
             log.warning("journal: %s not finished: its disk did not answer in %g s", self.path, CLOSE_WAIT_S)
             return  # the file stays as it is: read up to its last chunk
         try:

@@ -175,8 +175,8 @@ class ArbiterApp(RegistryTheme):
                 robot_side.poll(self)
 
     def _on_signal(self, sig: int) -> None:
+        lifecycle.exit_within(EXIT_DEADLINE_S)  # first: finishing the journal may wait on a stalled disk
         self.session.hang_up(f"signal {signal.Signals(sig).name}")
-        lifecycle.exit_within(EXIT_DEADLINE_S)
         self.exit()
 
     async def on_unmount(self) -> None:

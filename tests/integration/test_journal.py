@@ -424,3 +424,33 @@ def test_a_quit_while_the_journal_looks_back_opens_no_file_and_an_offer_is_count
     cut.write_bytes(data[: len(data) // 2])
     got = F.contents(cut)
     assert got.samples is None and got.chunks >= 1 and "chunks" in got.words()
+
+
+def test_a_close_never_waits_longer_than_its_bound_on_a_stalled_disk(tmp_path, monkeypatch):
+    """The journal's thread stuck in an fsync (a stalled SD card) holds the writer's lock: a quit or a
+    hang-up gives up on the file after CLOSE_WAIT_S (before: it waited on the lock for ever)."""
+    import arbiter_tui.session.journal as J
+
+    monkeypatch.setattr(J, "CLOSE_WAIT_S", 0.2, raising=False)  # (before: a fixed 2 s join, then for ever)
+    store = AnalyticsStore(1000)
+    journal = Journal(Sources(store), tmp_path, 10**8, flush_s=0.05)
+    journal.start()
+    wait_for(lambda: journal._channels is not None, timeout=5)
+    stalled, done = threading.Event(), threading.Event()
+
+    def fsync_forever() -> None:
+        with journal._lock:
+            stalled.set()
+            done.wait(30)
+
+    holder = threading.Thread(target=fsync_forever)
+    holder.start()
+    stalled.wait(5)
+    closing = threading.Thread(target=journal.close)
+    t0 = time.monotonic()
+    closing.start()
+    closing.join(10)
+    took = time.monotonic() - t0
+    done.set()
+    holder.join(5)
+    assert not closing.is_alive() and took < 5, took
