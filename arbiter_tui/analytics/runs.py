@@ -376,7 +376,7 @@ class RunLog:
 
     def snapshot(self) -> RunLog:
         """The runs as they are now, for summaries and rows computed outside the store's lock (the
-        store copies under its lock, the journal computes on its own thread: ``AnalyticsStore.runs_copy``)."""
+        store copies under its lock, the journal computes on its own thread: ``store.runs_copy``)."""
         out = RunLog()
         out._runs = [r.snapshot(r is self._active) for r in self._runs]
         out._by_id = {r.id: r for r in out._runs}

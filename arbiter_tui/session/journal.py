@@ -37,7 +37,7 @@ from typing import IO, Any
 
 from ..analytics.exports import JOURNAL_END_METADATA, JOURNAL_METADATA, McapChannels
 from ..analytics.runs import AlgorithmSummary, RunSummary
-from ..analytics.store import AnalyticsStore
+from ..analytics.store import AnalyticsStore, runs_copy
 from ..latency.clocksync import Sample
 from . import journal_files as F
 
@@ -299,7 +299,7 @@ class Journal:
 
     def _summaries(self, channels: McapChannels, t_ns: int) -> None:
         """The runs and per-(mission, algorithm) rows that changed since they were last written."""
-        runs = self.sources.store.runs_copy()  # copied under the store's lock, computed outside it
+        runs = runs_copy(self.sources.store)  # copied under the store's lock, computed outside it
         for r in runs.summaries():
             if self._runs.get(r.id) != r:
                 channels.run(r)

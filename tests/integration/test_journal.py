@@ -123,6 +123,16 @@ def test_a_killed_or_hung_up_console_loses_nothing_and_the_next_start_offers_it(
         wait_for(lambda: recorded(session) >= 30, timeout=15)  # samples, a run, latency records
         tmux("send-keys", "-t", session, "Space")  # stopped: the run ends, no more samples
         screen_until(session, "Command  v +0.00 m/s  ω +0.00")
+        # the robot standing gives one more sample (outside the run) a tick after the stop: the export
+        # below must hold it too, so what is recorded has held still for a second first
+        counts: list[tuple[float, int]] = []
+
+        def held_still() -> bool:
+            counts.append((time.monotonic(), recorded(session)))
+            recent = {n for t, n in counts if t >= counts[-1][0] - 1.0}
+            return counts[-1][0] - counts[0][0] >= 1.0 and len(recent) == 1
+
+        wait_for(held_still, timeout=10, interval=0.1)
         tmux("send-keys", "-t", session, "2")
         tmux("send-keys", "-t", session, "C-s")
         tmux("send-keys", "-t", session, "j")  # JSON: what the store holds now
