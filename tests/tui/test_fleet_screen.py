@@ -2,6 +2,7 @@
 rows, and the keys a user presses (Pilot): severity order, the name filter, Enter opening the single-robot
 console on the advertised URLs and coming back, a lost robot not opened, the history on ``h``."""
 
+import threading
 import time
 
 import pytest
@@ -592,3 +593,30 @@ async def test_a_stops_note_goes_away_after_a_while_and_a_refusal_is_styled_by_a
         await pilot.pause()
         assert lst.stops == {}, lst.stops
         assert "not stopped" not in shown_row(app, "r00")
+
+
+async def test_stop_all_shown_refused_everywhere_is_one_line_and_not_a_repaint_per_answer(monkeypatch):
+    n = 30
+    m = many(n)
+    together = threading.Barrier(n, timeout=10)
+
+    def refuse(name):
+        together.wait()  # every answer comes at once, as a router's refusals do
+        return f"not stopped: this console may not stop {name}"
+
+    app = FleetApp(source=lambda p: m.view(W, MONO, p, SESSION), opener=lambda a: 0, stop=refuse)
+    batches = []
+    set_stops = FleetList.set_stops
+
+    def counted(self, notes):
+        batches.append(len(notes))
+        set_stops(self, notes)
+
+    monkeypatch.setattr(FleetList, "set_stops", counted)
+    async with app.run_test(size=(200, 50)) as pilot:
+        await pilot.press("S", "S")
+        await app.workers.wait_for_complete()
+        await pilot.pause()
+        said = [x.message for x in app._notifications if "not stopped" in x.message]
+        assert len(said) == 1 and f"{n} of {n} robots not stopped" in said[0], said  # before: one each
+        assert batches[0] == n and sum(batches[1:]) == n and len(batches) - 1 < n / 2, batches
