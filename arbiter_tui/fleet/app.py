@@ -5,8 +5,8 @@ change the model; nothing is drawn on their threads) and hands it to the list by
 list draws only the rows that fit (200 robots cost what 20 do). ``/`` filters by name glob, Enter opens
 the single-robot console on the selected robot (the app suspends, the console runs in this terminal,
 the fleet comes back when it quits), ``h`` asks the robot's history on a worker thread. ``space`` or
-``ctrl+k`` asks the selected robot to stop (``arbiter/<name>/stop``), ``S`` twice every robot shown; the
-row's note says what each answered.
+``ctrl+k`` asks the robot drawn selected to stop (``arbiter/<name>/stop``), ``S`` twice every robot shown;
+the row's note says what each answered, for ``STOP_NOTE_S``.
 """
 
 from __future__ import annotations
