@@ -548,6 +548,11 @@ class StopAnswer:
 
     kind = STOP
 
+    @property
+    def sure(self) -> bool:
+        """Stopped for sure: nothing still drives it and no cancel failed or is still pending."""
+        return self.still is None and all(c.outcome not in ("failed", "pending") for c in self.cancels)
+
     def words(self) -> str:
         """``stopped: stanley aborted, 0 commands`` / ``stopped: 1 goal of /navigate_to_pose cancelled,
         zero sent`` / ``stopped: nothing was driving, zero sent``; then what still drives it."""
@@ -570,8 +575,7 @@ class StopAnswer:
             parts.append("zero sent")
         if not parts:
             parts.append("nothing done")
-        sure = self.still is None and all(c.outcome not in ("failed", "pending") for c in self.cancels)
-        head = "stopped" if sure else "asked"
+        head = "stopped" if self.sure else "asked"
         return f"{head}: {', '.join(parts)}" + ("" if self.still is None else f"; still: {self.still}")
 
     @classmethod

@@ -13,6 +13,7 @@ the ring still holds (``in_ring``).
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, replace
 from typing import Any
@@ -274,6 +275,15 @@ class _Run:
             self._summary = summary
         return self._summary
 
+    def snapshot(self, active: bool) -> _Run:
+        """This run as it is now, to summarize outside the store's lock: its samples copied where a
+        summary will read them (none cached) or the run may still change them (``active``); a finished
+        run's samples are shared (never written again: its pooled row reads them)."""
+        out = copy.copy(self)
+        if active or self._summary is None:
+            out.cols = self.cols[:, : self.n].copy()
+        return out
+
     def cross_track(self) -> np.ndarray:
         """Each sample's cross-track error against the reference in force when it was taken."""
         self._measure()
@@ -363,6 +373,16 @@ class RunLog:
         if run is not None and run.in_ring > 0:
             run.in_ring = max(0, run.in_ring - count)
             run._summary = None
+
+    def snapshot(self) -> RunLog:
+        """The runs as they are now, for summaries and rows computed outside the store's lock (the
+        store copies under its lock, the journal computes on its own thread: ``store.runs_copy``)."""
+        out = RunLog()
+        out._runs = [r.snapshot(r is self._active) for r in self._runs]
+        out._by_id = {r.id: r for r in out._runs}
+        out._next_id = self._next_id
+        out._pooled = dict(self._pooled)
+        return out
 
     def summaries(self, with_samples_only: bool = True) -> tuple[RunSummary, ...]:
         return tuple(r.summary() for r in self._runs if r.n or not with_samples_only)

@@ -393,3 +393,12 @@ __all__ = [  # the data model lives in model.py; these names are read from here 
     "EMPTY_STATS", "FIELDS", "MAX_ALGORITHM_NAME", "MAX_CAPACITY", "NUMERIC", "STATS_FIELDS",
     "AnalyticsStats", "AnalyticsStore", "DataPoint", "compute_stats", "stats_of_points",
 ]  # fmt: skip
+
+
+def runs_copy(store: AnalyticsStore) -> RunLog:
+    """``store``'s runs as they are, copied under its lock (a running run's samples: 0.7 ms for an hour's
+    at 10 Hz) for summaries computed outside it (``RunLog.summaries``, ``RunLog.by_algorithm``): what a
+    thread off the command path reads, so a record never waits for a summary. (A function beside the
+    class: the store has all the methods a class may.)"""
+    with store._lock:
+        return store._runs.snapshot()

@@ -10,12 +10,16 @@ link"), because over SSH on Wi-Fi they do not arrive at the terminal's pace:
   repeats seen lately (``GAPS_KEPT``), at least ``MIN_GRACE_S`` and at most ``key_timeout``: repeats
   bunched by a jittery link keep a steady hold without a gap, and when they really stop the zero goes
   out within that grace, not a fixed 0.6 s later;
-* keys that arrive closer together than ``BUNCH_S`` came together (one read of the terminal, one burst
-  of TCP segments after a stall), not from a hand: they never start motion or extend a hold by their
-  number. A fresh hold whose next key comes bunched with it was replayed from a stall: it is cancelled
-  at once (one zero) and the rest of the burst ignored; the hold resumes only with a key that arrives
-  at a pace a terminal repeats at. So a stall's burst commands no motion after the person let go, and a
-  stop key in it acts when it arrives, whatever came before or after it in the burst;
+* keys that arrive faster than any terminal repeats (more of them within ``PACE_WINDOW_S`` than
+  ``MAX_REPEAT_HZ`` allows in the time they took, with ``PACE_SLACK_S`` of a link's jitter) were held
+  back and replayed (a stall's burst, whether it comes in one read or split across several): the hold
+  they belong to is cancelled at once (one zero) and the rest ignored; the hold resumes only with keys
+  at a pace a terminal repeats at. A key sooner than ``FIRST_REPEAT_S`` after its press never makes a
+  fresh hold steady (no terminal repeats that soon): the burst's first keys cannot extend it. So a
+  stall's burst commands no motion after the person let go beyond the time its first keys took to
+  arrive, and a stop key in it acts when it arrives, whatever came before or after it in the burst;
+* the time of a key is when the terminal's input thread read it, taken before any lock (the session's
+  ``key(name, at)``), so a lock held elsewhere never bunches or spreads the keys teleop judges;
 * where the terminal reports key releases (:meth:`Teleop.release`), a hold ends at its release.
 """
 
@@ -96,6 +100,24 @@ BUNCH_S = 0.01  # keys closer than this came together (no terminal repeats faste
 MIN_GRACE_S = 0.15  # a hold outlasts its last repeat at least this long (a paint, a GC pause on a Pi)
 GRACE_GAPS = 2.0  # ...and this many times the longest recent gap between its repeats
 GAPS_KEPT = 30  # recent gaps: a second of a 30 Hz auto-repeat
+MAX_REPEAT_HZ = 60.0  # no terminal's auto-repeat is faster (30 Hz is a laptop's; 60 a fast X setting)
+PACE_SLACK_S = 0.05  # a link's jitter may bunch keys this much closer than they were sent
+PACE_WINDOW_S = 0.1  # the pace is judged over the keys of the hold that arrived this recently
+FIRST_REPEAT_S = 0.1  # no terminal repeats a key this soon after its press (its initial delay)
+ARRIVALS_KEPT = 32  # more keys than this in PACE_WINDOW_S is a replay whatever came before
+
+
+def too_fast(arrivals: deque[float], now: float) -> bool:
+    """More keys arrived lately than a terminal's auto-repeat could have sent in the time they took
+    (with a link's jitter allowed for): a replay of keys held back by a stall, however the burst was
+    split across reads. ``arrivals``: the hold's recent arrival times, ``now`` the last."""
+    for since, at in enumerate(reversed(arrivals)):  # ``since``: the keys after ``at``
+        if now - at > PACE_WINDOW_S:
+            break
+        if since > (now - at + PACE_SLACK_S) * MAX_REPEAT_HZ:
+            return True
+    return False
+
 
 FRESH, STEADY, STALE = "fresh", "steady", "stale"  # a hold's state: its first key, repeating, replayed
 
@@ -115,6 +137,8 @@ class Teleop:
     _state: str = FRESH
     gaps: deque[float] = field(default_factory=lambda: deque(maxlen=GAPS_KEPT))  # between steady repeats
     bursts: int = 0  # bursts replayed after a stall and cancelled (the bench and tests read it)
+    _arrivals: deque[float] = field(default_factory=lambda: deque(maxlen=ARRIVALS_KEPT))  # this hold's
+    _pressed_at: float = float("-inf")  # when this hold's key was pressed (its first arrival)
 
     def __post_init__(self) -> None:
         self.speed = bounded(self.speed, MIN_SPEED, self.limits.max_linear)
@@ -153,17 +177,28 @@ class Teleop:
     def _move(self, key: str, now: float) -> None:
         gap, self._last_at = now - self._last_at, now
         if key != self._key or (self.deadline is None and self._state != STALE) or gap > self.key_timeout:
+            self._arrivals.clear()
+            self._arrivals.append(now)
+            self._pressed_at = now
             self._hold(key, now, FRESH)  # a new key, or the same one pressed again after its hold ended
-        elif gap < BUNCH_S:  # it came with the key before it
-            if self._state == FRESH and self.deadline is not None:  # a fresh hold replayed from a stall
+            return
+        self._arrivals.append(now)
+        if too_fast(self._arrivals, now):  # replayed from a stall: no hand sends keys this fast
+            if self.deadline is not None:
                 self.bursts += 1
                 self.stop()
-                self._state = STALE
-            elif self._state == STEADY and self.deadline is not None:
-                self.deadline = max(self.deadline, now + self.grace() - gap)  # no later than the first
-        elif self._state == STALE and gap > self.grace():
-            self._hold(key, now, FRESH)  # long after the burst: pressed again
-        else:  # a repeat at a terminal's pace (or the first after a burst: the key is still held)
+            self._state = STALE  # the rest of the burst ignored
+        elif self._state == STALE:
+            if gap > self.grace():
+                self._arrivals.clear()
+                self._arrivals.append(now)
+                self._pressed_at = now
+                self._hold(key, now, FRESH)  # long after the burst: pressed again
+            elif gap >= BUNCH_S:  # at a terminal's pace again: the key is still held
+                self._hold(key, now, STEADY)
+        elif self._state == FRESH and now - self._pressed_at < FIRST_REPEAT_S:
+            pass  # sooner than a terminal's first repeat: the fresh hold's deadline stands (judged on)
+        else:  # a repeat at a terminal's pace
             if self._state == STEADY and self.deadline is not None:
                 self.gaps.append(gap)
             self._hold(key, now, STEADY)

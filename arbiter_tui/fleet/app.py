@@ -5,15 +5,17 @@ change the model; nothing is drawn on their threads) and hands it to the list by
 list draws only the rows that fit (200 robots cost what 20 do). ``/`` filters by name glob, Enter opens
 the single-robot console on the selected robot (the app suspends, the console runs in this terminal,
 the fleet comes back when it quits), ``h`` asks the robot's history on a worker thread. ``space`` or
-``ctrl+k`` asks the selected robot to stop (``arbiter/<name>/stop``), ``S`` twice every robot shown; the
-row's note says what each answered.
+``ctrl+k`` asks the robot drawn selected to stop (``arbiter/<name>/stop``), ``S`` twice every robot shown;
+the row's note says what each answered, for ``STOP_NOTE_S``.
 """
 
 from __future__ import annotations
 
+import threading
 import time
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
 
 from rich.cells import cell_len
 from rich.text import Text
@@ -60,6 +62,17 @@ STATE_STYLES = {"lost": "bold red", "stale": "yellow", "alive": "green", "unknow
 LAST_FIGURES = ("driver", "p95", "clock", "worst topic", "controller", "last run", "runs")
 CONFIRM_S = 3.0  # "stop all shown" asks for a second press within this
 STOPS_AT_ONCE = 32  # stop questions in flight at once (each waits at most fleet.STOP_TIMEOUT_S)
+STOP_NOTE_S = 10.0  # a stop's answer stays in its row's note this long (then the row's own note again)
+
+
+@dataclass(frozen=True)
+class StopNote:
+    """What a robot answered its last stop (or why it did not), in its row's note until ``until`` (on the
+    views' clock, ``FleetView.now``); ``failed``: not stopped for sure (shown in red)."""
+
+    words: str
+    failed: bool
+    until: float
 
 
 def layout(width: int) -> list[tuple[int, int]]:
@@ -91,11 +104,11 @@ def fit_topic(words: str, width: int) -> str:
     return f"…{name[-room:]} {verdict}"
 
 
-def line(row: Row, cols: list[tuple[int, int]], selected: bool, stop: str | None = None) -> Text:
+def line(row: Row, cols: list[tuple[int, int]], selected: bool, stop: StopNote | None = None) -> Text:
     """One row at the columns ``layout`` gave; ``stop``: what the robot answered a stop, in its note."""
     values = cells(row)
     shown = {i for i, _ in cols}
-    note = values[-1] if stop is None else stop
+    note = values[-1] if stop is None else stop.words
     if not note and COLUMNS.index("worst topic") not in shown and row.worst_topic:
         note = row.worst_topic  # no room for its column: the note says it
     text = Text(no_wrap=True, overflow="crop")
@@ -107,7 +120,7 @@ def line(row: Row, cols: list[tuple[int, int]], selected: bool, stop: str | None
         elif row.figures_at is not None and COLUMNS[i] in LAST_FIGURES:
             style = "dim"  # its last figures, not current ones
         elif COLUMNS[i] == "note" and stop is not None:
-            style = "bold" if " stopped: " in stop else "bold red"
+            style = "bold red" if stop.failed else "bold"
         elif COLUMNS[i] == "note" and (row.bad is not None or row.flooding is not None):
             style = "bold magenta"
         elif COLUMNS[i] == "note" and row.figures_at is not None:
@@ -184,14 +197,23 @@ class FleetList(Widget, can_focus=True):
 
     def __init__(self, id: str | None = None) -> None:  # Textual's name for it
         super().__init__(id=id)
-        self.stops: dict[str, str] = {}  # robot -> what it answered its last stop (its note)
+        self.stops: dict[str, StopNote] = {}  # robot -> what it answered its last stop (its note)
         self._lines: list[Text] = []  # what each line shows
         self._selected_at: tuple[int, str] | None = None  # (line, robot) of the selection
 
-    def set_stop(self, name: str, words: str) -> None:
-        self.stops[name] = words
+    def set_stops(self, notes: dict[str, StopNote]) -> None:
+        """Stops' answers in their rows: one repaint for all of them."""
+        self.stops.update(notes)
         self._repaint(self.view)
         self.post_message(self.Highlighted(self.current()))
+
+    def stop_target(self) -> str | None:
+        """The robot a stop key goes to: the one the person saw selected (the last paint drew it so),
+        not one the selection moved to since (a robot going lost sorts first and takes the selection)."""
+        if self._drawn is not None:
+            return self._drawn
+        row = self.current()
+        return None if row is None else row.name
 
     class Chosen(Message):
         """Enter on a row: open its console."""
@@ -217,6 +239,8 @@ class FleetList(Widget, can_focus=True):
         return rows[0] if rows else None
 
     def watch_view(self, view: FleetView) -> None:
+        for name in [n for n, note in self.stops.items() if note.until <= view.now]:
+            del self.stops[name]  # its answer said long enough: the row's own note again
         if view.rows and (self.follow or self.selected not in {r.name for r in view.rows}):
             self.follow = True
             self.selected = view.rows[0].name  # the worst robot, until the person moves
@@ -343,7 +367,9 @@ class FleetList(Widget, can_focus=True):
 
 class FleetScreen(Screen[None]):
     BINDINGS = [
-        Binding("ctrl+k", "stop", "Stop robot", show=False, priority=True),  # from the filter too
+        # from the filter too, where the footer names it (space is text there): as the console's (TYPING)
+        Binding("ctrl+k", "stop('typing')", "Stop robot", key_display="^k", priority=True),
+        Binding("ctrl+k", "stop", "Stop robot", show=False, priority=True),
         Binding("slash", "filter", "Filter"),
         Binding("S", "stop_shown", "Stop all shown"),
         Binding("h", "history", "History"),
@@ -363,6 +389,8 @@ class FleetScreen(Screen[None]):
         self._texts: dict[str, str] = {}
         self._confirm_until = 0.0  # "stop all shown" armed until (monotonic s)
         self._lost: set[str] | None = None  # the robots lost at the last view (None: no view yet)
+        self._answers: list[tuple[str, StopNote]] = []  # stops answered, not yet shown (any thread)
+        self._answers_lock = threading.Lock()
 
     def compose(self) -> ComposeResult:
         yield Static(id="fleet-head")
@@ -444,7 +472,7 @@ class FleetScreen(Screen[None]):
         lines = [] if row is None else detail_lines(row, self.view.now)
         stopped = None if row is None else self.query_one(FleetList).stops.get(row.name)
         if stopped is not None:
-            lines.append(f"stop: {stopped}")
+            lines.append(f"stop: {stopped.words}")
         if row is not None and self.history_line.startswith(f"{row.name}: "):
             lines.append(self.history_line.removeprefix(f"{row.name}: "))
         self._show("#fleet-detail", "\n".join(lines))
@@ -483,15 +511,21 @@ class FleetScreen(Screen[None]):
         self.app.call_from_thread(setattr, self, "history_line", f"{name}: {words}")
 
     # -- the stop --------------------------------------------------------------------------------
-    def action_stop(self) -> None:
-        """The selected robot asked to stop; its row says what it answered."""
-        row = self.query_one(FleetList).current()
-        if row is None:
+    def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
+        """ctrl+k's shown binding only while the filter has the focus (elsewhere the list shows space)."""
+        if action != "stop" or not parameters:
+            return True
+        return isinstance(self.focused, Input) == (parameters == ("typing",))
+
+    def action_stop(self, _where: str = "") -> None:
+        """The robot the person saw selected asked to stop; its row says what it answered."""
+        name = self.query_one(FleetList).stop_target()
+        if name is None:
             return
         if self.fleet_app.stopper is None:
             self.notify("this fleet view cannot stop robots", severity="warning")
             return
-        self.ask_stops([row.name])
+        self.ask_stops([name])
 
     def action_stop_shown(self) -> None:
         """Every robot the filter shows asked to stop, on a second press within CONFIRM_S."""
@@ -509,28 +543,52 @@ class FleetScreen(Screen[None]):
         self.ask_stops(names)
 
     def ask_stops(self, names: list[str]) -> None:
-        lst = self.query_one(FleetList)
-        for name in names:
-            lst.set_stop(name, stop_words("asking it to stop...", time.time()))
+        until = self.view.now + STOP_NOTE_S
+        asking = StopNote(stop_words("asking it to stop...", time.time()), False, until)
+        self.query_one(FleetList).set_stops(dict.fromkeys(names, asking))
         self._stop_many(names)
 
-    @work(thread=True, group="stop")
+    class StopsAnswered(Message):
+        """Answers are waiting in ``_answers`` (posted from the stop's threads)."""
+
+    @work(thread=True, group="stop", exit_on_error=False)
     def _stop_many(self, names: list[str]) -> None:
+        """Each robot asked on a pool's thread; their answers shown in batches (one repaint for the
+        answers that came meanwhile, not one per robot), and one line said for all that failed."""
         stop = self.fleet_app.stopper
         assert stop is not None
+        failed: list[str] = []
+        asked = time.time()
 
         def one(name: str) -> None:
             at = time.time()
-            answer = stop(name)
-            self.app.call_from_thread(self._stopped, name, stop_words(answer, at), isinstance(answer, str))
+            try:
+                answer = stop(name)
+                bad = isinstance(answer, str) or not answer.sure
+            except Exception as exc:  # a stopper that fails says so in its row; the app goes on
+                answer, bad = f"not stopped: asking failed: {exc!r}", True
+            note = StopNote(stop_words(answer, at), bad, self.view.now + STOP_NOTE_S)
+            with self._answers_lock:
+                self._answers.append((name, note))
+                first = len(self._answers) == 1
+                if isinstance(answer, str):
+                    failed.append(answer)
+            if first:
+                self.post_message(self.StopsAnswered())
 
         with ThreadPoolExecutor(min(STOPS_AT_ONCE, len(names)), thread_name_prefix="fleet-stop") as pool:
             list(pool.map(one, names))
-
-    def _stopped(self, name: str, words: str, failed: bool) -> None:
-        self.query_one(FleetList).set_stop(name, words)
         if failed:
-            self.notify(words, severity="error")
+            line = failed[0] if len(names) == 1 else f"{len(failed)} of {len(names)} robots {failed[0]}"
+            more = f" (and {len(set(failed)) - 1} other reasons)" if len(set(failed)) > 1 else ""
+            self.app.call_from_thread(self.notify, stop_words(line + more, asked), severity="error")
+
+    @on(StopsAnswered)
+    def _stopped(self) -> None:
+        with self._answers_lock:
+            answers, self._answers = self._answers, []
+        if answers:
+            self.query_one(FleetList).set_stops(dict(answers))
 
     @on(FleetList.Chosen)
     def open_console(self, event: FleetList.Chosen) -> None:

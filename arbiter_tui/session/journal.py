@@ -14,10 +14,11 @@ summaries (a CSV carries no run outcomes or missions), Foxglove opens it, and on
 samples, the runs and the link's figures with their message definitions.
 
 Where: ``journal_files`` (the user data directory, one file a session, a lock while it is written).
-The work is done on a thread of its own, off the UI and off the command path: it reads the store and
-the meter under their own locks for microseconds, as a screen does, and writes outside them; the
-session's lock is never taken. A full disk, an unwritable directory, a file grown past its bound: one
-line said (``warn``), the journal stops, the console goes on.
+The work is done on a thread of its own, off the UI and off the command path: it copies what it needs
+from the store and the meter under their own locks (the new samples, and every few seconds the runs:
+a running run's samples, ~1 ms for an hour of them at 10 Hz) and computes the runs' summaries and
+writes outside them; the session's lock is never taken. A full disk, an unwritable directory, a file
+grown past its bound: one line said (``warn``), the journal stops, the console goes on.
 """
 
 from __future__ import annotations
@@ -35,18 +36,18 @@ from pathlib import Path
 from typing import IO, Any
 
 from ..analytics.exports import JOURNAL_END_METADATA, JOURNAL_METADATA, McapChannels
-from ..analytics.files import load_export
 from ..analytics.runs import AlgorithmSummary, RunSummary
-from ..analytics.store import AnalyticsStore
+from ..analytics.store import AnalyticsStore, runs_copy
 from ..latency.clocksync import Sample
 from . import journal_files as F
 
 log = logging.getLogger(__name__)
 
 FLUSH_S = 0.5  # a chunk handed to the kernel (and synced) at least this often
+CLOSE_WAIT_S = 2.0  # close() waits at most this long for the thread and the file (a stalled disk)
 # The run summaries: at once when a run begins or ends, else this often. A running run's summary is
-# computed over all its samples under the store's lock (2-8 ms for an hour's run on the dev box, several
-# times that on a Pi), which the session's thread waits for to record its next sample: not every chunk.
+# computed over all its samples (2-8 ms for an hour's run on the dev box, several times that on a Pi;
+# on a copy, outside the store's lock): not every chunk.
 RUNS_EVERY_S = 5.0
 LATENCY_TOPIC = "/arbiter/latency"
 LATENCY_TYPE = "arbiter_msgs/msg/Latency"
@@ -71,17 +72,16 @@ class Found:
 
     path: Path
     how: str
-    samples: int
-    runs: int
+    contents: F.Contents | None  # None: it could not be read
     older: int
 
     def text(self) -> str:
-        when = time.strftime("%H:%M %d %b", time.localtime(_mtime(self.path)))
+        when = time.strftime("%H:%M %d %b", time.localtime(F.mtime(self.path) or time.time()))
         more = f" ({self.older} older ones beside it)" if self.older else ""
-        runs = f", {self.runs} run{'s' * (self.runs != 1)}" if self.runs else ""
+        kept = "nothing readable" if self.contents is None else self.contents.words()
         return (
             f"The session last written at {when} did not end cleanly ({self.how}): its journal kept "
-            f"{self.samples} samples{runs}. R opens it on screen 2. {self.path}{more}"
+            f"{kept}. R opens it on screen 2. {self.path}{more}"
         )
 
 
@@ -116,7 +116,8 @@ class Journal:
         self._channels: McapChannels | None = None
         self._schemas: dict[str, Any] = {}
         self._lock = threading.Lock()  # the writer: the thread's steps, close() from the UI's thread
-        self._wake = threading.Event()
+        self._wake = threading.Event()  # set: close() was called (the thread stops, opens nothing)
+        self._stopped = False  # the journal writes no more (closed, failed, full): nothing is queued
         self._thread: threading.Thread | None = None
         self._total = 0
         self._clears = 0
@@ -140,10 +141,17 @@ class Journal:
     def close(self, ended: str = F.QUIT) -> None:
         """The last samples written and the file finished, saying how the session ended. Idempotent."""
         self._wake.set()
+        self._stopped = True
+        self._latency.clear()
         thread, self._thread = self._thread, None
+        deadline = time.monotonic() + CLOSE_WAIT_S  # a quit, a hang-up: never longer than this
         if thread is not None and thread is not threading.current_thread():
-            thread.join(timeout=2.0)
-        with self._lock:
+            thread.join(timeout=CLOSE_WAIT_S)
+        wait = max(0.0, deadline - time.monotonic())
+        if not self._lock.acquire(timeout=wait):  # the thread is stuck in a write or an fsync
+            log.warning("journal: %s not finished: its disk did not answer in %g s", self.path, CLOSE_WAIT_S)
+            return  # the file stays as it is: read up to its last chunk
+        try:
             if self._channels is None:
                 return
             try:
@@ -154,11 +162,16 @@ class Journal:
             except Exception as exc:  # the file stays as it is: read up to its last chunk
                 log.warning("journal: could not finish %s: %s", self.path, exc)
             self._shut()
+        finally:
+            self._lock.release()
 
     def latency(self, window_t: tuple[float, ...], window: tuple[float, ...]) -> None:
         """The tracker's latency window as polled (receive times, epoch s; latencies, ms): the records
         newer than the last one journaled are written with the next chunk. One caller thread (the
-        poller's: the UI's loop); it never waits for the journal's thread (no lock: a deque)."""
+        poller's: the UI's loop); it never waits for the journal's thread (no lock: a deque). Nothing
+        is kept once the journal stopped (closed, full, failed): nobody would take it."""
+        if self._stopped:
+            return
         fresh = [(t, v) for t, v in zip(window_t, window, strict=False) if t > self._latency_t]
         if fresh:
             self._latency.extend(fresh)
@@ -169,6 +182,9 @@ class Journal:
             self.directory.mkdir(parents=True, exist_ok=True)
             self._look_back()
             with self._lock:
+                if self._wake.is_set():  # closed while looking back: no file that nobody finishes
+                    self._stopped = True
+                    return
                 self._open()
         except OSError as exc:
             self._fail(f"no journal this session: {self.directory}: {exc.strerror or exc}")
@@ -196,28 +212,31 @@ class Journal:
                         f"journal full ({self.max_bytes / 1e6:g} MB, --journal-max-mb): the rest of this "
                         f"session is not journaled; export to keep it. {self.path}"
                     )
-                    self._channels.metadata(JOURNAL_END_METADATA, {"ended": F.FULL})
-                    self._channels.finish()
+                    try:
+                        self._channels.metadata(JOURNAL_END_METADATA, {"ended": F.FULL})
+                        self._channels.finish()
+                        self._sync()
+                    except Exception as exc:  # the file stays as it is: read up to its last chunk
+                        log.warning("journal: could not finish %s: %s", self.path, exc)
                     self._shut()
                     return
 
     def _look_back(self) -> None:
         unclean = F.offerable(self.directory)
         if unclean is not None:
+            contents: F.Contents | None = None
             try:
-                export = load_export(unclean.path)
-                samples, runs = len(export.points), len(export.runs or ())
+                contents = F.contents(unclean.path)  # counted, not decoded (R decodes it)
             except Exception as exc:
                 log.warning("journal: cannot read %s: %s", unclean.path, exc)
-                samples, runs = 0, 0
-            self.offered = Found(unclean.path, unclean.how, samples, runs, unclean.older)
+            self.offered = Found(unclean.path, unclean.how, contents, unclean.older)
             self.found(self.offered)
         F.prune(self.directory, self.max_bytes, keep=(None if unclean is None else unclean.path,))
 
     def _open(self) -> None:
         fd, path = F.create(self.directory)
         F.lock(fd)
-        self._file = os.fdopen(fd, "wb")
+        self._file = _stream(fd)
         self.path = path
         channels = McapChannels(self._file)
         if not callable(getattr(channels.writer._writer, "flush", None)):
@@ -234,6 +253,8 @@ class Journal:
         self._sync()
 
     def _fail(self, text: str) -> None:
+        self._stopped = True
+        self._latency.clear()
         log.warning("journal: %s", text)
         self.warn(text)
 
@@ -278,12 +299,12 @@ class Journal:
 
     def _summaries(self, channels: McapChannels, t_ns: int) -> None:
         """The runs and per-(mission, algorithm) rows that changed since they were last written."""
-        store = self.sources.store
-        for r in store.runs():
+        runs = runs_copy(self.sources.store)  # copied under the store's lock, computed outside it
+        for r in runs.summaries():
             if self._runs.get(r.id) != r:
                 channels.run(r)
                 self._runs[r.id] = r
-        for a in store.runs_by_algorithm():
+        for a in runs.by_algorithm():
             if self._rows.get((a.mission, a.algorithm)) != a:
                 channels.algorithm(a, t_ns)
                 self._rows[(a.mission, a.algorithm)] = a
@@ -315,8 +336,6 @@ class Journal:
         self._open()
 
 
-def _mtime(path: Path) -> float:
-    try:
-        return path.stat().st_mtime
-    except OSError:
-        return time.time()
+def _stream(fd: int) -> IO[bytes]:
+    """The journal file's stream (a test hands it one that fills up)."""
+    return os.fdopen(fd, "wb")

@@ -22,7 +22,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..analytics.exports import JOURNAL_END_METADATA, MCAP_MAGIC
+from ..analytics.exports import JOURNAL_END_METADATA, MCAP_MAGIC, MCAP_POINT_TOPIC, MCAP_RUNS_TOPIC
 
 try:  # POSIX; elsewhere no journal is ever taken for one a console still writes (nothing is offered)
     import fcntl
@@ -88,10 +88,11 @@ def journals(directory: Path) -> list[Path]:
         found = [p for p in directory.iterdir() if p.name.startswith(PREFIX) and p.name.endswith(SUFFIX)]
     except OSError:
         return []
-    return sorted(found, key=_mtime)
+    return sorted(found, key=mtime)
 
 
-def _mtime(path: Path) -> float:
+def mtime(path: Path) -> float:
+    """When ``path`` was last written (0 when it cannot be read)."""
     try:
         return path.stat().st_mtime
     except OSError:
@@ -118,6 +119,56 @@ def ending(path: Path) -> str | None:
     except Exception:  # a damaged end: as good as none
         return None
     return ""
+
+
+@dataclass(frozen=True)
+class Contents:
+    """What a journal holds, counted without decoding its samples: a finished file's samples from its
+    summary's statistics and its runs from the runs' own messages; a cut file (no summary) by its
+    chunks and the time they span."""
+
+    samples: int | None  # None: a cut file's are not counted (opening it reads them)
+    runs: int | None
+    chunks: int
+    span_s: float
+
+    def words(self) -> str:
+        if self.samples is None:
+            return f"{self.chunks} chunks ({self.span_s:.0f} s of the session)"
+        runs = f", {self.runs} run{'s' * (self.runs != 1)}" if self.runs else ""
+        return f"{self.samples} samples{runs}"
+
+
+def contents(path: Path) -> Contents:
+    """``path``'s contents (``Contents``); raises OSError or the mcap library's errors for a damaged one."""
+    from mcap.records import Chunk
+    from mcap.stream_reader import StreamReader
+
+    with path.open("rb") as fh:
+        if ending(path) is not None:  # finished: its summary says
+            from mcap.reader import make_reader
+            from mcap_ros2.decoder import DecoderFactory
+
+            reader = make_reader(fh, decoder_factories=[DecoderFactory()])
+            summary = reader.get_summary()
+            if summary is not None and summary.statistics is not None:
+                stats = summary.statistics
+                topics = {cid: c.topic for cid, c in summary.channels.items()}
+                counts = stats.channel_message_counts
+                samples = sum(n for cid, n in counts.items() if topics.get(cid) == MCAP_POINT_TOPIC)
+                runs = {m.id for _s, _c, _m, m in reader.iter_decoded_messages(topics=[MCAP_RUNS_TOPIC])}
+                span = (stats.message_end_time - stats.message_start_time) / 1e9 if samples else 0.0
+                return Contents(samples, len(runs), stats.chunk_count, span)
+            fh.seek(0)
+        chunks, first, last = 0, None, None
+        with contextlib.suppress(Exception):  # where a cut file stops
+            for record in StreamReader(fh, skip_magic=False, emit_chunks=True).records:
+                if isinstance(record, Chunk):
+                    chunks += 1
+                    first = record.message_start_time if first is None else first
+                    last = record.message_end_time
+        span = 0.0 if first is None or last is None else max(0, last - first) / 1e9
+        return Contents(None, None, chunks, span)
 
 
 @dataclass(frozen=True)

@@ -299,8 +299,11 @@ class RobotSession:
                 self.stop("terminal too small")
             self.too_small = small
 
-    def key(self, key: str) -> bool:
-        """A key pressed on the control screen; True if teleop used it."""
+    def key(self, key: str, at: float | None = None) -> bool:
+        """A key pressed on the control screen; True if teleop used it. ``at``: when it was read, on
+        this session's clock (taken before this lock; now when not given)."""
+        if at is None:
+            at = self.clock()
         with self.lock:
             if key in STOP_KEYS:  # everywhere, whatever else holds: a stop
                 self.stop_all("stop key")
@@ -312,7 +315,7 @@ class RobotSession:
                 # ends as overridden before the key is pressed, once.
                 self.loop.override()
             before = (self.teleop.moving, self.teleop.target)
-            result = self.teleop.press(key, self.clock())
+            result = self.teleop.press(key, at)
             if result is None:
                 return False
             self.loop.acknowledge()  # the last run's "done" stays until the next mission or key

@@ -108,7 +108,7 @@ class ArbiterApp(RegistryTheme):
         self.session.autonomy = None if tracker is None else tracker.autonomy()
         self.sampler = FrameSampler(self.session, settings, tracker=tracker)
         self.frame_clock: FrameClock | None = None  # live only: frames after control ticks
-        self.keys = KeyRouter(self.session.key, lambda: self.session.stop_all("stop key"))
+        self.keys = KeyRouter(self.session.key, lambda: self.session.stop_all("stop key"), self.session.clock)
         self.dialogs = Dialogs(self, self)
         self._shown_state: tuple[object, ...] = ()
         self._theme_loaded = False
@@ -175,8 +175,8 @@ class ArbiterApp(RegistryTheme):
                 robot_side.poll(self)
 
     def _on_signal(self, sig: int) -> None:
+        lifecycle.exit_within(EXIT_DEADLINE_S)  # first: finishing the journal may wait on a stalled disk
         self.session.hang_up(f"signal {signal.Signals(sig).name}")
-        lifecycle.exit_within(EXIT_DEADLINE_S)
         self.exit()
 
     async def on_unmount(self) -> None:

@@ -9,12 +9,17 @@ the screen shows it and nothing answers it twice. Keys keep their order: while a
 The stop key that is never text (``ctrl+k``) is answered on the input thread whatever is in front, a
 dialog or a text input included, and then again by the UI in its place among the keys (a ``g`` queued
 before it must not start a mission after it).
+
+A key's time is when the input thread read it (``KeyRouter.read_at``), taken there before any lock and
+passed down: teleop judges a burst by the keys' spacing, and a lock held elsewhere (the session's, while
+a key before it waits) must neither spread a burst's keys nor bunch a hand's.
 """
 
 from __future__ import annotations
 
 import logging
 import threading
+import time
 from collections.abc import Callable
 
 from textual import events
@@ -27,16 +32,47 @@ from ..control.teleop import ANYWHERE_STOP, TELEOP_KEYS, key_name
 log = logging.getLogger(__name__)
 
 
+SAME_READ_S = 0.0005  # a key made this soon after the one before it was answered came in the same read
+READ_AT = "arbiter_read_at"  # the attribute a key event carries its read time on, for the UI's thread
+
+
 class KeyRouter:
     """Which keys the session answers on the input thread, and which the UI answers (thread-safe)."""
 
-    def __init__(self, answer: Callable[[str], bool], stop: Callable[[], None] = lambda: None) -> None:
-        self._answer = answer  # the session's key handler: True if it used the key
+    def __init__(
+        self,
+        answer: Callable[[str, float], bool],
+        stop: Callable[[], None] = lambda: None,
+        clock: Callable[[], float] = time.monotonic,
+        stamp: Callable[[], float] = time.monotonic,
+    ) -> None:
+        self._answer = answer  # the session's key handler (the key, when it was read): True if it used it
         self._stop = stop  # the session's stop (ANYWHERE_STOP, on the input thread)
+        self._clock = clock  # the session's clock, the one a key's time is given on
+        self._stamp = stamp  # the clock Textual stamps each event with as it makes it (monotonic)
         self._lock = threading.Lock()
         self._direct = False  # the control screen is in front, no dialog over it, no key queued
         self._queued = 0  # keys passed to the UI that it has not answered yet
         self._taken: set[int] = set()  # ids of key events the session already answered
+        self._read = (float("-inf"), float("-inf"))  # (stamp, read time) of the last key's read
+        self._done = float("-inf")  # when the input thread was done with the last key (stamp)
+
+    def read_at(self, event: events.Key) -> float:
+        """When ``event``'s read came, on the session's clock (the input thread, before any lock). The
+        parser makes a read's keys one after another as the input thread answers them, so a key made
+        right after the one before it was answered is of the same read and gets that read's time, not
+        one later by what answering the keys before it took (a lock waited on, a stop sent)."""
+        now = self._stamp()
+        made = getattr(event, "time", now)
+        read = self._read[1] if made - self._done < SAME_READ_S and made >= self._done else made
+        self._read = (made, read)
+        return self._clock() - max(0.0, now - read)
+
+    def when(self, event: events.Key) -> float:
+        """The UI's thread: when ``event``'s read came, as the input thread took it (now, on the
+        session's clock, for a key that did not come through it)."""
+        at = getattr(event, READ_AT, None)
+        return at if isinstance(at, float) else self._clock()
 
     def set_direct(self, direct: bool) -> None:
         """The control screen came to the front (True) or went behind a screen or dialog (False)."""
@@ -45,6 +81,14 @@ class KeyRouter:
 
     def on_input_thread(self, event: events.Key) -> None:
         """A key on Textual's input thread, before it joins the UI's queue."""
+        try:
+            self._on_input_thread(event)
+        finally:
+            self._done = self._stamp()
+
+    def _on_input_thread(self, event: events.Key) -> None:
+        at = self.read_at(event)  # first: before any lock
+        setattr(event, READ_AT, at)  # for the UI, if it answers the key
         key = key_name(event.character, event.key)
         if key == ANYWHERE_STOP:
             try:
@@ -61,7 +105,7 @@ class KeyRouter:
         if not take:
             return
         try:
-            used = self._answer(key)
+            used = self._answer(key, at)
         except Exception:  # never let a key take the input thread down: the UI gets it instead
             log.exception("a key on the input thread failed")
             used = False

@@ -5,12 +5,14 @@ the journal gives the figures an export taken just before gave, and the next sta
 and opens it on screen 2 with one key. Below them, the journal alone: a file cut anywhere reads up to
 its last whole chunk, a clear starts a new file, an unwritable directory is one line and no journal."""
 
+import errno
 import json
 import os
 import shutil
 import signal
 import subprocess
 import sys
+import threading
 import time
 import uuid
 from pathlib import Path
@@ -113,6 +115,7 @@ def test_a_killed_or_hung_up_console_loses_nothing_and_the_next_start_offers_it(
         screen_until(session, "CONNECTED")
         pid = console_pid(session)
         journal_dir = data / "arbiter-tui" / "journal"
+        wait_for(lambda: list(journal_dir.glob("session_*.mcap")), timeout=10)  # its own thread makes it
         (journal,) = list(journal_dir.glob("session_*.mcap"))  # written from the start
         tmux("send-keys", "-t", session, "a")  # manual -> a controller
         tmux("send-keys", "-t", session, "g")  # its mission
@@ -120,6 +123,16 @@ def test_a_killed_or_hung_up_console_loses_nothing_and_the_next_start_offers_it(
         wait_for(lambda: recorded(session) >= 30, timeout=15)  # samples, a run, latency records
         tmux("send-keys", "-t", session, "Space")  # stopped: the run ends, no more samples
         screen_until(session, "Command  v +0.00 m/s  ω +0.00")
+        # the robot standing gives one more sample (outside the run) a tick after the stop: the export
+        # below must hold it too, so what is recorded has held still for a second first
+        counts: list[tuple[float, int]] = []
+
+        def held_still() -> bool:
+            counts.append((time.monotonic(), recorded(session)))
+            recent = {n for t, n in counts if t >= counts[-1][0] - 1.0}
+            return counts[-1][0] - counts[0][0] >= 1.0 and len(recent) == 1
+
+        wait_for(held_still, timeout=10, interval=0.1)
         tmux("send-keys", "-t", session, "2")
         tmux("send-keys", "-t", session, "C-s")
         tmux("send-keys", "-t", session, "j")  # JSON: what the store holds now
@@ -226,12 +239,31 @@ def test_a_clear_starts_a_new_file_and_an_unwritable_directory_is_one_line(tmp_p
     assert len(said) == 1 and said[0].startswith("no journal this session: ") and "\n" not in said[0]
 
 
-def test_a_disk_that_takes_no_more_is_one_line_and_the_session_goes_on(tmp_path):
-    """Writes that fail mid-session (here the kernel's file size limit, EFBIG, standing in for a full disk's
-    ENOSPC: the same OSError from the same write): one line, the journal stops, the store records on, and
-    what was journaled before still reads."""
-    import resource
+class Filling:
+    """A journal's file on a disk that fills up when told: its writes fail as a full disk's do (ENOSPC)."""
 
+    def __init__(self, stream) -> None:
+        self.stream = stream
+        self.full = False
+
+    def write(self, data) -> int:
+        if self.full:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return self.stream.write(data)
+
+    def __getattr__(self, name):
+        return getattr(self.stream, name)
+
+
+def test_a_disk_that_takes_no_more_is_one_line_and_the_session_goes_on(tmp_path, monkeypatch):
+    """Writes that fail mid-session (a stream that fills up: the full disk's ENOSPC from the same
+    write): one line, the journal stops, the store records on, and what was journaled before still
+    reads."""
+    import arbiter_tui.session.journal as J
+
+    disks: list[Filling] = []
+    real = J._stream
+    monkeypatch.setattr(J, "_stream", lambda fd: disks.append(Filling(real(fd))) or disks[-1])
     store = AnalyticsStore(10_000)
     store.start_collection()
     said: list[str] = []
@@ -240,18 +272,12 @@ def test_a_disk_that_takes_no_more_is_one_line_and_the_session_goes_on(tmp_path)
     for i in range(20):
         store.record(_point(i, None))
     wait_for(lambda: journal.written == 20, timeout=5)
-    soft, hard = resource.getrlimit(resource.RLIMIT_FSIZE)
-    old = signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # a write past the limit fails instead of killing
-    try:
-        resource.setrlimit(resource.RLIMIT_FSIZE, (journal.path.stat().st_size + 4096, hard))
-        for i in range(20, 2000):
-            store.record(_point(i, None))
-        wait_for(lambda: said, timeout=5)
-    finally:
-        resource.setrlimit(resource.RLIMIT_FSIZE, (soft, hard))
-        signal.signal(signal.SIGXFSZ, old)
+    disks[0].full = True
+    for i in range(20, 2000):
+        store.record(_point(i, None))
+    wait_for(lambda: said, timeout=5)
     journal.close()
-    assert len(said) == 1 and said[0].startswith("journal stopped (File too large)"), said
+    assert len(said) == 1 and said[0].startswith("journal stopped (No space left on device)"), said
     assert len(store) == 2000  # the session went on
     assert len(load_export(journal.path).points) >= 20  # cut where the disk stopped: read to its last chunk
 
@@ -269,3 +295,172 @@ def test_a_running_consoles_journal_is_never_offered_and_a_hung_up_one_once(tmp_
     assert found is not None and found.how == "signal SIGHUP" and found.path.name.endswith(".offered.mcap")
     assert F.offerable(tmp_path) is None  # once
     assert len(load_export(found.path).points) == 1
+
+
+def _free(lock) -> bool:
+    """Whether another thread could take ``lock`` now."""
+    got: list[bool] = []
+
+    def take() -> None:
+        ok = lock.acquire(blocking=False)
+        got.append(ok)
+        if ok:
+            lock.release()
+
+    thread = threading.Thread(target=take)
+    thread.start()
+    thread.join()
+    return got[0]
+
+
+def test_the_runs_summaries_are_computed_outside_the_stores_lock(tmp_path, monkeypatch):
+    """The session records a sample under the store's lock while holding its own, and a stop needs the
+    session's: a summary computed under the store's lock (2-8 ms for an hour's run) held up the stop."""
+    from arbiter_tui.analytics import runs as runs_module
+
+    store = AnalyticsStore(1000)
+    store.start_collection()
+    journal = Journal(Sources(store), tmp_path, 10**8, flush_s=3600)
+    journal.start()
+    wait_for(lambda: journal._channels is not None, timeout=5)
+    run = store.begin_run("pure_pursuit", "square", 1.8e12)
+    for i in range(50):
+        store.record(_point(i, run))
+    held: list[bool] = []
+    compute = runs_module.compute_stats
+
+    def spy(*args, **kwargs):
+        held.append(not _free(store._lock))
+        return compute(*args, **kwargs)
+
+    monkeypatch.setattr(runs_module, "compute_stats", spy)
+    with journal._lock:
+        journal._step(force=True)
+    journal.close()
+    assert held and not any(held), held
+
+
+def test_latency_is_not_kept_once_the_journal_stopped(tmp_path):
+    store = AnalyticsStore(1000)
+    journal = Journal(Sources(store), tmp_path, 10**8, flush_s=0.05)
+    journal.start()
+    wait_for(lambda: journal._channels is not None, timeout=5)
+    journal.close()
+    for k in range(100):
+        journal.latency((float(k + 1),), (5.0,))
+    assert len(journal._latency) == 0  # before: every record kept, for the rest of the session
+
+
+def test_a_journal_that_fills_up_ends_its_file_and_an_error_ending_it_leaves_no_file_open(
+    tmp_path, monkeypatch
+):
+    """The "full" branch: the file ends as ``full``, one line said; a failure while ending it (the disk)
+    is one log line, the file closed, the thread ended (before: a traceback, the file left open)."""
+    from arbiter_tui.analytics.exports import McapChannels
+
+    store = AnalyticsStore(1000)
+    store.start_collection()
+    said: list[str] = []
+    journal = Journal(Sources(store), tmp_path / "a", 1, warn=said.append, flush_s=0.05)
+    journal.start()
+    store.record(_point(0, None))
+    wait_for(lambda: said, timeout=5)
+    wait_for(lambda: journal._file is None, timeout=5)
+    assert F.ending(journal.path) == F.FULL and said[0].startswith("journal full")
+
+    def broken(self, *args, **kwargs):
+        raise OSError(5, "Input/output error")
+
+    monkeypatch.setattr(McapChannels, "finish", broken)
+    errors: list[object] = []
+    monkeypatch.setattr(threading, "excepthook", errors.append)
+    said.clear()
+    journal = Journal(Sources(store), tmp_path / "b", 1, warn=said.append, flush_s=0.05)
+    journal.start()
+    thread = journal._thread
+    store.record(_point(1, None))
+    wait_for(lambda: said and not thread.is_alive(), timeout=5)
+    assert journal._file is None and errors == [] and said[0].startswith("journal full")
+    journal.close()
+
+
+def test_a_quit_while_the_journal_looks_back_opens_no_file_and_an_offer_is_counted_not_decoded(
+    tmp_path, monkeypatch
+):
+    """close() gives up waiting for a thread still reading what the last session left; that thread must
+    then open no new journal (before: a file nobody finished, offered at the next start as a 'killed'
+    session of 0 samples). An offered journal's samples are counted from its summary, a cut one's by
+    its chunks, without decoding it."""
+    import arbiter_tui.session.journal as J
+
+    store = AnalyticsStore(1000)
+    store.start_collection()
+    journal = Journal(Sources(store), tmp_path, 10**8, flush_s=0.05)
+    journal.start()
+    for i in range(30):
+        store.record(_point(i, None))
+    wait_for(lambda: journal.written == 30, timeout=5)
+    journal.close("signal SIGHUP")  # a finished journal, to be offered
+    first = journal.path
+
+    looking = threading.Event()
+    go_on = threading.Event()
+    real = F.offerable
+
+    def slow(directory, own=None):
+        looking.set()
+        go_on.wait(10)
+        return real(directory, own)
+
+    monkeypatch.setattr(F, "offerable", slow)
+    monkeypatch.setattr(J, "CLOSE_WAIT_S", 0.05, raising=False)  # (before: a fixed 2 s)
+    found: list[J.Found] = []
+    journal = Journal(Sources(store), tmp_path, 10**8, found=found.append, flush_s=0.05)
+    journal.start()
+    thread = journal._thread
+    looking.wait(5)
+    journal.close()  # gives up on the thread
+    go_on.set()
+    thread.join(5)
+    assert not thread.is_alive() and journal.path is None
+    assert sorted(p.name for p in tmp_path.iterdir()) == [first.name.replace(".mcap", ".offered.mcap")]
+    (offer,) = found
+    assert offer.contents is not None and offer.contents.samples == 30
+    assert "kept 30 samples" in offer.text()
+
+    monkeypatch.setattr(J.F, "offerable", real)
+    cut = tmp_path / "session_cut.mcap"
+    data = first.with_name(first.name.replace(".mcap", ".offered.mcap")).read_bytes()
+    cut.write_bytes(data[: len(data) // 2])
+    got = F.contents(cut)
+    assert got.samples is None and got.chunks >= 1 and "chunks" in got.words()
+
+
+def test_a_close_never_waits_longer_than_its_bound_on_a_stalled_disk(tmp_path, monkeypatch):
+    """The journal's thread stuck in an fsync (a stalled SD card) holds the writer's lock: a quit or a
+    hang-up gives up on the file after CLOSE_WAIT_S (before: it waited on the lock for ever)."""
+    import arbiter_tui.session.journal as J
+
+    monkeypatch.setattr(J, "CLOSE_WAIT_S", 0.2, raising=False)  # (before: a fixed 2 s join, then for ever)
+    store = AnalyticsStore(1000)
+    journal = Journal(Sources(store), tmp_path, 10**8, flush_s=0.05)
+    journal.start()
+    wait_for(lambda: journal._channels is not None, timeout=5)
+    stalled, done = threading.Event(), threading.Event()
+
+    def fsync_forever() -> None:
+        with journal._lock:
+            stalled.set()
+            done.wait(30)
+
+    holder = threading.Thread(target=fsync_forever)
+    holder.start()
+    stalled.wait(5)
+    closing = threading.Thread(target=journal.close)
+    t0 = time.monotonic()
+    closing.start()
+    closing.join(10)
+    took = time.monotonic() - t0
+    done.set()
+    holder.join(5)
+    assert not closing.is_alive() and took < 5, took

@@ -2,16 +2,19 @@
 rows, and the keys a user presses (Pilot): severity order, the name filter, Enter opening the single-robot
 console on the advertised URLs and coming back, a lost robot not opened, the history on ``h``."""
 
+import threading
 import time
 
 import pytest
 from textual import events
-from textual.widgets import Static
+from textual.widgets import Input, Static
 
 from arbiter_core import fleet
 from arbiter_core.timesync import TimeSync
-from arbiter_tui.fleet.app import FleetApp, FleetList
+from arbiter_tui.fleet.app import STOP_NOTE_S, FleetApp, FleetList
 from arbiter_tui.fleet.rows import FleetModel, detail_lines
+
+from ..support.tui import screen_text
 
 W = 1_800_000_000.0  # 2027-01-15 08:00:00 UTC
 MONO = 1000.0
@@ -403,6 +406,7 @@ async def test_space_and_ctrl_k_stop_the_selected_robot_and_its_row_says_what_it
     app = fleet_app(stop=stop)
     async with app.run_test(size=(300, 40)) as pilot:
         app.screen.query_one(FleetList).selected = "lab-02"
+        await pilot.pause()  # drawn: the person sees it selected
         await pilot.press("space")
         await app.workers.wait_for_complete()
         await pilot.pause()
@@ -524,3 +528,95 @@ async def test_the_console_opened_from_the_fleet_says_which_robot_it_drives(tmp_
         await pilot.pause()
         status = str(console.screen.query_one("#status").render())
         assert status.startswith("CONNECTED · lab-01 · "), status
+
+
+async def test_a_stop_goes_to_the_robot_drawn_selected_not_to_one_that_went_lost_since():
+    """A robot goes lost between a paint and the space key: it sorts first and takes the selection,
+    but the person saw r00 selected, and the stop goes to r00 (before: to r03, the selection then)."""
+    asked = []
+    m = many(5)
+    app = FleetApp(
+        source=lambda p: m.view(W, MONO, p, SESSION),
+        opener=lambda a: 0,
+        stop=lambda name: asked.append(name) or fleet.StopAnswer(name, W, "nobody", True),
+    )
+    async with app.run_test(size=(120, 33)) as pilot:
+        await pilot.pause()
+        assert app.screen.query_one(FleetList).selected == "r00"
+        m.token("r03", False, W, MONO)
+        app.screen.sample()  # r03 lost: first, selected; not drawn yet
+        app.post_message(events.Key("space", " "))
+        await pilot.pause()
+        await app.workers.wait_for_complete()
+        await pilot.pause()
+        assert asked == ["r00"]
+
+
+async def test_while_typing_a_filter_the_footer_names_ctrl_k():
+    app = fleet_app(stop=lambda name: fleet.StopAnswer(name, W, "nobody", True))
+    async with app.run_test(size=(120, 40)) as pilot:
+        await pilot.press("slash", "l")
+        await pilot.pause()
+        assert isinstance(app.focused, Input) and app.focused.value == "l"
+        footer = screen_text(app).splitlines()[-1]
+        assert "^k Stop robot" in footer, footer
+
+
+async def test_a_stops_note_goes_away_after_a_while_and_a_refusal_is_styled_by_a_flag_not_its_words():
+    now = [MONO]
+    m = many(3)
+    answers = {"r00": "not stopped: this console may not stop r00", "r01": "boom"}
+
+    def stop(name):
+        if answers.get(name) == "boom":
+            raise RuntimeError("zenoh session closed")
+        return answers[name]
+
+    app = FleetApp(
+        source=lambda p: m.view(W + now[0] - MONO, now[0], p, SESSION), opener=lambda a: 0, stop=stop
+    )
+    async with app.run_test(size=(300, 33)) as pilot:
+        await pilot.pause()
+        lst = app.screen.query_one(FleetList)
+        app.screen.ask_stops(["r00", "r01"])
+        await app.workers.wait_for_complete()
+        await pilot.pause()
+        assert app.is_running  # a stopper that raised ended nothing
+        assert "asking failed: RuntimeError('zenoh session closed')" in shown_row(app, "r01")
+        assert lst.stops["r00"].failed and lst.stops["r01"].failed  # "not stopped: " is no success
+        said = [n.message for n in app._notifications if "not stopped" in n.message]
+        assert len(said) == 1 and "2 of 2 robots not stopped" in said[0], said  # one line for both
+        now[0] += STOP_NOTE_S + 1
+        for name in ("r00", "r01", "r02"):
+            m.accept(status(name, t=W + STOP_NOTE_S + 1), 400, now[0])
+        app.screen.sample()
+        await pilot.pause()
+        assert lst.stops == {}, lst.stops
+        assert "not stopped" not in shown_row(app, "r00")
+
+
+async def test_stop_all_shown_refused_everywhere_is_one_line_and_not_a_repaint_per_answer(monkeypatch):
+    n = 30
+    m = many(n)
+    together = threading.Barrier(n, timeout=10)
+
+    def refuse(name):
+        together.wait()  # every answer comes at once, as a router's refusals do
+        return f"not stopped: this console may not stop {name}"
+
+    app = FleetApp(source=lambda p: m.view(W, MONO, p, SESSION), opener=lambda a: 0, stop=refuse)
+    batches = []
+    set_stops = FleetList.set_stops
+
+    def counted(self, notes):
+        batches.append(len(notes))
+        set_stops(self, notes)
+
+    monkeypatch.setattr(FleetList, "set_stops", counted)
+    async with app.run_test(size=(200, 50)) as pilot:
+        await pilot.press("S", "S")
+        await app.workers.wait_for_complete()
+        await pilot.pause()
+        said = [x.message for x in app._notifications if "not stopped" in x.message]
+        assert len(said) == 1 and f"{n} of {n} robots not stopped" in said[0], said  # before: one each
+        assert batches[0] == n and sum(batches[1:]) == n and len(batches) - 1 < n / 2, batches

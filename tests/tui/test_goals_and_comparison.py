@@ -106,6 +106,24 @@ async def test_the_goal_prompt_says_where_the_robot_is_now_and_asks_before_a_far
         assert not isinstance(app.screen, GoalPrompt) and loop.mission.waypoints == ((3.5, 1.0),)
 
 
+async def test_a_far_goals_second_enter_counts_only_once_its_question_was_drawn(tmp_path):
+    """Two enters in one read (a double press, a laggy link): the second came before the question about
+    the far goal was on the screen, so it answers nothing; an enter after it was drawn drives."""
+    from textual import events
+
+    app = still_app(tmp_path)
+    loop = app.session.loop
+    async with app.run_test(size=SIZE) as pilot:
+        await pilot.press("t", *"1000 1000")
+        app.post_message(events.Key("enter", "\r"))
+        app.post_message(events.Key("enter", "\r"))
+        await pilot.pause()
+        await pilot.pause()
+        assert isinstance(app.screen, GoalPrompt) and not loop.running
+        await pilot.press("enter")
+        assert not isinstance(app.screen, GoalPrompt) and loop.running
+
+
 async def test_the_hints_name_the_controller_that_will_drive_from_the_registry(tmp_path):
     from arbiter_core.controllers import CONTROLLERS
 

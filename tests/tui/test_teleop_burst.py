@@ -46,3 +46,23 @@ async def test_a_stop_in_a_burst_wins_over_the_keys_around_it():
             app.session.tick_control()
             assert not app.session.teleop.moving
         assert app.session.link.sent[-1] == (0.0, 0.0)
+
+
+async def test_a_burst_whose_first_key_came_in_a_read_of_its_own_is_dropped_too():
+    """The burst split across reads: its first key alone, the rest 12 ms later, then 60 ms (before, a
+    second key over 10 ms after the first made the replay a steady hold that drove on)."""
+    app = still_app()
+    async with app.run_test(size=(100, 30)) as pilot:
+        await pilot.pause()
+        for later in (0.012, 0.06):
+            await stalled(app, pilot)
+            burst(app, "i")
+            app.fake_clock.t += later
+            burst(app, *["i"] * 10)
+            app.fake_clock.t += 0.012
+            burst(app, *["i"] * 20)
+            assert app.session.link.sent[-1] == (0.0, 0.0) and not app.session.teleop.moving
+            app.fake_clock.t += 0.1
+            app.session.tick_control()
+            assert not app.session.teleop.moving
+            app.fake_clock.t += 1.0  # the person presses again later

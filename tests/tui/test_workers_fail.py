@@ -103,3 +103,19 @@ async def test_a_recording_that_fails_unexpectedly_is_said_and_the_next_opens(mo
         monkeypatch.setattr(dialogs, "open_recording", real)
         await pilot.press("f", *str(good), "enter")
         assert await until(pilot, lambda: bool(app.frame.analytics.source), timeout=15)
+
+
+async def test_a_hang_up_arms_the_exit_deadline_before_it_finishes_the_journal(tmp_path, monkeypatch):
+    """Finishing the journal may wait on a stalled disk: the process must be sure to end first."""
+    import signal
+
+    from arbiter_tui.shell import app as app_module
+
+    order: list[str] = []
+    monkeypatch.setattr(app_module.lifecycle, "exit_within", lambda s: order.append("deadline"))
+    app = still_app(tmp_path)
+    monkeypatch.setattr(app.session, "hang_up", lambda reason: order.append("hang up"))
+    async with app.run_test(size=(100, 30)) as pilot:
+        await pilot.pause()
+        app._on_signal(signal.SIGHUP)
+    assert order == ["deadline", "hang up"]

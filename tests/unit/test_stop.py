@@ -82,7 +82,7 @@ def key(name: str, character: str | None = None) -> events.Key:
 
 def test_ctrl_k_is_answered_on_the_input_thread_behind_a_dialog_and_again_in_its_place():
     stops, answered = [], []
-    router = KeyRouter(lambda k: answered.append(k) or True, lambda: stops.append("stop"))
+    router = KeyRouter(lambda k, at: answered.append(k) or True, lambda: stops.append("stop"))
     router.set_direct(False)  # a dialog is in front: teleop keys go to the UI
     router.on_input_thread(key("g", "g"))  # queued for the UI (it may start a mission)
     event = key("ctrl+k", "\x0b")
@@ -91,3 +91,27 @@ def test_ctrl_k_is_answered_on_the_input_thread_behind_a_dialog_and_again_in_its
     assert not router.taken(event)  # ...and the UI answers it again after the g
     router.on_input_thread(key("space", " "))
     assert stops == ["stop"]  # space behind a dialog: the UI's binding answers it (it may be text)
+
+
+def test_a_key_carries_the_time_its_read_came_not_when_a_lock_let_it_through():
+    """The parser makes a read's keys one by one as the input thread answers them: a key whose answer
+    waited 20 ms on a lock must not make the next key of its read 20 ms later (a stall's burst spread
+    out into a hand's pace); a later read gets its own time."""
+    now, answered = [100.0], []
+
+    def answer(name, at):  # the session's lock held elsewhere for 20 ms
+        answered.append(at)
+        now[0] += 0.02
+        return True
+
+    router = KeyRouter(answer, clock=lambda: now[0] + 5000.0, stamp=lambda: now[0])
+    router.set_direct(True)
+    for _ in range(3):  # one read: each key made right after the one before it was answered
+        event = key("i", "i")
+        event.time = now[0]
+        router.on_input_thread(event)
+    now[0] += 0.3  # the next read
+    event = key("i", "i")
+    event.time = now[0]
+    router.on_input_thread(event)
+    assert answered == [5100.0, 5100.0, 5100.0, pytest.approx(5100.36)]

@@ -145,3 +145,41 @@ def test_a_tap_still_moves_for_the_key_timeout_and_a_slow_terminal_keeps_its_hol
         slow.press("i", 0.5 + 0.1 * k if k else 0.0)
         assert slow.moving
     assert slow.grace() == pytest.approx(0.2)
+
+
+def after_release(first_gap: float, split: int = 1, read_gap: float = 0.0, n: int = 60) -> float:
+    """Metres commanded past a stall's end by a burst of ``n`` repeats of a key let go during the stall:
+    its first ``split`` keys in one read, the next one ``first_gap`` later, the rest in reads
+    ``read_gap`` apart (10 keys each)."""
+    held = Teleop(speed=SPEED, turn=1.0)
+    keys = [(0.0, "i"), (0.25, "i")]  # held, then the stall; the deadman stops it
+    t = 3.0
+    keys += [(t + 1e-5 * k, "i") for k in range(split)]
+    t += first_gap
+    rest = n - split
+    for k in range(rest):
+        keys.append((t + 1e-5 * (k % 10) + read_gap * (k // 10), "i"))
+    sent = drive(keys, until=5.0, teleop=held)
+    return motion_after(sent, 3.0, 5.0)
+
+
+@pytest.mark.parametrize("first_gap", [0.0, 0.012, 0.03, 0.06])
+def test_a_burst_whose_second_key_comes_late_still_drives_no_further(first_gap):
+    """The burst's first key read alone, the rest 12 or 60 ms later (a split TCP delivery): before, a
+    second key over 10 ms after the first made the replay a steady hold (0.10 m past the release at
+    12 ms, 0.15 m at 60 ms)."""
+    assert after_release(first_gap) <= 0.05
+
+
+@pytest.mark.parametrize("read_gap", [0.005, 0.012, 0.03])
+def test_a_burst_split_across_many_reads_drives_no_further(read_gap):
+    assert after_release(0.012, split=3, read_gap=read_gap) <= 0.05
+
+
+def test_a_stall_burst_is_cancelled_by_its_count_against_the_time_it_took():
+    t = Teleop(speed=SPEED)
+    t.press("i", 10.0)
+    assert t.press("i", 10.012) == "move" and t.moving  # one more key: a hand could (a double tap)
+    for k in range(4):
+        t.press("i", 10.012 + 1e-5 * (k + 1))
+    assert not t.moving and t.bursts == 1  # six keys in 12 ms: no terminal repeats that fast

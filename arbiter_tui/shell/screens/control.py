@@ -109,7 +109,7 @@ class ControlScreen(BaseScreen):
         return True
 
     def on_key(self, event: events.Key) -> None:
-        if self.console.session.key(key_name(event.character, event.key)):
+        if self.console.session.key(key_name(event.character, event.key), self.console.keys.when(event)):
             self.console.refresh_frame()  # a new command or limit shows at once; a held key's repeats
             event.stop()  # ...wait for the UI tick
             event.prevent_default()

@@ -28,7 +28,7 @@ class GoalPrompt(ModalScreen[tuple[float, float] | None]):
         super().__init__()
         self.where = where  # where the robot is now: said live, and far goals measured from it
         self.driver = driver  # the controller enter starts (arbiter_core.controllers.goal_driver)
-        self._asked: tuple[float, float] | None = None  # a far goal asked about: enter again drives there
+        self._asked: tuple[float, float] | None = None  # a far goal asked about (drawn): enter again drives
         self._said = ""
 
     def _what(self) -> str:
@@ -65,10 +65,15 @@ class GoalPrompt(ModalScreen[tuple[float, float] | None]):
             return
         far = far_goal(goal, self.where())
         if far is not None and goal != self._asked:  # far away: asked first, driven on a second enter
-            self._asked = goal
+            self._asked = None  # ...once the question is on the screen: an enter typed ahead is no answer
             self.query_one("#goal-error", Static).update(Text(far, style="bold yellow"))
+            self.call_after_refresh(self._shown, goal)
             return
         self.dismiss(goal)
+
+    def _shown(self, goal: tuple[float, float]) -> None:
+        """The far goal's question was drawn: the next enter answers it."""
+        self._asked = goal
 
     def action_cancel(self) -> None:
         self.dismiss(None)

@@ -18,6 +18,8 @@ HELP = f"""[b]arbiter-tui[/b] — teleop console, analytics and latency monitor
          space or k too, but where they are text: the goal prompt,
          the topics filter, the palette and a recording's path
 [b]Quit[/b]     ctrl+q or ctrl+c (stops the robot first)
+[b]Journal[/b]  R opens, on screen 2, what a session that did not end cleanly
+         left (said at start; kept under the user's data directory)
 
 [b]Control[/b] (teleop_twist_keyboard keys; hold a key to keep moving)
 {legend_long()}
