@@ -14,12 +14,9 @@ from ..keys import STOP_HINT
 HELP = f"""[b]arbiter-tui[/b] — teleop console, analytics and latency monitor
 
 [b]Screens[/b]  1 control  2 analytics  3 latency  4 topics  ? help  ctrl+p
-[b]Stop[/b]     ctrl+k anywhere, even while typing: it stops whatever drives;
-         space or k too, but where they are text: the goal prompt,
-         the topics filter, the palette and a recording's path
-[b]Quit[/b]     ctrl+q or ctrl+c (stops the robot first)
-[b]Journal[/b]  R opens, on screen 2, what a session that did not end cleanly
-         left (said at start; kept under the user's data directory)
+[b]Stop[/b]     ctrl+k anywhere, whatever drives; space or k where not text
+         (text: the goal prompt, the filter, the palette, a recording's path)
+[b]Quit[/b]     ctrl+q or ctrl+c (robot stopped first)   R: a lost session's journal
 
 [b]Control[/b] (teleop_twist_keyboard keys; hold a key to keep moving)
 {legend_long()}
@@ -34,15 +31,12 @@ HELP = f"""[b]arbiter-tui[/b] — teleop console, analytics and latency monitor
 [b]Analytics[/b]  r record/pause  v per algorithm / per run  s sort
   ctrl+s export  delete clear (asks)  f open a recording (esc: live)
   ranked per mission, overall over missions every algorithm completed
-
 [b]Latency[/b]  GET /api/latency at 2 Hz; one-way = receive - stamp
 
 [b]Topics[/b]  / filter (esc, enter: back)  s sort (name, rate, bandwidth,
   delay, age)  r reverse (flip)  the header marks the sorted column ▼ ▲
   up/down select; rate, bandwidth, delay, age of every topic as
-  the backend measures it (GET /api/topics, 2 Hz)
-
-Press escape or ? to close."""
+  the backend measures it (GET /api/topics, 2 Hz)"""
 
 
 class HelpScreen(ModalScreen[None]):
