@@ -14,8 +14,11 @@ link"), because over SSH on Wi-Fi they do not arrive at the terminal's pace:
   of TCP segments after a stall), not from a hand: they never start motion or extend a hold by their
   number. A fresh hold whose next key comes bunched with it was replayed from a stall: it is cancelled
   at once (one zero) and the rest of the burst ignored; the hold resumes only with a key that arrives
-  at a pace a terminal repeats at. So a stall's burst commands no motion after the person let go, and a
-  stop key in it acts when it arrives, whatever came before or after it in the burst;
+  at a pace a terminal repeats at, and not on the first such key after a burst but on the one after it:
+  TCP brings a stall's keys back in flights one round trip apart (its retransmission, then what its
+  window held back), so a burst's next flight starts with a key at a hand's pace and the rest bunched
+  behind it. So a stall's burst commands no motion after the person let go, and a stop key in it acts
+  when it arrives, whatever came before or after it in the burst;
 * where the terminal reports key releases (:meth:`Teleop.release`), a hold ends at its release.
 """
 
@@ -98,6 +101,7 @@ GRACE_GAPS = 2.0  # ...and this many times the longest recent gap between its re
 GAPS_KEPT = 30  # recent gaps: a second of a 30 Hz auto-repeat
 
 FRESH, STEADY, STALE = "fresh", "steady", "stale"  # a hold's state: its first key, repeating, replayed
+RESUMING = "resuming"  # after a burst, one key at a hand's pace: held if the next comes at that pace too
 
 
 @dataclass
@@ -152,17 +156,22 @@ class Teleop:
 
     def _move(self, key: str, now: float) -> None:
         gap, self._last_at = now - self._last_at, now
-        if key != self._key or (self.deadline is None and self._state != STALE) or gap > self.key_timeout:
+        replayed = self._state in (STALE, RESUMING)
+        if key != self._key or (self.deadline is None and not replayed) or gap > self.key_timeout:
             self._hold(key, now, FRESH)  # a new key, or the same one pressed again after its hold ended
         elif gap < BUNCH_S:  # it came with the key before it
             if self._state == FRESH and self.deadline is not None:  # a fresh hold replayed from a stall
                 self.bursts += 1
                 self.stop()
                 self._state = STALE
+            elif self._state == RESUMING:  # the burst's next flight: still replayed
+                self._state = STALE
             elif self._state == STEADY and self.deadline is not None:
                 self.deadline = max(self.deadline, now + self.grace() - gap)  # no later than the first
-        elif self._state == STALE and gap > self.grace():
+        elif replayed and gap > self.grace():
             self._hold(key, now, FRESH)  # long after the burst: pressed again
+        elif self._state == STALE:
+            self._state = RESUMING  # at a hand's pace after a burst: held if the next one is too
         else:  # a repeat at a terminal's pace (or the first after a burst: the key is still held)
             if self._state == STEADY and self.deadline is not None:
                 self.gaps.append(gap)
