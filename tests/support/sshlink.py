@@ -112,7 +112,6 @@ class SshRig:
         self.suffix = unique_suffix()
         self.host_ip, self.ns_ip = unique_subnet(self.suffix)
         self.netns = f"arbssh{self.suffix}"
-        self.tmux_socket = f"arbssh{self.suffix}"
         self.session = "laptop"
         self.trace = Trace()
         self._stack = contextlib.ExitStack()
@@ -235,7 +234,7 @@ class SshRig:
     # -- the laptop's terminal ----------------------------------------------------------------------
     def tmux(self, *args: str) -> str:
         return subprocess.run(
-            ["tmux", "-L", self.tmux_socket, *args], capture_output=True, text=True, timeout=10
+            ["tmux", "-S", str(self.tmp / "tmux"), *args], capture_output=True, text=True, timeout=10
         ).stdout
 
     def screen(self) -> str:
@@ -254,7 +253,8 @@ class SshRig:
     def key(self, key: str) -> float:
         """Type ``key``; the monotonic time just before tmux got it."""
         t = time.monotonic()
-        subprocess.run(["tmux", "-L", self.tmux_socket, "send-keys", "-t", self.session, key], timeout=10)
+        cmd = ["tmux", "-S", str(self.tmp / "tmux"), "send-keys", "-t", self.session, key]
+        subprocess.run(cmd, timeout=10)
         return t
 
     def hold_keys(
@@ -382,7 +382,7 @@ class SshRig:
     def resize(self, width: int, height: int) -> None:
         self.tmux("resize-window", "-t", self.session, "-x", str(width), "-y", str(height))
         self.size = (width, height)
-        time.sleep(1.0)  # the resize's repaint goes out before the next figure
+        time.sleep(4.0)  # the resize's whole-screen repaint (~50 kB at 200x60) goes out before a figure
 
 
 def _seq_after(seq_end: int, before: int) -> bool:
