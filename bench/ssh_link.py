@@ -14,8 +14,8 @@ roslibpy (``tests/support/sshlink.py``, the rig the tests use). Per profile and 
   Pi to the first zero on /cmd_vel_measured;
 * the mission's hold after a stall begins: n/a here (the heartbeat is another branch's);
 * bytes a second toward the laptop (IP, headers included) at 80x24 and 200x60, idle and with a key held;
-* key-to-echo (ms, p50/p95 of ``--trials``): from ``q`` typed in tmux to the laptop's screen showing the
-  new max speed.
+* key-to-echo (ms, p50/p95 of ``--trials``, at each size): from ``q`` (or ``z``) typed in tmux to the
+  laptop's screen showing the new max speed, the robot standing still.
 
 Root, /dev/net/tun, sshd, ssh and tmux needed. Run it where the load average is under ~2.
 
@@ -47,7 +47,8 @@ COLUMNS = (
     "mission's hold after a stall begins",
     "B/s 80x24 idle/held",
     "B/s 200x60 idle/held",
-    "key-to-echo p50/p95",
+    "key-to-echo p50/p95 80x24",
+    "key-to-echo p50/p95 200x60",
 )
 
 
@@ -56,6 +57,7 @@ def measure(profile: str, root: Path, holds: int, trials: int) -> dict:
     with SshRig(PROFILES[profile], console_root=root) as rig:
         setup_s = time.monotonic() - t_start
         hold = [rig.hold(5.0) for _ in range(holds)]
+        rig.drained()
         idle_small = rig.screen_bytes(3.0)
         echoes = [rig.key_echo("q" if i % 2 == 0 else "z") for i in range(trials)]
         stall = rig.stall_release()
@@ -63,6 +65,8 @@ def measure(profile: str, root: Path, holds: int, trials: int) -> dict:
         rig.resize(200, 60)
         idle_big = rig.screen_bytes(3.0)
         held_big = rig.hold(3.0)["bytes_per_s_down"]
+        rig.drained()
+        echoes_big = [rig.key_echo("q" if i % 2 == 0 else "z") for i in range(trials)]
     found = [s for s in stops if s is not None]
     return {
         "profile": profile,
@@ -86,6 +90,9 @@ def measure(profile: str, root: Path, holds: int, trials: int) -> dict:
         "key_echo_ms": echoes,
         "key_echo_p50_ms": pct(echoes, 0.5),
         "key_echo_p95_ms": pct(echoes, 0.95),
+        "key_echo_200x60_ms": echoes_big,
+        "key_echo_200x60_p50_ms": pct(echoes_big, 0.5),
+        "key_echo_200x60_p95_ms": pct(echoes_big, 0.95),
     }
 
 
@@ -100,6 +107,7 @@ def row(label: str, r: dict) -> str:
         f"{r['bytes_per_s_80x24_idle']:,} / {r['bytes_per_s_80x24_held']:,}",
         f"{r['bytes_per_s_200x60_idle']:,} / {r['bytes_per_s_200x60_held']:,}",
         f"{r['key_echo_p50_ms']:.0f} / {r['key_echo_p95_ms']:.0f} ms",
+        f"{r['key_echo_200x60_p50_ms']:.0f} / {r['key_echo_200x60_p95_ms']:.0f} ms",
     )
     return "| " + " | ".join(cells) + " |"
 

@@ -382,7 +382,23 @@ class SshRig:
     def resize(self, width: int, height: int) -> None:
         self.tmux("resize-window", "-t", self.session, "-x", str(width), "-y", str(height))
         self.size = (width, height)
-        time.sleep(4.0)  # the resize's whole-screen repaint (~50 kB at 200x60) goes out before a figure
+        self.drained()
+
+    def drained(self, timeout: float = 30.0) -> float:
+        """Wait until what the console wrote before (a resize's whole-screen repaint, ~50 kB at 200x60)
+        has crossed the link: two 1 s windows toward the laptop within 30 % of each other, and, on a
+        rate-limited link, below 80 % of its rate (a backlog drains at the full rate). Seconds waited."""
+        t0, rate = time.monotonic(), self.profile.link.rate_bps
+        last = None
+        while time.monotonic() - t0 < timeout:
+            b0 = self.link.bytes_in
+            time.sleep(1.0)
+            window = self.link.bytes_in - b0
+            below = rate is None or window * 8 < 0.8 * rate
+            if last is not None and below and abs(window - last) <= 0.3 * max(last, window, 1000):
+                break
+            last = window
+        return time.monotonic() - t0
 
 
 def _seq_after(seq_end: int, before: int) -> bool:
