@@ -362,16 +362,16 @@ class SshRig:
             return None
         return round(1000.0 * (zero - arrival), 1)
 
-    def key_echo(self, key: str = "q") -> float:
-        """From typing ``key`` (q: faster by 10 %) to the laptop's screen showing the new max speed, ms."""
+    def key_echo(self, key: str = "q", timeout: float = 5.0) -> float | None:
+        """From typing ``key`` (q: faster by 10 %, z: slower) to the laptop's screen showing the new max
+        speed, ms; None when it did not show within ``timeout``."""
         before = _speed(self.screen())
         t = self.key(key)
-        deadline = t + 10
-        while time.monotonic() < deadline:
+        while time.monotonic() < t + timeout:
             now_speed = _speed(self.screen())
             if now_speed is not None and now_speed != before:
                 return round(1000.0 * (time.monotonic() - t), 1)
-        raise AssertionError(f"{key!r} never changed the speed on screen:\n{self.screen()}")
+        return None
 
     def screen_bytes(self, seconds: float = 3.0) -> float:
         """The link's bytes a second toward the laptop over ``seconds`` of an idle console."""
