@@ -14,7 +14,10 @@ link"), because over SSH on Wi-Fi they do not arrive at the terminal's pace:
   ``MAX_REPEAT_HZ`` allows in the time they took, with ``PACE_SLACK_S`` of a link's jitter) were held
   back and replayed (a stall's burst, whether it comes in one read or split across several): the hold
   they belong to is cancelled at once (one zero) and the rest ignored; the hold resumes only with keys
-  at a pace a terminal repeats at. A key sooner than ``FIRST_REPEAT_S`` after its press never makes a
+  at a pace a terminal repeats at, and not on the first such key after a burst but on the one after it:
+  TCP brings a stall's keys back in flights one round trip apart (its retransmission, then what its
+  window held back), so a burst's next flight starts with a key at a hand's pace and the rest bunched
+  behind it. A key sooner than ``FIRST_REPEAT_S`` after its press never makes a
   fresh hold steady (no terminal repeats that soon): the burst's first keys cannot extend it. So a
   stall's burst commands no motion after the person let go beyond the time its first keys took to
   arrive, and a stop key in it acts when it arrives, whatever came before or after it in the burst;
@@ -120,6 +123,7 @@ def too_fast(arrivals: deque[float], now: float) -> bool:
 
 
 FRESH, STEADY, STALE = "fresh", "steady", "stale"  # a hold's state: its first key, repeating, replayed
+RESUMING = "resuming"  # after a burst, one key at a hand's pace: held if the next comes at that pace too
 
 
 @dataclass
@@ -176,7 +180,8 @@ class Teleop:
 
     def _move(self, key: str, now: float) -> None:
         gap, self._last_at = now - self._last_at, now
-        if key != self._key or (self.deadline is None and self._state != STALE) or gap > self.key_timeout:
+        replayed = self._state in (STALE, RESUMING)
+        if key != self._key or (self.deadline is None and not replayed) or gap > self.key_timeout:
             self._arrivals.clear()
             self._arrivals.append(now)
             self._pressed_at = now
@@ -188,13 +193,17 @@ class Teleop:
                 self.bursts += 1
                 self.stop()
             self._state = STALE  # the rest of the burst ignored
-        elif self._state == STALE:
+        elif replayed:
             if gap > self.grace():
                 self._arrivals.clear()
                 self._arrivals.append(now)
                 self._pressed_at = now
                 self._hold(key, now, FRESH)  # long after the burst: pressed again
-            elif gap >= BUNCH_S:  # at a terminal's pace again: the key is still held
+            elif gap < BUNCH_S:
+                self._state = STALE  # bunched: the burst's next flight, still replayed
+            elif self._state == STALE:
+                self._state = RESUMING  # at a hand's pace after a burst: held if the next one is too
+            else:  # the second key in a row at a terminal's pace: the key is still held
                 self._hold(key, now, STEADY)
         elif self._state == FRESH and now - self._pressed_at < FIRST_REPEAT_S:
             pass  # sooner than a terminal's first repeat: the fresh hold's deadline stands (judged on)

@@ -117,6 +117,20 @@ def test_a_stop_in_a_burst_gives_zero_in_the_same_tick_whatever_surrounds_it(see
     assert motion_after(sent, 4.0, 6.0) <= 1e-3  # at most the first key's command, for microseconds
 
 
+@pytest.mark.parametrize("rtt", [0.04, 0.08, 0.15])
+def test_a_burst_that_tcp_brings_back_in_two_flights_drives_nothing_after_the_release(rtt):
+    """As the SSH link test saw it (tests/integration/test_ssh_link.py): after a stall TCP retransmits
+    what was in flight (one segment, the first keys at once), and one round trip later sends what its
+    window held back (the rest at once). The second flight's first key comes at a hand's pace."""
+    typed = sends(0.0, 2.0)
+    keys = [(4.5 + i * 1e-5, "i") for i, s in enumerate(typed) if 1.0 <= s < 1.7]
+    keys += [(4.5 + rtt + i * 1e-5, "i") for i, s in enumerate(typed) if s >= 1.7]
+    before = [(s + 0.03, "i") for s in typed if s < 1.0]
+    sent = drive(before + keys, until=6.0)
+    assert motion_after(sent, 2.0, 6.0) <= 1e-3  # at most a key's command, for microseconds
+    assert sent[-1][1] == (0.0, 0.0)
+
+
 def test_a_key_held_on_after_the_stall_resumes_with_its_next_repeat():
     """Not released: after the burst is dropped the hold resumes with the first repeat at a hand's pace."""
     rng = random.Random(7)
