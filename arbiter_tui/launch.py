@@ -48,6 +48,7 @@ from .session.settings import (
     JOURNAL_MAX_MB,
     KEY_TIMEOUT_S,
     OFFSET_WARN_MS,
+    OPERATOR_TIMEOUT_S,
     REPEAT_RATE_HZ,
     SIM,
     Settings,
@@ -215,6 +216,14 @@ def build_parser() -> argparse.ArgumentParser:
         f"{D.key_timeout:g})",
     )
     p.add_argument(
+        "--operator-timeout",
+        type=bounded_float(*OPERATOR_TIMEOUT_S, "s"),
+        default=D.operator_timeout,
+        help=f"a mission holds (zero command; g resumes it) when the person's terminal has not answered "
+        f"the console's cursor queries for this long, s; 0: never (docs/drive.md, 'An operator who cannot "
+        f"see'; {OPERATOR_TIMEOUT_S[0]:g}-{OPERATOR_TIMEOUT_S[1]:g}; {D.operator_timeout:g})",
+    )
+    p.add_argument(
         "--offset-warn-ms",
         type=bounded_float(*OFFSET_WARN_MS, "ms", low_open=True),
         default=D.offset_warn_ms,
@@ -328,6 +337,7 @@ def run_app(argv: list[str]) -> int:
         turn=turn,
         repeat_rate=args.repeat_rate,
         key_timeout=args.key_timeout,
+        operator_timeout=args.operator_timeout,
         offset_warn_ms=args.offset_warn_ms,
         config_path=loaded.path,
         theme=loaded.theme,
