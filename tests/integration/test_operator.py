@@ -3,12 +3,18 @@ real ``arbiter-tui`` in a pseudo-terminal this test plays the person's terminal 
 ptyterm.py), driving a real backend; what reaches the robot read from the backend's tracker."""
 
 import glob
+import os
 import platform
+import shutil
+import subprocess
+import sys
 import time
+import uuid
 
 import httpx
 import pytest
 
+from arbiter_tui.session.heartbeat import PROBE_S
 from tests.support.backend import start_backend
 from tests.support.ptyterm import PtyTerminal
 from tests.support.waits import wait_for
@@ -126,3 +132,76 @@ def blocked_on_the_terminal(pid: int) -> bool:
         if len(fields) > 1 and fields[0] == str(write_nr) and int(fields[1], 16) in (1, 2):
             return True
     return False
+
+
+# -- under tmux --------------------------------------------------------------------------------------------
+needs_tmux = pytest.mark.skipif(shutil.which("tmux") is None, reason="tmux is not installed")
+
+
+def tmux(*args: str) -> str:
+    return subprocess.run(["tmux", *args], capture_output=True, text=True, timeout=10).stdout
+
+
+def pane_shows(session: str, text: str, timeout: float = 10.0) -> bool:
+    return wait_for(lambda: text in tmux("capture-pane", "-p", "-t", session), timeout=timeout, interval=0.1)
+
+
+def tmux_console(tmp_path, *env_unset: str) -> str:
+    """``arbiter-tui --sim`` in a new detached 100x30 tmux session (its environment less ``env_unset``)."""
+    session = f"arbiter-{uuid.uuid4().hex[:8]}"
+    unset = " ".join(f"-u {name}" for name in env_unset)
+    cmd = (
+        f"env {unset} PYTHONPATH={os.environ.get('PYTHONPATH', '')} {sys.executable} -m arbiter_tui.cli "
+        f"--sim --no-journal --log-file {tmp_path / 'console.log'}"
+    )
+    tmux("new-session", "-d", "-s", session, "-x", "100", "-y", "30", cmd)
+    return session
+
+
+def attach(session: str) -> PtyTerminal:
+    """A tmux client attached to ``session`` in a pty of its own: the person's terminal on the Pi."""
+    return PtyTerminal(["attach", "-t", session], program=["tmux"])
+
+
+@needs_tmux
+def test_under_tmux_a_mission_holds_when_the_last_client_leaves(tmp_path):
+    """tmux answers the cursor queries itself: the console asks tmux whether a client is attached. The
+    client killed (an SSH session dropped, its tmux client gone) is nobody watching: the mission holds;
+    the next client attached reads what held, and g resumes it."""
+    session = tmux_console(tmp_path)
+    client = attach(session)
+    try:
+        assert pane_shows(session, "Drive", 20)
+        tmux("send-keys", "-t", session, "a")
+        tmux("send-keys", "-t", session, "g")
+        assert pane_shows(session, "(driving)")
+        time.sleep(1.5)  # (attached: it drives on, polled once a second)
+        assert "(driving)" in tmux("capture-pane", "-p", "-t", session)
+        client.proc.kill()  # the client gone at once, as when sshd kills the session
+        assert pane_shows(session, "(stopped)", 6), tmux("capture-pane", "-p", "-t", session)
+        client.close()
+        client = attach(session)
+        assert pane_shows(session, "Press g to resume", 6), tmux("capture-pane", "-p", "-t", session)
+        tmux("send-keys", "-t", session, "g")
+        assert pane_shows(session, "(driving)")
+    finally:
+        client.close()
+        tmux("kill-session", "-t", session)
+
+
+@needs_tmux
+def test_a_terminal_that_answers_the_cursor_queries_is_heard(tmp_path):
+    """tmux playing the person's terminal (the console not told it runs under tmux): it answers the
+    queries, so nothing is said at start and a mission drives on past the probe and the bound."""
+    session = tmux_console(tmp_path, "TMUX", "TMUX_PANE")
+    try:
+        assert pane_shows(session, "Drive", 20)
+        tmux("send-keys", "-t", session, "a")
+        tmux("send-keys", "-t", session, "g")
+        assert pane_shows(session, "(driving)")
+        time.sleep(PROBE_S + 1.0)  # (past the probe: nothing said, nothing held)
+        screen = tmux("capture-pane", "-p", "-t", session)
+        assert "(driving)" in screen and "did not answer" not in screen, screen
+        assert "did not answer" not in (tmp_path / "console.log").read_text()
+    finally:
+        tmux("kill-session", "-t", session)

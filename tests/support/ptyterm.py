@@ -18,13 +18,21 @@ ANSWER = b"\x1b[1;1R"
 
 
 class PtyTerminal:
-    def __init__(self, args: list[str], cols: int = 100, rows: int = 30, env: dict[str, str] | None = None):
+    def __init__(
+        self,
+        args: list[str],
+        cols: int = 100,
+        rows: int = 30,
+        env: dict[str, str] | None = None,
+        program: list[str] | None = None,
+    ):
+        """``arbiter-tui ARGS`` (or ``program`` + ``args``: another terminal program, a tmux client)."""
         self.master, slave = os.openpty()
         fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", rows, cols, 0, 0))
         base = {k: v for k, v in os.environ.items() if k not in ("TMUX", "TMUX_PANE", "STY")}
         base.update(TERM="xterm-256color", COLUMNS=str(cols), LINES=str(rows))
         self.proc = subprocess.Popen(
-            [sys.executable, "-m", "arbiter_tui.cli", *args],
+            [*(program or [sys.executable, "-m", "arbiter_tui.cli"]), *args],
             stdin=slave, stdout=slave, stderr=slave, start_new_session=True, env={**base, **(env or {})},
         )  # fmt: skip
         os.close(slave)
