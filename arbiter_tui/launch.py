@@ -47,6 +47,7 @@ from .session.settings import (
     EMBEDDED,
     JOURNAL_MAX_MB,
     KEY_TIMEOUT_S,
+    MAX_FPS,
     OFFSET_WARN_MS,
     OPERATOR_TIMEOUT_S,
     REPEAT_RATE_HZ,
@@ -216,6 +217,15 @@ def build_parser() -> argparse.ArgumentParser:
         f"{D.key_timeout:g})",
     )
     p.add_argument(
+        "--max-fps",
+        type=bounded_float(*MAX_FPS, "Hz"),
+        default=D.ui_rate,
+        help=f"frames a second at most, and the analytics, latency and topics panels no more often: fewer "
+        f"bytes on a slow link (the console also spreads its frames when the terminal's answers come "
+        f"later than 0.3 s; docs/benchmarks/ssh-link.md, 'Screen bytes'; {MAX_FPS[0]:g}-{MAX_FPS[1]:g}; "
+        f"{D.ui_rate:g})",
+    )
+    p.add_argument(
         "--operator-timeout",
         type=bounded_float(*OPERATOR_TIMEOUT_S, "s"),
         default=D.operator_timeout,
@@ -338,6 +348,8 @@ def run_app(argv: list[str]) -> int:
         repeat_rate=args.repeat_rate,
         key_timeout=args.key_timeout,
         operator_timeout=args.operator_timeout,
+        ui_rate=args.max_fps,
+        analytics_rate=min(D.analytics_rate, args.max_fps),
         offset_warn_ms=args.offset_warn_ms,
         config_path=loaded.path,
         theme=loaded.theme,

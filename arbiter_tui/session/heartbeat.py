@@ -96,6 +96,15 @@ class Heartbeat:
         with self._lock:
             return max(self._rtt) if self._rtt else None
 
+    def lag_s(self, now: float) -> float | None:
+        """How late the screen is now: the last answer's round trip, or longer while the oldest query
+        waits for its answer (None before any answer)."""
+        with self._lock:
+            if not self._rtt:
+                return None
+            waiting = now - self._pending[0] if self._pending else 0.0
+            return max(self._rtt[-1], waiting)
+
 
 @dataclass(frozen=True)
 class OperatorLost:

@@ -51,9 +51,15 @@ def watch(app: ArbiterApp) -> None:
 
     def ask() -> None:
         driver = app._driver  # Textual's writer: the query queued behind the frames written before it
-        if driver is not None:
-            heartbeat.asked(time.monotonic())
-            driver.write(QUERY)
+        if driver is None:
+            return
+        now = time.monotonic()
+        clock, lag = app.frame_clock, heartbeat.lag_s(now)
+        if clock is not None and lag is not None:  # a link slower than the screen: fewer frames
+            clock.echoed(lag)
+            app.sampler.slow_stretch = clock.stretch
+        heartbeat.asked(now)
+        driver.write(QUERY)
 
     app.set_interval(PERIOD_S, ask)
 

@@ -1,7 +1,8 @@
 """The person's terminal, played by a test: ``arbiter-tui`` in a pseudo-terminal whose other end this
 harness reads (counting the bytes the console writes), answering the console's cursor queries
 (``ESC [ 6 n`` -> ``ESC [ row ; col R``) as a terminal does, and typing keys. A stalled link is the
-harness reading nothing and answering nothing: the console's writes fill the pty, then block."""
+harness reading nothing and answering nothing: the console's writes fill the pty, then block; a slow
+link is the harness reading at its rate (``rate``)."""
 
 import fcntl
 import os
@@ -38,6 +39,13 @@ class PtyTerminal:
         os.close(slave)
         self.answering = True  # cursor queries answered (a terminal that hears the console)
         self.reading = True  # False: a stalled link (nothing read, nothing answered)
+        # a slow link with sshd's deep buffers (bytes a second; None: none): everything is read at once
+        # (the buffers take it) and reaches the person's screen at this rate, in order; the terminal
+        # answers a query when the query reaches it
+        self.rate: float | None = None
+        self._link_free = 0.0  # when the link has carried everything read so far
+        self._arrivals: list[tuple[int, float]] = []  # (output offset a chunk ends at, when it is on screen)
+        self._answers: list[float] = []  # when owed answers are due (a query on screen)
         self.bytes = 0
         self.queries = 0
         self.answered = 0
@@ -53,7 +61,8 @@ class PtyTerminal:
             if not self.reading:
                 time.sleep(0.01)
                 continue
-            ready, _, _ = select.select([self.master], [], [], 0.05)
+            self._answer_due()
+            ready, _, _ = select.select([self.master], [], [], 0.005 if self._answers else 0.05)
             if not ready:
                 continue
             try:
@@ -62,15 +71,35 @@ class PtyTerminal:
                 return
             if not data:
                 return
+            now, rate = time.monotonic(), self.rate
             seen = (tail + data).count(QUERY) - tail.count(QUERY)
             tail = data[-(len(QUERY) - 1) :]
             with self._lock:
                 self._out += data
                 self.bytes += len(data)
                 self.queries += seen
+                if rate is not None:
+                    self._link_free = max(self._link_free, now) + len(data) / rate
+                    self._arrivals.append((len(self._out), self._link_free))
             if seen and self.answering:
-                self.answered += seen
-                self.type(ANSWER * seen)
+                self._answers += [now if rate is None else self._link_free] * seen
+                self._answer_due()
+
+    def _answer_due(self) -> None:
+        now = time.monotonic()
+        due = [t for t in self._answers if t <= now]
+        if due:
+            self._answers = [t for t in self._answers if t > now]
+            self.answered += len(due)
+            self.type(ANSWER * len(due))
+
+    def on_screen_at(self, offset: int) -> float:
+        """When the output up to ``offset`` reached the person's screen (through the slow link, if any)."""
+        with self._lock:
+            for end, at in self._arrivals:
+                if end >= offset:
+                    return at
+        return time.monotonic()
 
     def type(self, data: bytes | str) -> None:
         os.write(self.master, data.encode() if isinstance(data, str) else data)

@@ -77,3 +77,25 @@ def test_off_and_tmux():
     assert multiplexer({"TMUX": "/tmp/tmux-0/default,1,0"}) == TMUX
     assert multiplexer({"STY": "123.pts-0.pi"}) == "screen" and multiplexer({}) is None
     assert tmux_attached("1\n") is True and tmux_attached("0\n") is False and tmux_attached("") is None
+
+
+def test_frames_spread_while_the_answers_come_late_and_come_back_with_punctual_ticks():
+    from arbiter_tui.session.frames import FrameClock
+
+    t = [0.0]
+    clock = FrameClock(0.2, 0.1, clock=lambda: t[0])
+    clock.echoed(0.1)  # a screen the link keeps up with: nothing changes
+    assert clock.frame_s == 0.2 and clock.stretch == 1.0
+    clock.echoed(0.5)
+    assert abs(clock.frame_s - 0.3) < 1e-9 and clock.backed_off == 1
+    t[0] = 0.5
+    clock.echoed(0.8)  # (within a second of the last back-off: the answers lag the frames)
+    assert abs(clock.frame_s - 0.3) < 1e-9
+    for step in range(1, 8):
+        t[0] = step * 1.0
+        clock.echoed(2.0)
+    assert clock.frame_s == FrameClock.SLOWEST_S and clock.stretch == 5.0
+    for _ in range(FrameClock.RECOVER_TICKS * 40):  # punctual ticks with answers on time again
+        clock.ticked(0.0)
+        clock.drawn()
+    assert clock.frame_s == 0.2
