@@ -222,7 +222,7 @@ def build_parser() -> argparse.ArgumentParser:
         default=D.ui_rate,
         help=f"frames a second at most, and the analytics, latency and topics panels no more often: fewer "
         f"bytes on a slow link (the console also spreads its frames when the terminal's answers come "
-        f"later than 0.3 s; docs/benchmarks/ssh-link.md, 'Screen bytes'; {MAX_FPS[0]:g}-{MAX_FPS[1]:g}; "
+        f"later than 0.3 s; docs/benchmarks/screen-bytes.md; {MAX_FPS[0]:g}-{MAX_FPS[1]:g}; "
         f"{D.ui_rate:g})",
     )
     p.add_argument(

@@ -151,15 +151,21 @@ class FrameClock:
         was written (``session/heartbeat.py``): the time a key's echo takes to reach the screen. Longer
         than ``ECHO_S`` is a link slower than the screen (its backlog grows): frames ``BACK_OFF`` times
         further apart, at most once a second (the answers lag the frames by the backlog), up to
-        ``SLOWEST_S``; the punctual ticks bring them closer again (``_adapt``)."""
+        ``SLOWEST_S``; under half of it, ``BACK_OFF`` times closer again, as often, down to the asked-for
+        ``frame_s`` (and the punctual ticks, ``_adapt``)."""
         now = self.clock()
-        if round_trip_s > self.ECHO_S and now >= self._echo_hold:
+        if now < self._echo_hold:
+            return
+        if round_trip_s > self.ECHO_S:
             self._echo_hold = now + 1.0
             self._punctual = 0
             slower = min(self.SLOWEST_S, self.frame_s * self.BACK_OFF)
             if slower > self.frame_s:
                 self.frame_s = slower
                 self.backed_off += 1
+        elif round_trip_s < self.ECHO_S / 2 and self.frame_s > self.asked_s:
+            self._echo_hold = now + 1.0
+            self.frame_s = max(self.asked_s, self.frame_s / self.BACK_OFF)
 
     @property
     def stretch(self) -> float:

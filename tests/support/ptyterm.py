@@ -93,6 +93,10 @@ class PtyTerminal:
             self.answered += len(due)
             self.type(ANSWER * len(due))
 
+    def backlog_s(self) -> float:
+        """How long the slow link needs to carry what it holds now."""
+        return max(0.0, self._link_free - time.monotonic())
+
     def on_screen_at(self, offset: int) -> float:
         """When the output up to ``offset`` reached the person's screen (through the slow link, if any)."""
         with self._lock:

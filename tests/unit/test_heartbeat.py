@@ -95,7 +95,10 @@ def test_frames_spread_while_the_answers_come_late_and_come_back_with_punctual_t
         t[0] = step * 1.0
         clock.echoed(2.0)
     assert clock.frame_s == FrameClock.SLOWEST_S and clock.stretch == 5.0
-    for _ in range(FrameClock.RECOVER_TICKS * 40):  # punctual ticks with answers on time again
-        clock.ticked(0.0)
-        clock.drawn()
-    assert clock.frame_s == 0.2
+    t[0] = 8.0
+    clock.echoed(0.2)  # (between the bounds: as they are)
+    assert clock.frame_s == FrameClock.SLOWEST_S
+    for step in range(8, 13):  # answers on time again: closer, once a second
+        t[0] = step + 0.5
+        clock.echoed(0.05)
+    assert abs(clock.frame_s - 0.2) < 0.01 and clock.frame_s >= 0.2
