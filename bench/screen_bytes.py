@@ -190,8 +190,9 @@ def table(rows: list[dict], link_kbit: float) -> str:
         )
     lines += [
         "",
-        f"| size | key to echo through {link_kbit:g} kbit/s: p50 / p95 / max | keys echoed |",
-        "|---|---:|---:|",
+        f"| size | key to echo through {link_kbit:g} kbit/s: p50 / p95 / max | keys echoed | bytes/s "
+        "| backlog max |",
+        "|---|---:|---:|---:|---:|",
     ]
     for r in rows:
         if "echo_p50" in r:
