@@ -158,7 +158,7 @@ def echo_through_link(term: PtyTerminal, args: argparse.Namespace) -> dict:
     for i in range(args.keys):
         mark, pressed = term.mark(), time.monotonic()
         term.type("q" if i % 2 == 0 else "z")
-        while time.monotonic() - pressed < 30:
+        while time.monotonic() - pressed < 10:
             if (hit := SPEED.search(term.since(mark))) is not None:
                 echoes.append(term.on_screen_at(mark + hit.end()) - pressed)
                 break
