@@ -47,7 +47,9 @@ from .session.settings import (
     EMBEDDED,
     JOURNAL_MAX_MB,
     KEY_TIMEOUT_S,
+    MAX_FPS,
     OFFSET_WARN_MS,
+    OPERATOR_TIMEOUT_S,
     REPEAT_RATE_HZ,
     SIM,
     Settings,
@@ -235,6 +237,23 @@ def build_parser() -> argparse.ArgumentParser:
         f"{D.key_timeout:g})",
     )
     p.add_argument(
+        "--max-fps",
+        type=bounded_float(*MAX_FPS, "Hz"),
+        default=D.ui_rate,
+        help=f"frames a second at most, and the analytics, latency and topics panels no more often: fewer "
+        f"bytes on a slow link (the console also spreads its frames when the terminal's answers come "
+        f"later than 0.3 s; docs/benchmarks/screen-bytes.md; {MAX_FPS[0]:g}-{MAX_FPS[1]:g}; "
+        f"{D.ui_rate:g})",
+    )
+    p.add_argument(
+        "--operator-timeout",
+        type=bounded_float(*OPERATOR_TIMEOUT_S, "s"),
+        default=D.operator_timeout,
+        help=f"a mission holds (zero command; g resumes it) when the person's terminal has not answered "
+        f"the console's cursor queries for this long, s; 0: never (docs/drive.md, 'An operator who cannot "
+        f"see'; {OPERATOR_TIMEOUT_S[0]:g}-{OPERATOR_TIMEOUT_S[1]:g}; {D.operator_timeout:g})",
+    )
+    p.add_argument(
         "--offset-warn-ms",
         type=bounded_float(*OFFSET_WARN_MS, "ms", low_open=True),
         default=D.offset_warn_ms,
@@ -352,6 +371,9 @@ def run_app(argv: list[str]) -> int:
         turn=turn,
         repeat_rate=args.repeat_rate,
         key_timeout=args.key_timeout,
+        operator_timeout=args.operator_timeout,
+        ui_rate=args.max_fps,
+        analytics_rate=min(D.analytics_rate, args.max_fps),
         offset_warn_ms=args.offset_warn_ms,
         config_path=loaded.path,
         theme=loaded.theme,

@@ -114,6 +114,7 @@ class FrameClock:
         self._due = float("-inf")
         self._pending = False
         self._punctual = 0
+        self._echo_hold = float("-inf")
 
     def ticked(self, late_s: float = 0.0) -> bool:
         """A control tick just ended, its command ``late_s`` after its time: True when a frame is due
@@ -143,6 +144,34 @@ class FrameClock:
     def drawn(self) -> None:
         self._pending = False
 
+    ECHO_S = 0.3  # a key's echo on the person's screen within this (docs/benchmarks/ssh-link.md)
+
+    def echoed(self, round_trip_s: float) -> None:
+        """The person's terminal answered a query written behind the frames ``round_trip_s`` after it
+        was written (``session/heartbeat.py``): the time a key's echo takes to reach the screen. Longer
+        than ``ECHO_S`` is a link slower than the screen (its backlog grows): frames ``BACK_OFF`` times
+        further apart, at most once a second (the answers lag the frames by the backlog), up to
+        ``SLOWEST_S``; under half of it, ``BACK_OFF`` times closer again, as often, down to the asked-for
+        ``frame_s`` (and the punctual ticks, ``_adapt``)."""
+        now = self.clock()
+        if now < self._echo_hold:
+            return
+        if round_trip_s > self.ECHO_S:
+            self._echo_hold = now + 1.0
+            self._punctual = 0
+            slower = min(self.SLOWEST_S, self.frame_s * self.BACK_OFF)
+            if slower > self.frame_s:
+                self.frame_s = slower
+                self.backed_off += 1
+        elif round_trip_s < self.ECHO_S / 2 and self.frame_s > self.asked_s:
+            self._echo_hold = now + 1.0
+            self.frame_s = max(self.asked_s, self.frame_s / self.BACK_OFF)
+
+    @property
+    def stretch(self) -> float:
+        """How many times further apart the frames are than asked (1: as asked)."""
+        return self.frame_s / self.asked_s
+
 
 class FrameSampler:
     """Samples a :class:`RobotSession` and the pollers' answers into one :class:`Frame`.
@@ -166,6 +195,7 @@ class FrameSampler:
         self.tracker = tracker  # the tracker the pollers ask (None: none yet)
         self.start_error: str | None = None
         self._slow_at = {ANALYTICS: float("-inf"), LATENCY: float("-inf"), TOPICS: float("-inf")}
+        self.slow_stretch = 1.0  # the slow parts' period stretched with the frames' (FrameClock.stretch)
         self._count_at = float("-inf")
         self._topics: TopicsState | None = None  # the last topics answer, for the next slow frame
         self.robot_side: RobotSideView | None = None  # observe mode: the robot-side controller's last answer
@@ -239,7 +269,7 @@ class FrameSampler:
         s = self.session
         now = self.clock()
         f = self.frame
-        period = 1.0 / self.settings.analytics_rate
+        period = self.slow_stretch / self.settings.analytics_rate
         due = [part for part, at in self._slow_at.items() if shown.shows(part) and now - at >= period]
         slow = set(self._slow_at) if force else set(due and [min(due, key=self._slow_at.__getitem__)])
         for part in slow:

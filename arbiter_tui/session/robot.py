@@ -46,6 +46,7 @@ from ..control.teleop import MOVE_KEYS, SCALE_KEYS, STOP_KEYS, Teleop
 from ..latency.autonomy import AutonomyUnavailable, RobotSideView
 from ..link.base import DISCONNECTED, RECONNECTING, STARTING, Link, Observes, Stepped
 from .echo import TopicEcho
+from .heartbeat import OperatorWatch
 from .journal import Journal, Sources
 from .remote_stop import RemoteStop
 from .schedule import Jobs, Schedule
@@ -142,6 +143,9 @@ class RobotSession:
         self.too_small = False
         self.stop_reason: str | None = None
         self.on_event: Callable[[object], None] = lambda event: None
+        # does the person's terminal still hear the console? (heartbeat.py; the shell arms it)
+        self.operator = OperatorWatch(config.operator_timeout, lambda e: self.on_event(e))
+        self._robot_side_started = False  # observe mode: g started the robot-side controller
         self.ticks = 0  # control ticks run (tests and the bench read it)
         self.published = False  # the last control tick handed the link a command
         self._was_running = False
@@ -198,6 +202,7 @@ class RobotSession:
         with self.lock:
             self.published = False
             self._follow_observed_life()
+            self._hold_if_unheard()
             try:
                 self.link.telemetry.meter.expire(time.monotonic())  # unreported commands become "lost"
                 refused = self.loop.unsent
@@ -215,6 +220,23 @@ class RobotSession:
         if event is not None:
             self.on_event(event)
         return self.published
+
+    def _hold_if_unheard(self) -> None:
+        """The person's terminal has not answered for longer than the bound (``heartbeat.py``): nobody
+        can see the robot, so what drives on its own holds: a mission stops where it is (one zero; g
+        resumes it), and the robot-side controller the console started is asked to stop."""
+        driving = None
+        if self.loop.running:
+            m = self.loop.mission
+            driving = f"{m.label} ({self.loop.algorithm}, {m.reached}/{m.total} waypoints)"
+        elif self._robot_side_started:
+            driving = "the robot-side controller"
+        if not self.operator.hold(time.monotonic(), driving):
+            return
+        self.stop("operator unheard")
+        if self._robot_side_started:
+            self._robot_side_started = False
+            self.remote_stop.request()
 
     def sample(self) -> DataPoint | None:
         """One sample of the robot into the store (at the collection rate); the point recorded, if any."""
@@ -376,6 +398,7 @@ class RobotSession:
             algorithm = goal_driver(self.loop.algorithm)
             mission, speed, turn = self.loop.mission_name, self.teleop.speed, self.teleop.turn
         status = client.start(algorithm, mission, speed, turn)
+        self._robot_side_started = True
         return f"robot-side {status.run()}: started on the robot"
 
     def take_notice(self) -> str | None:

@@ -15,6 +15,8 @@ COLLECTION_RATE_HZ = (0.0, 100.0)  # (low exclusive, high]: more than 100 sample
 REPEAT_RATE_HZ = (2.0, 50.0)  # at least 2 Hz, so a held key refreshes the 0.5 s deadman in time
 KEY_TIMEOUT_S = (0.1, 2.0)  # more than a few seconds would drive on long after the finger left the key
 OFFSET_WARN_MS = (0.0, 60_000.0)  # (low exclusive, high]
+MAX_FPS = (0.2, 30.0)  # --max-fps: the frames a second (ui_rate) a slow link can ask for
+OPERATOR_TIMEOUT_S = (0.0, 60.0)  # 0: off; [low inclusive, high]
 JOURNAL_MAX_MB = (1.0, 1_000_000.0)  # the journal directory's bound
 
 
@@ -62,4 +64,6 @@ class Settings:
     # the session's journal (session/journal.py): its directory (None: no journal, as in tests and
     # `compare`; the command line gives the user data directory unless --no-journal) and its bound
     journal_dir: Path | None = None
-    journal_max_mb: float = 256.0  # ~10 MB an hour at 10 samples/s with the latency and link records
+    journal_max_mb: float = 256.0
+    # a mission holds when the person's terminal has not answered for this long, s (0: never; heartbeat.py)
+    operator_timeout: float = 1.0  # ~10 MB an hour at 10 samples/s with the latency and link records

@@ -34,7 +34,7 @@ from ..session.config import save_theme
 from ..session.frames import CONTROL, Frame, FrameClock, FrameSampler, Shown
 from ..session.robot import RobotSession
 from ..session.settings import Settings
-from . import lifecycle, palette, perf, robot_side, sweep
+from . import lifecycle, operator, palette, perf, robot_side, sweep
 from .dialogs import Dialogs
 from .keys import STOP_BINDINGS, TYPING, KeyRouter, direct_keys
 from .messages import (
@@ -134,6 +134,7 @@ class ArbiterApp(RegistryTheme):
             # the robot's clock (control, sampling, simulation, on their own thread) says when to paint
             self.frame_clock = lifecycle.frames_after_ticks(self, self.sampler)
             self.session.start()
+            operator.watch(self)  # does the person's terminal still hear the console?
             if self._connector is not None:  # the link (and the backend) start after the first frame
                 connect = partial(lifecycle.connect, self._connector, self)
                 self.run_worker(connect, thread=True, group="connect", exclusive=True, exit_on_error=False)

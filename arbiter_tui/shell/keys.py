@@ -45,11 +45,13 @@ class KeyRouter:
         stop: Callable[[], None] = lambda: None,
         clock: Callable[[], float] = time.monotonic,
         stamp: Callable[[], float] = time.monotonic,
+        reported: Callable[[float], None] = lambda now: None,
     ) -> None:
         self._answer = answer  # the session's key handler (the key, when it was read): True if it used it
         self._stop = stop  # the session's stop (ANYWHERE_STOP, on the input thread)
         self._clock = clock  # the session's clock, the one a key's time is given on
         self._stamp = stamp  # the clock Textual stamps each event with as it makes it (monotonic)
+        self.reported = reported  # the terminal answered a cursor query (session/heartbeat.py), at ``now``
         self._lock = threading.Lock()
         self._direct = False  # the control screen is in front, no dialog over it, no key queued
         self._queued = 0  # keys passed to the UI that it has not answered yet
@@ -139,11 +141,15 @@ class KeyRouter:
 
 def direct_keys(base: type[Driver], router: Callable[[], KeyRouter | None]) -> type[Driver]:
     """``base`` (the terminal driver Textual chose) with keys offered to ``router()`` on the driver's
-    input thread, before they join the UI's queue."""
+    input thread, before they join the UI's queue, and the terminal's answers to the heartbeat's cursor
+    queries (``shell/operator.py``) handed to it there, never queued behind a paint."""
 
     class DirectKeysDriver(base):  # type: ignore[misc, valid-type]  # the driver Textual chose at run time
         def process_message(self, message: Message) -> None:
             keys = router()
+            if isinstance(message, events.CursorPosition) and keys is not None:
+                keys.reported(time.monotonic())  # the heartbeat's answer: the app never needs it
+                return
             if isinstance(message, events.Key) and keys is not None:
                 keys.on_input_thread(message)
             super().process_message(message)

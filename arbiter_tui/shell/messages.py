@@ -17,6 +17,7 @@ from ..control.stop import StopReport
 from ..latency.tracker_client import TrackerClient
 from ..link.base import Link
 from ..session.frames import FrameClock
+from ..session.heartbeat import OperatorBack, OperatorUnknown
 from ..session.journal import Found
 from ..session.robot import JournalSaid, MissionFinished, StopDone
 from ..session.views import AnalyticsView
@@ -173,6 +174,21 @@ class JournalStopped(Said):
         return Notice(self.text, "warning", 10)
 
 
+class OperatorSaid(Said):
+    """The person's terminal answers again after a silence (what held meanwhile), or the console cannot
+    tell whether it hears it (``session/heartbeat.py``)."""
+
+    def __init__(self, event: OperatorBack | OperatorUnknown) -> None:
+        super().__init__()
+        self.event = event
+
+    def notice(self) -> Notice | None:
+        e = self.event
+        if isinstance(e, OperatorUnknown):
+            return Notice(e.text, "warning", 12)
+        return Notice(e.text(), "warning" if e.held else "information", 30 if e.held else 6)
+
+
 def session_said(event: object) -> Said | None:
     """The message for an event of the robot session (told from its threads), None for none."""
     if isinstance(event, MissionFinished):
@@ -183,4 +199,6 @@ def session_said(event: object) -> Said | None:
         return JournalFound(event)
     if isinstance(event, JournalSaid):
         return JournalStopped(event.text)
+    if isinstance(event, (OperatorBack, OperatorUnknown)):
+        return OperatorSaid(event)
     return None
