@@ -139,7 +139,7 @@ class RobotSession:
         )  # fmt: skip
         self.last_export: ExportResult | None = None
         # what it records, on disk as it goes (session/journal.py), where the command line asks
-        self.journal = self._journal() if config.journal_dir is not None and config.live else None
+        self.journal = _journal_of(self) if config.journal_dir is not None and config.live else None
         self.too_small = False
         self.stop_reason: str | None = None
         self.on_event: Callable[[object], None] = lambda event: None
@@ -278,13 +278,6 @@ class RobotSession:
         self.stop(reason)
         if self.journal is not None:
             self.journal.close(reason)
-
-    def _journal(self) -> Journal:
-        c = self.config
-        assert c.journal_dir is not None
-        sources = Sources(self.store, lambda: self.link.telemetry.meter.samples())
-        said = lambda text: self.on_event(JournalSaid(text))  # noqa: E731
-        return Journal(sources, c.journal_dir, int(c.journal_max_mb * 1e6), said, lambda f: self.on_event(f))
 
     # -- commands (any thread) -------------------------------------------------------------------------
     def stop(self, reason: str) -> None:
@@ -450,3 +443,14 @@ class RobotSession:
         if results:
             self.last_export = results[-1]
         return results
+
+
+def _journal_of(session: RobotSession) -> Journal:
+    """The session's journal (``journal.py``): its store and link figures, written under ``journal_dir``;
+    what it says goes through the session's events (a function, not a method: RobotSession is at its
+    bound of 30)."""
+    c = session.config
+    assert c.journal_dir is not None
+    sources = Sources(session.store, lambda: session.link.telemetry.meter.samples())
+    said = lambda text: session.on_event(JournalSaid(text))  # noqa: E731
+    return Journal(sources, c.journal_dir, int(c.journal_max_mb * 1e6), said, lambda f: session.on_event(f))
