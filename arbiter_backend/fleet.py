@@ -29,6 +29,7 @@ from pathlib import Path
 from typing import Any
 
 from arbiter_core import fleet, stopping, topics
+from arbiter_core.cliargs import installed_distribution
 from arbiter_core.hostclock import HostClock
 from arbiter_core.kinematics import pose_of_odometry
 from arbiter_core.mission import Phase
@@ -67,7 +68,8 @@ def import_zenoh() -> Any:
     try:
         import zenoh
     except ImportError:
-        raise FleetConfigError(f"--zenoh {fleet.ZENOH_MISSING}") from None
+        installed = installed_distribution()  # the console's install or the robot's: theirs differ
+        raise FleetConfigError(f"--zenoh {fleet.zenoh_missing(installed and installed[0])}") from None
     return zenoh
 
 
