@@ -324,6 +324,8 @@ async def _run(config: BackendConfig, ros_args: list[str], fleet: FleetSettings 
     except UsageError as exc:
         print(f"arbiter-backend: {exc}", file=sys.stderr)
         return 2
+    if link is not None:
+        backend.fleet_health = link.health.to_dict  # /api/health's fleet key
     try:
         await backend.start()
     except auth.AuthConfigError as exc:

@@ -354,6 +354,67 @@ class Announcer:
 
 
 # -- the Zenoh side ---------------------------------------------------------------------------------
+UNREACHED_S = 3.0  # a session not open this long (no router answers): said once in the log
+POLL_S = 1.0  # how often the open session's routers and peers are looked at
+
+
+class LinkHealth:
+    """The link's state, as ``/api/health`` shows it (its ``fleet`` key) and the log says it (once, then
+    at each change): ``connecting`` (the session is being opened; Zenoh retries for ever), ``connected``
+    (a router, or in peer mode a peer, is reached), ``retrying`` (the open session lost every one of
+    them: Zenoh reconnects), ``failed`` (the session could not be opened), each since when; the last
+    error. Written on the opening thread and the event loop, read on the loop."""
+
+    def __init__(self, endpoints: tuple[str, ...], mode: str, now: float) -> None:
+        self.where = f"{','.join(endpoints)} (Zenoh {mode})"
+        self._endpoints, self._mode = list(endpoints), mode
+        self._lock = threading.Lock()
+        self.state, self.since = "connecting", now
+        self.last_error: str | None = None
+        self._started = now
+        self._warned = False
+
+    def to_dict(self) -> dict[str, Any]:
+        with self._lock:
+            return {
+                "state": self.state,
+                "since": round(self.since, 3),
+                "endpoints": self._endpoints,
+                "mode": self._mode,
+                "last_error": self.last_error,
+            }
+
+    def failed(self, error: str, now: float) -> None:
+        with self._lock:
+            self.state, self.since, self.last_error = "failed", now, error
+
+    def observe(self, reached: bool | None, now: float) -> None:
+        """``reached``: whether the open session has a router or peer (None: not open yet). Logs a
+        router not reached (once), reached, lost and reached again."""
+        with self._lock:
+            was = self.state
+            if was == "failed":
+                return
+            if reached is None:
+                if now - self._started >= UNREACHED_S and not self._warned:
+                    self._warned = True
+                    self.last_error = f"no router answered in {UNREACHED_S:g} s"
+                    log.warning("fleet: cannot reach %s yet: retrying (/api/health: fleet)", self.where)
+                return
+            state = "connected" if reached else "retrying"
+            if state == was:
+                return
+            self.state, self.since = state, now
+            if state == "retrying":
+                self.last_error = "lost every router and peer"
+                self._warned = True
+                log.warning("fleet: lost %s: retrying", self.where)
+            elif self._warned:
+                log.warning("fleet: reached %s after %.0f s", self.where, now - self._started)
+            else:
+                log.info("fleet: reached %s", self.where)
+
+
 class FleetLink:
     """The robot's Zenoh session: opened on its own thread (retried for ever), then the token, one
     publisher per payload, the history queryable. ``put`` before it is open does nothing."""
@@ -369,6 +430,8 @@ class FleetLink:
         self._closed = False
         self._history: Callable[[float], bytes] | None = None
         self._stop: Callable[[Any], None] | None = None
+        self.health = LinkHealth(settings.endpoints, settings.mode, time.time())
+        self._polled = 0.0
 
     def open_in_background(
         self, history: Callable[[float], bytes], stop: Callable[[Any], None] | None = None
@@ -381,8 +444,9 @@ class FleetLink:
         try:
             session = self.zenoh.open(self.config)
         except Exception as exc:
-            log.error("fleet: cannot open a Zenoh session on %s: %s", ",".join(self.settings.endpoints),
-                      str(exc).splitlines()[0][:160])  # fmt: skip
+            error = str(exc).splitlines()[0][:160] if str(exc) else type(exc).__name__
+            self.health.failed(error, time.time())
+            log.error("fleet: cannot open a Zenoh session on %s: %s", self.health.where, error)
             return
         if self._closed:
             session.close()
@@ -397,6 +461,23 @@ class FleetLink:
         self.session = session
         self.opened.set()
         log.info("fleet: announcing as %s on %s", name, ",".join(self.settings.endpoints))
+
+    def poll(self, mono: float) -> None:
+        """The link's health brought up to date (on the announcer's beat, at most every ``POLL_S``)."""
+        if mono - self._polled < POLL_S:
+            return
+        self._polled = mono
+        reached = None
+        if self.opened.is_set() and not self._closed:
+            try:
+                info = self.session.info
+                reached = bool(list(info.routers_zid())) or (
+                    self.settings.mode == "peer" and bool(list(info.peers_zid()))
+                )
+            except Exception as exc:  # the session closing
+                log.debug("fleet: the session's routers not read: %s", exc)
+                return
+        self.health.observe(reached, time.time())
 
     def _on_query(self, query: Any) -> None:
         """A history query (on Zenoh's thread): answered, never raised out of."""
@@ -456,6 +537,7 @@ class FleetAnnouncer:
                 synced = mono
                 loop.run_in_executor(None, self.host_clock.read)
             self.supervisor.beat(WORKER)
+            self.link.poll(mono)
             for p in self.announcer.due(mono, now):
                 if was_open:
                     self.link.put(p.kind, fleet.encode(p))

@@ -14,6 +14,7 @@ import itertools
 import logging
 import ssl
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -148,6 +149,8 @@ class Servers:
         self.host_clock = HostClock()
         # every long-lived worker of the backend, whichever the transport (supervise.py)
         self.supervisor = Supervisor()
+        # with --zenoh, the fleet link's state for /api/health (set by the command line before start)
+        self.fleet_health: Callable[[], dict[str, Any]] | None = None
 
     async def _serve(self, app: web.Application, port: int) -> int:
         runner = web.AppRunner(app, access_log=None, handle_signals=False)
@@ -179,6 +182,7 @@ class Servers:
                 bridge=endpoint.stats if endpoint is not None else None,
                 autonomy=autonomy,
                 workers=self.supervisor.workers,
+                fleet=self.fleet_health,
             )
             self.api_port = await self._serve(api_app, self.config.api_port)
         except BaseException:
