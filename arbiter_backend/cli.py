@@ -33,8 +33,9 @@ from arbiter_core.topicstats import WINDOW_S
 
 from . import supervise
 from .bridge import DEAD_AFTER, MAX_FRAME_BYTES, TRANSPORT_MAX_FRAME, WS_PING_S
+from .config import BackendConfig
 from .pacing import WAIT_S as PACED_WAIT_S
-from .server import Backend, BackendConfig
+from .server import Backend
 
 if TYPE_CHECKING:
     from .fleet import FleetSettings
