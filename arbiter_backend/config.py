@@ -16,7 +16,7 @@ from arbiter_core.topicstats import WINDOW_S
 from . import bridge, rosapi
 from .bridge import MAX_FRAME_BYTES, WS_PING_S, RosbridgeEndpoint
 from .bridge.exposure import Exposure
-from .bus import Bus
+from .bus import Bus, GraphBus
 from .pacing import WAIT_S as PACED_WAIT_S
 from .topicwatch import TopicFilter, TopicWatch
 from .tracker import DEFAULT_MAX_COMMAND_AGE_MS, LatencyTracker
@@ -68,10 +68,9 @@ class BackendConfig:
         param_ok = params.wants if params else lambda name: True
         # no graph on the embedded transport: its parameters live in a store in memory
         rosapi_services = rosapi.ParamStore().handlers(param_ok)
-        graph = getattr(bus, "graph", None)
-        if graph is not None:  # rosapi from the live graph where there is one (ROS mode)
+        if isinstance(bus, GraphBus):  # rosapi from the live graph where there is one (ROS mode)
             rosapi_services = rosapi.handlers(
-                graph,
+                bus.graph,
                 topic_ok=expose.wants if expose else lambda name: True,
                 service_ok=services.wants if services else lambda name: True,
                 param_ok=param_ok,
