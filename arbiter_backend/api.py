@@ -81,13 +81,15 @@ def make_app(
     bridge: Callable[[], dict[str, Any]] | None = None,
     autonomy: AutonomySource | None = None,
     workers: Callable[[], list[dict[str, Any]]] | None = None,
+    fleet: Callable[[], dict[str, Any]] | None = None,
 ) -> web.Application:
     """``bridge``: the rosbridge endpoint's figures (clients, frames dropped per topic), added to
     ``/api/health`` as its ``bridge`` key. ``autonomy``: the robot-side controller ``/api/autonomy``
     starts (POST), stops (DELETE) and reports (GET); None: 403 (the backend runs without
     ``--autonomy``: nothing that moves the robot is reachable). ``workers``: the backend's long-lived
     workers (``supervise.Supervisor.workers``), added to ``/api/health`` as its ``workers`` key; when one
-    is ``failed``, ``status`` is ``degraded`` and ``failed_workers`` names them."""
+    is ``failed``, ``status`` is ``degraded`` and ``failed_workers`` names them. ``fleet``: with
+    ``--zenoh``, the fleet link's state (``fleet.LinkHealth``), added as its ``fleet`` key."""
     clock = HostClock() if host_clock is None else host_clock
 
     def _int(request: web.Request, name: str, lo: int, hi: int) -> int | None:
@@ -119,6 +121,8 @@ def make_app(
         body["time_sync"] = (await asyncio.to_thread(clock.read)).to_dict()
         if bridge is not None:
             body = {**body, "bridge": bridge()}
+        if fleet is not None:
+            body = {**body, "fleet": fleet()}
         if workers is not None:
             listed = workers()
             body = {**body, "workers": listed}

@@ -11,9 +11,12 @@ from __future__ import annotations
 import asyncio
 import logging
 from collections.abc import Callable
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 from arbiter_core.msgtypes import MessageError, check_message, normalize_type
+
+if TYPE_CHECKING:
+    from .rosapi import Graph
 
 log = logging.getLogger(__name__)
 
@@ -36,6 +39,29 @@ class Bus(Protocol):
         self, topic: str, callback: Callback, type_name: str | None = None
     ) -> Callable[[], None]: ...
     def publish(self, topic: str, msg: Any, type_name: str | None = None) -> dict[str, Any]: ...
+
+
+# -- what a bus may have beyond Bus: checked with isinstance, never probed by name, so that a rename fails
+# the type check (ros/bus.py states that RosBus has both), as the console's link/base.py does -----------
+@runtime_checkable
+class GraphBus(Protocol):
+    """A bus on a ROS graph (``ros.bus.RosBus``): rosapi answers from the live graph, any service on it is
+    called, and what clients provide or send goals to goes through rclpy (``interfaces``)."""
+
+    @property
+    def graph(self) -> Graph: ...
+    @property
+    def interfaces(self) -> Any: ...  # ros.interfaces.RosInterfaces (rclpy's): set by the ROS backend
+
+
+@runtime_checkable
+class ConvertingBus(Protocol):
+    """A bus that carries ROS messages (``ros.bus.RosBus``): their JSON form made on first use, rosbridge's
+    CBOR form (typed arrays, byte strings) and their CDR bytes (``cbor-raw``) with the time received."""
+
+    def json_form(self, msg: dict[str, Any]) -> dict[str, Any]: ...
+    def cbor_values(self, type_name: str | None, msg: dict[str, Any]) -> dict[str, Any]: ...
+    def cdr(self, type_name: str | None, msg: dict[str, Any]) -> tuple[bytes, int]: ...
 
 
 class TopicBus:

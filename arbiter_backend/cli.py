@@ -33,8 +33,9 @@ from arbiter_core.topicstats import WINDOW_S
 
 from . import supervise
 from .bridge import DEAD_AFTER, MAX_FRAME_BYTES, TRANSPORT_MAX_FRAME, WS_PING_S
+from .config import BackendConfig
 from .pacing import WAIT_S as PACED_WAIT_S
-from .server import Backend, BackendConfig
+from .server import Backend
 
 if TYPE_CHECKING:
     from .fleet import FleetSettings
@@ -324,6 +325,8 @@ async def _run(config: BackendConfig, ros_args: list[str], fleet: FleetSettings 
     except UsageError as exc:
         print(f"arbiter-backend: {exc}", file=sys.stderr)
         return 2
+    if link is not None:
+        backend.fleet_health = link.health.to_dict  # /api/health's fleet key
     try:
         await backend.start()
     except auth.AuthConfigError as exc:

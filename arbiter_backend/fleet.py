@@ -26,9 +26,10 @@ from collections import deque
 from collections.abc import Callable, Coroutine
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 from arbiter_core import fleet, stopping, topics
+from arbiter_core.cliargs import installed_distribution
 from arbiter_core.hostclock import HostClock
 from arbiter_core.kinematics import pose_of_odometry
 from arbiter_core.mission import Phase
@@ -36,9 +37,14 @@ from arbiter_core.stats import percentile
 from arbiter_core.topicstats import Expectation, TopicFigures
 
 from .autonomy import AutonomyService
+from .bus import Bus, TopicBus
 from .supervise import Supervisor
 from .topicwatch import TopicWatch
 from .tracker import LatencyTracker
+
+if TYPE_CHECKING:
+    from .bridge import RosbridgeEndpoint
+    from .config import BackendConfig
 
 log = logging.getLogger(__name__)
 TICK_S = 0.25  # the announcer's beat: what is due is published on it
@@ -67,7 +73,8 @@ def import_zenoh() -> Any:
     try:
         import zenoh
     except ImportError:
-        raise FleetConfigError(f"--zenoh {fleet.ZENOH_MISSING}") from None
+        installed = installed_distribution()  # the console's install or the robot's: theirs differ
+        raise FleetConfigError(f"--zenoh {fleet.zenoh_missing(installed and installed[0])}") from None
     return zenoh
 
 
@@ -112,17 +119,92 @@ class Sources:
     api_port: int | None
 
 
-def sources_of(backend: Any, advertise_host: str | None = None) -> Sources:
+# -- what the fleet reads of a backend: one protocol both transports meet, and the capabilities one has
+# (isinstance, never a name probed: cli.py hands either backend here, and the type check holds both to
+# FleetBackend; the capabilities are stated for it below, in _capabilities) -----------------------------
+class WatchesTopics(Protocol):
+    @property
+    def watch(self) -> TopicWatch: ...
+
+
+class FleetBackend(Protocol):
+    """A started backend, whichever the transport (``server.Backend``, ``ros.backend.RosBackend``)."""
+
+    @property
+    def config(self) -> BackendConfig: ...
+    @property
+    def tracker(self) -> LatencyTracker: ...
+    @property
+    def sim_enabled(self) -> bool: ...
+    @property
+    def bridge_port(self) -> int | None: ...
+    @property
+    def api_port(self) -> int | None: ...
+    @property
+    def host_clock(self) -> HostClock: ...
+    @property
+    def supervisor(self) -> Supervisor: ...
+    @property
+    def bus(self) -> Bus | None: ...
+    @property
+    def endpoint(self) -> RosbridgeEndpoint | None: ...
+    @property
+    def topics(self) -> WatchesTopics: ...
+    def publish_zero(self) -> None: ...
+
+
+@runtime_checkable
+class RunsAutonomy(Protocol):
+    """The embedded backend: its robot-side controller in process (None without ``--autonomy``)."""
+
+    @property
+    def autonomy(self) -> AutonomyService | None: ...
+    @property
+    def topic_odom(self) -> str: ...
+
+
+class ServesAutonomy(Protocol):
+    @property
+    def service(self) -> AutonomyService: ...
+
+
+class NamedNode(Protocol):
+    def get_namespace(self) -> str: ...
+
+
+@runtime_checkable
+class RunsNodes(Protocol):
+    """The ROS backend: the controller in its own node, and the tracker node's namespace as rcl resolved
+    it (a ``--ros-args -r __ns:=/robot1`` remap)."""
+
+    @property
+    def autonomy_node(self) -> ServesAutonomy | None: ...
+    @property
+    def tracker_node(self) -> NamedNode: ...
+
+
+if TYPE_CHECKING:
+    from .ros.backend import RosBackend
+    from .server import Backend
+
+    def _capabilities(
+        embedded: Backend, ros: RosBackend
+    ) -> tuple[FleetBackend, FleetBackend, RunsAutonomy, RunsNodes]:
+        """What sources_of finds by isinstance, stated for the type check: a rename fails it."""
+        return embedded, ros, embedded, ros
+
+
+def sources_of(backend: FleetBackend, advertise_host: str | None = None) -> Sources:
     """Read an embedded (``server.Backend``) or ROS (``ros.backend.RosBackend``) backend, started."""
     config = backend.config
-    autonomy = getattr(backend, "autonomy", None)
-    node = getattr(backend, "autonomy_node", None)
+    autonomy = backend.autonomy if isinstance(backend, RunsAutonomy) else None
+    node = backend.autonomy_node if isinstance(backend, RunsNodes) else None
     if node is not None:
         autonomy = node.service
     last: dict[str, Any] = {}
-    odom_topic = getattr(backend, "topic_odom", None)
-    bus = getattr(backend, "bus", None)
-    if odom_topic is not None and bus is not None and hasattr(bus, "taps"):  # the embedded bus: its taps
+    bus = backend.bus
+    if isinstance(backend, RunsAutonomy) and isinstance(bus, TopicBus):  # the embedded bus: its taps
+        odom_topic = backend.topic_odom
 
         def tap(topic: str, type_name: str, msg: dict[str, Any]) -> None:
             if topic == odom_topic:
@@ -135,13 +217,14 @@ def sources_of(backend: Any, advertise_host: str | None = None) -> Sources:
     host = advertise_host or config.host
     if host in ("0.0.0.0", "::", ""):
         host = socket.gethostname()
-    topic_source = getattr(backend, "topics", None)
     # ROS: the tracker node's namespace as rcl resolved it (a ``--ros-args -r __ns:=/robot1`` remap)
-    tracker_node = getattr(backend, "tracker_node", None)
-    namespace = config.namespace if tracker_node is None else tracker_node.get_namespace().rstrip("/")
+    if isinstance(backend, RunsNodes):
+        namespace = backend.tracker_node.get_namespace().rstrip("/")
+    else:
+        namespace = config.namespace
     return Sources(
         tracker=backend.tracker,
-        watch=getattr(topic_source, "watch", None),
+        watch=backend.topics.watch,
         autonomy=autonomy,
         odometry=lambda: last.get("odom"),
         cmd_topic=topics.resolve("cmd_vel", namespace),
@@ -352,6 +435,67 @@ class Announcer:
 
 
 # -- the Zenoh side ---------------------------------------------------------------------------------
+UNREACHED_S = 3.0  # a session not open this long (no router answers): said once in the log
+POLL_S = 1.0  # how often the open session's routers and peers are looked at
+
+
+class LinkHealth:
+    """The link's state, as ``/api/health`` shows it (its ``fleet`` key) and the log says it (once, then
+    at each change): ``connecting`` (the session is being opened; Zenoh retries for ever), ``connected``
+    (a router, or in peer mode a peer, is reached), ``retrying`` (the open session lost every one of
+    them: Zenoh reconnects), ``failed`` (the session could not be opened), each since when; the last
+    error. Written on the opening thread and the event loop, read on the loop."""
+
+    def __init__(self, endpoints: tuple[str, ...], mode: str, now: float) -> None:
+        self.where = f"{','.join(endpoints)} (Zenoh {mode})"
+        self._endpoints, self._mode = list(endpoints), mode
+        self._lock = threading.Lock()
+        self.state, self.since = "connecting", now
+        self.last_error: str | None = None
+        self._started = now
+        self._warned = False
+
+    def to_dict(self) -> dict[str, Any]:
+        with self._lock:
+            return {
+                "state": self.state,
+                "since": round(self.since, 3),
+                "endpoints": self._endpoints,
+                "mode": self._mode,
+                "last_error": self.last_error,
+            }
+
+    def failed(self, error: str, now: float) -> None:
+        with self._lock:
+            self.state, self.since, self.last_error = "failed", now, error
+
+    def observe(self, reached: bool | None, now: float) -> None:
+        """``reached``: whether the open session has a router or peer (None: not open yet). Logs a
+        router not reached (once), reached, lost and reached again."""
+        with self._lock:
+            was = self.state
+            if was == "failed":
+                return
+            if reached is None:
+                if now - self._started >= UNREACHED_S and not self._warned:
+                    self._warned = True
+                    self.last_error = f"no router answered in {UNREACHED_S:g} s"
+                    log.warning("fleet: cannot reach %s yet: retrying (/api/health: fleet)", self.where)
+                return
+            state = "connected" if reached else "retrying"
+            if state == was:
+                return
+            self.state, self.since = state, now
+            if state == "retrying":
+                self.last_error = "lost every router and peer"
+                self._warned = True
+                log.warning("fleet: lost %s: retrying", self.where)
+            elif self._warned:
+                log.warning("fleet: reached %s after %.0f s", self.where, now - self._started)
+            else:
+                log.info("fleet: reached %s", self.where)
+
+
 class FleetLink:
     """The robot's Zenoh session: opened on its own thread (retried for ever), then the token, one
     publisher per payload, the history queryable. ``put`` before it is open does nothing."""
@@ -367,6 +511,8 @@ class FleetLink:
         self._closed = False
         self._history: Callable[[float], bytes] | None = None
         self._stop: Callable[[Any], None] | None = None
+        self.health = LinkHealth(settings.endpoints, settings.mode, time.time())
+        self._polled = 0.0
 
     def open_in_background(
         self, history: Callable[[float], bytes], stop: Callable[[Any], None] | None = None
@@ -379,8 +525,9 @@ class FleetLink:
         try:
             session = self.zenoh.open(self.config)
         except Exception as exc:
-            log.error("fleet: cannot open a Zenoh session on %s: %s", ",".join(self.settings.endpoints),
-                      str(exc).splitlines()[0][:160])  # fmt: skip
+            error = str(exc).splitlines()[0][:160] if str(exc) else type(exc).__name__
+            self.health.failed(error, time.time())
+            log.error("fleet: cannot open a Zenoh session on %s: %s", self.health.where, error)
             return
         if self._closed:
             session.close()
@@ -395,6 +542,23 @@ class FleetLink:
         self.session = session
         self.opened.set()
         log.info("fleet: announcing as %s on %s", name, ",".join(self.settings.endpoints))
+
+    def poll(self, mono: float) -> None:
+        """The link's health brought up to date (on the announcer's beat, at most every ``POLL_S``)."""
+        if mono - self._polled < POLL_S:
+            return
+        self._polled = mono
+        reached = None
+        if self.opened.is_set() and not self._closed:
+            try:
+                info = self.session.info
+                reached = bool(list(info.routers_zid())) or (
+                    self.settings.mode == "peer" and bool(list(info.peers_zid()))
+                )
+            except Exception as exc:  # the session closing
+                log.debug("fleet: the session's routers not read: %s", exc)
+                return
+        self.health.observe(reached, time.time())
 
     def _on_query(self, query: Any) -> None:
         """A history query (on Zenoh's thread): answered, never raised out of."""
@@ -423,7 +587,7 @@ class FleetLink:
 class FleetAnnouncer:
     """The announcer on the backend's event loop, publishing through the link."""
 
-    def __init__(self, backend: Any, settings: FleetSettings, link: FleetLink) -> None:
+    def __init__(self, backend: FleetBackend, settings: FleetSettings, link: FleetLink) -> None:
         self.link = link
         self.backend = backend
         self.host_clock: HostClock = backend.host_clock  # the API's: the host is probed once for both
@@ -454,6 +618,7 @@ class FleetAnnouncer:
                 synced = mono
                 loop.run_in_executor(None, self.host_clock.read)
             self.supervisor.beat(WORKER)
+            self.link.poll(mono)
             for p in self.announcer.due(mono, now):
                 if was_open:
                     self.link.put(p.kind, fleet.encode(p))
@@ -480,7 +645,7 @@ class RobotStop:
     event loop, answered from there: Zenoh's thread never waits for it. Who may ask is the router's
     access control: the robot answers whoever reaches it."""
 
-    def __init__(self, backend: Any, announcer: Announcer, loop: asyncio.AbstractEventLoop) -> None:
+    def __init__(self, backend: FleetBackend, announcer: Announcer, loop: asyncio.AbstractEventLoop) -> None:
         self.backend = backend
         self.announcer = announcer
         self.loop = loop
@@ -585,11 +750,8 @@ class RobotStop:
 
     def _zero(self) -> bool:
         """One zero command on the robot's output (what the deadman sends), where the backend has one."""
-        publish_zero = getattr(self.backend, "publish_zero", None)
-        if publish_zero is None:
-            return False
         try:
-            publish_zero()
+            self.backend.publish_zero()
         except Exception as exc:
             log.warning("fleet: the stop's zero was not sent: %s", exc)
             return False
@@ -597,9 +759,10 @@ class RobotStop:
 
     def _actions(self) -> list[str]:
         """The action servers a stop cancels (Nav2's, under the robot's namespace) that are there."""
-        room = getattr(getattr(self.backend, "endpoint", None), "service_room", None)
-        if room is None:
+        endpoint = self.backend.endpoint
+        if endpoint is None:
             return []
+        room = endpoint.service_room
         ns = self.announcer.src.namespace
         wanted = [topics.resolve(a, ns, what="action") for a in stopping.NAV2_ACTIONS]
         on_graph: set[str] = set()
@@ -612,7 +775,9 @@ class RobotStop:
     async def _cancel(self, action: str) -> stopping.ActionCancel:
         """Every goal of ``action`` cancelled: through the bridge's client that provides it, else on the
         ROS graph; bounded by ``CANCEL_TIMEOUT_S``."""
-        room = self.backend.endpoint.service_room
+        endpoint = self.backend.endpoint
+        assert endpoint is not None  # _actions found none without it
+        room = endpoint.service_room
         service = action + stopping.CANCEL_SUFFIX
         try:
             provided = room.provided.get(service)
@@ -620,6 +785,8 @@ class RobotStop:
                 ok, values = await provided.call(stopping.CANCEL_ALL, stopping.CANCEL_TIMEOUT_S)
                 if not ok:
                     return stopping.cancel_failure(action, str(values))
+            elif room.graph is None:
+                return stopping.cancel_failure(action, "no provider and no ROS graph")
             else:
                 call = room.graph.call_service(service, stopping.CANCEL_ALL)
                 values = await asyncio.wait_for(call, stopping.CANCEL_TIMEOUT_S)
@@ -630,7 +797,7 @@ class RobotStop:
         return stopping.cancel_outcome(action, values)
 
     def _cmd_type(self, cmd_topic: str) -> str | None:
-        bus = getattr(self.backend, "bus", None)
+        bus = self.backend.bus
         t = None if bus is None else bus.type_of(cmd_topic)
         return t if t in (topics.TYPE_TWIST, topics.TYPE_TWIST_STAMPED) else None
 
@@ -642,7 +809,10 @@ class RobotStop:
         while time.monotonic() < end:
             try:
                 zero = topics.measured_message(0.0, 0.0, kind, time.time_ns())
-                self.backend.bus.publish(cmd_topic, zero)
+                bus = self.backend.bus
+                if bus is None:
+                    return
+                bus.publish(cmd_topic, zero)
             except Exception as exc:
                 log.warning("fleet: a zero on %s was not sent: %s", cmd_topic, exc)
                 return

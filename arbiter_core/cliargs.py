@@ -211,18 +211,23 @@ LOG_LEVELS = ("DEBUG", "INFO", "WARNING", "ERROR")
 DISTRIBUTIONS = ("arbiter-tui", "arbiter-backend")  # the console's (both commands), the robot's (robot/)
 
 
-def add_version(parser: argparse.ArgumentParser) -> None:
-    """``--version``: the installed distribution's version (the console's carries both commands; a robot
-    may have the backend's alone)."""
+def installed_distribution() -> tuple[str, str] | None:
+    """The distribution these modules were installed from and its version (the console's carries both
+    commands; a robot may have the backend's alone), or None from a source tree never installed."""
     from importlib.metadata import PackageNotFoundError, version
 
-    text = "unknown (not installed)"  # running from a source tree that was never installed
     for distribution in DISTRIBUTIONS:
         try:
-            text = version(distribution)
-            break
+            return distribution, version(distribution)
         except PackageNotFoundError:
             continue
+    return None
+
+
+def add_version(parser: argparse.ArgumentParser) -> None:
+    """``--version``: the installed distribution's version."""
+    installed = installed_distribution()
+    text = "unknown (not installed)" if installed is None else installed[1]
     parser.add_argument("--version", action="version", version=f"{parser.prog} {text}")
 
 

@@ -771,7 +771,21 @@ def _round(v: float | None) -> float | None:
 
 
 # -- a Zenoh session's settings (both sides insert these into a zenoh.Config) -----------------------
-ZENOH_MISSING = "needs eclipse-zenoh (the [fleet] extra): pip install 'arbiter-tui[fleet]'"
+# how to add the [fleet] extra to each install (docs/INSTALL.md): the robot's is built from a clone
+FLEET_INSTALLS = {
+    "arbiter-tui": "pip install 'arbiter-tui[fleet]'",
+    "arbiter-backend": "pip install './robot[fleet]' (the robot's install, from the repository's clone)",
+}
+
+
+def zenoh_missing(distribution: str | None = "arbiter-tui") -> str:
+    """The one line saying how to get Zenoh into the install ``distribution`` (None: not installed,
+    a source tree: the console's)."""
+    how = FLEET_INSTALLS.get(distribution or "arbiter-tui", FLEET_INSTALLS["arbiter-tui"])
+    return f"needs eclipse-zenoh (the [fleet] extra): {how}"
+
+
+ZENOH_MISSING = zenoh_missing()
 DEFAULT_LEASE_MS = 1500  # a robot whose session goes silent this long is dropped by its router: "lost"
 MAX_MESSAGE_BYTES = 16 * 1024 * 1024  # larger messages are dropped by Zenoh's transport, unread
 

@@ -19,8 +19,10 @@ from __future__ import annotations
 import itertools
 from typing import Any
 
+from arbiter_core.msgtypes import MessageError
+
 from .. import cborenc, jsonframe, pngtext
-from ..bus import Bus
+from ..bus import Bus, ConvertingBus
 from .frames import dumps
 from .outbox import Fragments, Payload
 
@@ -38,6 +40,9 @@ class Encoder:
 
     def __init__(self, bus: Bus) -> None:
         self.bus = bus
+        # the ROS transport's bus: its own JSON, CBOR and CDR forms (decided once: isinstance on a protocol
+        # is slow for a per-message path)
+        self.converting: ConvertingBus | None = bus if isinstance(bus, ConvertingBus) else None
         # (topic, encoding) -> (the last message, its frame); (topic, "fragments:<size>") -> (the last
         # message, its parts)
         self._encoded: dict[tuple[str, str], tuple[Any, Payload]] = {}
@@ -47,7 +52,7 @@ class Encoder:
     @property
     def serialises(self) -> bool:
         """The bus has each message's CDR bytes (``cbor-raw``): the ROS transport."""
-        return hasattr(self.bus, "cdr")
+        return self.converting is not None
 
     def encode(
         self, topic: str, compression: str, type_name: str | None, msg: dict[str, Any], fragment_size: int
@@ -70,21 +75,23 @@ class Encoder:
             return cached[1]
         frame: Payload
         if encoding in ("none", "png"):  # ROS mode: the JSON form is made on first use (ros/bus.py)
-            json_form = getattr(self.bus, "json_form", None)
-            if json_form is None:  # the embedded bus: no ROS converter, so no base64 to splice
+            if self.converting is None:  # the embedded bus: no ROS converter, so no base64 to splice
                 text = dumps({"op": "publish", "topic": topic, "msg": msg})
             else:  # a camera's base64 spliced in, not scanned for escapes
-                text = jsonframe.dumps({"op": "publish", "topic": topic, "msg": json_form(msg)})
+                text = jsonframe.dumps(
+                    {"op": "publish", "topic": topic, "msg": self.converting.json_form(msg)}
+                )
         if encoding == "none":
             frame = text
         elif encoding == "png":
             frame = dumps({"op": "png", "data": pngtext.encode(text)})
         elif encoding == "cbor":
-            convert = getattr(self.bus, "cbor_values", None) or cborenc.values_of
+            convert = cborenc.values_of if self.converting is None else self.converting.cbor_values
             frame = cborenc.encode({"op": "publish", "topic": topic, "msg": convert(type_name, msg)})
-        else:  # cbor-raw: the CDR bytes and the time received (subscribe checked the bus has ``cdr``)
-            cdr = self.bus.cdr  # type: ignore[attr-defined]  # only the ROS bus has it: subscribe checked
-            raw, received_ns = cdr(type_name, msg)
+        else:  # cbor-raw: the CDR bytes and the time received (subscribe checked ``serialises``)
+            if self.converting is None:
+                raise MessageError("cbor-raw needs the ROS transport's CDR bytes")
+            raw, received_ns = self.converting.cdr(type_name, msg)
             secs, nsecs = divmod(received_ns, 1_000_000_000)
             frame = cborenc.encode(
                 {"op": "publish", "topic": topic, "msg": {"secs": secs, "nsecs": nsecs, "bytes": raw}}

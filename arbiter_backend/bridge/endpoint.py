@@ -23,7 +23,7 @@ from arbiter_core import auth
 from arbiter_core.msgtypes import MessageError
 
 from .. import cborenc, pacing, rosapi
-from ..bus import Bus
+from ..bus import Bus, GraphBus
 from ..topicwatch import TopicFilter
 from . import ops, wire
 from .actions import ActionRoom
@@ -71,12 +71,13 @@ class RosbridgeEndpoint:
         exposure = Exposure(expose_topics, expose_services, expose_actions, namespace, node)
         # ROS mode: the rest of the graph (rosapi, any service), and rclpy servers for what clients
         # provide and an action client for the goals they send (ros/graph.py, ros/interfaces.py)
-        graph: rosapi.Graph | None = getattr(bus, "graph", None)
+        on_graph = bus if isinstance(bus, GraphBus) else None
+        graph = None if on_graph is None else on_graph.graph
         # the endpoint's own services (rosapi), by name
         distro = graph.distro() if graph is not None else ""
         self.services = rosapi.bus_handlers(bus, exposure.topic_ok, exposure.resolve, distro)
         self.services.update(services or {})
-        interfaces: Any = getattr(bus, "interfaces", None)
+        interfaces = None if on_graph is None else on_graph.interfaces
         self.topic_room = TopicRoom(bus, exposure, Encoder(bus), self.clients, client_queue)
         self.service_room = ServiceRoom(graph, interfaces, exposure, self.services)
         self.action_room = ActionRoom(interfaces, exposure)

@@ -16,7 +16,7 @@ from arbiter_core import envelope, topics
 from arbiter_core.kinematics import Pose, quaternion_to_yaw
 
 from .. import autonomy as A
-from ..server import BackendConfig
+from ..config import BackendConfig
 from .bus import default_qos
 from .convert import message_class, to_ros
 

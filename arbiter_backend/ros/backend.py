@@ -23,7 +23,8 @@ from rclpy.node import Node
 from arbiter_core import topics
 
 from .. import bridge
-from ..server import BackendConfig, Servers
+from ..config import BackendConfig
+from ..servers import Servers
 from . import topicwatch
 from .autonomy import AutonomyNode
 from .bus import RosBus

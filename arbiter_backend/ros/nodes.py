@@ -27,7 +27,7 @@ from arbiter_core import simulator, topics
 from arbiter_core.kinematics import Limits
 
 from .. import tracker
-from ..server import BackendConfig
+from ..config import BackendConfig
 from ..supervise import WorkerRecord
 from .bus import default_qos
 from .convert import message_class, to_json, to_ros

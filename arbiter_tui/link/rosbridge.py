@@ -15,7 +15,7 @@ from arbiter_core import envelope, topics
 from arbiter_core import failures as errors
 
 from ..analytics.observe import Observer
-from . import wsframe
+from . import twisted_internals
 from .base import CLOSED, CONNECTED, CONNECTING, DISCONNECTED, RECONNECTING, Telemetry
 from .observed import (
     TYPE_GOAL_STATUS_ARRAY,
@@ -41,32 +41,6 @@ PING_TIMEOUT_S = 2.0  # ...and a link with no pong for this long is dropped (the
 REPORT_QUEUE = 1000  # latency reports the server may hold for us (its default): 10 s of 100 Hz commands
 
 
-def _write_now(proto: Any, payload: bytes) -> None:
-    """Send a text frame on the reactor thread: straight into the socket when it is a plain TCP
-    socket with nothing buffered (so ordering is kept), otherwise through autobahn and Twisted's
-    buffer (TLS, or data already queued)."""
-    from twisted.internet import tcp
-
-    transport = getattr(proto, "transport", None)
-    if (
-        # only a plain TCP socket: under TLS (a BufferingTLSTransport, or tcp.Client after startTLS)
-        # writeSomeData would bypass the encryption (found by the wss:// test)
-        not isinstance(transport, tcp.Client)
-        or transport.TLS
-        or getattr(proto, "state", None) != getattr(proto, "STATE_OPEN", object())
-        or getattr(transport, "_tempDataBuffer", True)
-        or getattr(transport, "dataBuffer", True)
-    ):
-        proto.sendMessage(payload, isBinary=False)
-        return
-    frame = wsframe.text_frame(payload)
-    written = transport.writeSomeData(frame)
-    if not isinstance(written, int):  # an error object: the connection is going; Twisted reports it
-        return
-    if written < len(frame):
-        transport.write(frame[written:])  # type: ignore[no-untyped-call]  # Twisted's is not annotated
-
-
 class RosLink:
     """The rosbridge link: stamped commands out, odometry and latency reports in (roslibpy on Twisted's
     thread; its callbacks only write :class:`Telemetry`)."""
@@ -87,6 +61,7 @@ class RosLink:
         from twisted.internet import reactor
         from twisted.internet.threads import blockingCallFromThread
 
+        twisted_internals.install()  # whether commands may go straight into the socket (this release)
         factory_cls = select_factory()
         factory_cls.set_max_delay(MAX_RECONNECT_DELAY_S)  # roslibpy's default is an hour
         factory_cls.set_initial_delay(0.3)
@@ -129,35 +104,25 @@ class RosLink:
         factory = self.ros.factory
         # A silently dead link (cable out, Wi-Fi gone, NAT timeout) sends no FIN: only pings find it.
         factory.setProtocolOptions(autoPingInterval=PING_INTERVAL_S, autoPingTimeout=PING_TIMEOUT_S)
-        original_started = factory.startedConnecting
 
-        def started(connector: Any) -> None:
+        def started() -> None:
             with self._lock:
                 if self._state == DISCONNECTED:
                     self._state = RECONNECTING
-            original_started(connector)
 
-        factory.startedConnecting = started
-        original_failed = factory.clientConnectionFailed
-
-        def failed(connector: Any, reason: Any) -> None:  # refused or unreachable: no "close" event
+        def failed(reason: Any) -> None:  # refused or unreachable: no "close" event
             with self._lock:
                 if self._state != CLOSED:
                     self._state = DISCONNECTED
             value = getattr(reason, "value", reason)
             self._set_error(errors.connect_failure(type(value).__name__, str(value)))
-            original_failed(connector, reason)
 
-        factory.clientConnectionFailed = failed
-        original_lost = factory.clientConnectionLost
-
-        def lost(connector: Any, reason: Any) -> None:  # a TLS handshake that failed ends up here
+        def lost(reason: Any) -> None:  # a TLS handshake that failed ends up here
             value = getattr(reason, "value", reason)
             if "SSL" in type(value).__module__ + type(value).__name__:
                 self._set_error(errors.connect_failure(type(value).__name__, str(value)))
-            original_lost(connector, reason)
 
-        factory.clientConnectionLost = lost
+        twisted_internals.hook_connection(factory, started, failed, lost)
         link = self
 
         class Protocol(factory.protocol):  # type: ignore[misc, name-defined]  # roslibpy's, untyped
@@ -176,8 +141,7 @@ class RosLink:
                     link._set_error(said)
                     if said.startswith(errors.TOKEN_HINT):
                         # the same token will be refused again: retry slowly, and say so
-                        factory.delay = max(factory.delay, AUTH_RETRY_S / factory.factor)
-                        factory.maxDelay = AUTH_RETRY_S
+                        twisted_internals.retry_slowly(factory, AUTH_RETRY_S)
                 super().onClose(wasClean, code, reason)
 
         factory.protocol = Protocol
@@ -207,7 +171,7 @@ class RosLink:
         dropped while the link is down: the registry sends its subscriptions again when it is up."""
 
         def write() -> None:
-            proto = self.ros.factory._proto
+            proto = twisted_internals.open_protocol(self.ros.factory)
             if proto is None or not self.ros.is_connected:
                 return
             try:
@@ -240,8 +204,8 @@ class RosLink:
 
     def _on_ready(self, proto: Any) -> None:
         # roslibpy has no handler for rosbridge "status" frames; ours records the message.
-        proto._message_handlers["status"] = self._on_status
-        self.ros.factory.maxDelay = MAX_RECONNECT_DELAY_S  # a token accepted: back to fast retries
+        twisted_internals.handle_op(proto, "status", self._on_status)
+        twisted_internals.retry_fast(self.ros.factory, MAX_RECONNECT_DELAY_S)  # a token accepted
         with self._lock:
             self._error = None
             self._odom_problem = None  # subscribed again: what the server says now counts
@@ -311,7 +275,7 @@ class RosLink:
         ``Date.now()`` + ``ws.send`` does. roslibpy would stamp on the caller's thread and then
         hop threads, putting the hand-off wait (up to the GIL switch interval while the UI
         renders) inside the measured latency."""
-        proto = self.ros.factory._proto
+        proto = twisted_internals.open_protocol(self.ros.factory)
         if proto is None or not self.ros.is_connected:
             return  # dropped while queued: counted lost by nobody, never stamped
         # lets the tracker judge the command's age across clocks: the clock model's offset now
@@ -325,7 +289,7 @@ class RosLink:
             separators=(",", ":"),
         )
         try:
-            _write_now(proto, frame.encode("utf-8"))
+            twisted_internals.write_now(proto, frame.encode("utf-8"))
         except Exception:  # a socket closing under us: the meter counts it lost later
             log.debug("sending a command failed", exc_info=True)
         # After the write: nothing that takes a lock stands between the stamp and the socket. The

@@ -3,7 +3,8 @@
 import aiohttp
 import pytest
 
-from arbiter_backend.server import Backend, BackendConfig
+from arbiter_backend.config import BackendConfig
+from arbiter_backend.server import Backend
 
 
 @pytest.fixture

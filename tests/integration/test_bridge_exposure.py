@@ -4,7 +4,8 @@ rosapi lists nothing of it; the connection stays up."""
 
 import json
 
-from arbiter_backend.server import Backend, BackendConfig
+from arbiter_backend.config import BackendConfig
+from arbiter_backend.server import Backend
 
 
 async def frames_until(ws, want, limit: int = 50):

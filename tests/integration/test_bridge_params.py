@@ -52,7 +52,8 @@ def test_roslibpy_param(backend):
 
 
 async def test_parameters_outside_the_glob_are_not_reachable(session):
-    from arbiter_backend.server import Backend, BackendConfig
+    from arbiter_backend.config import BackendConfig
+    from arbiter_backend.server import Backend
 
     backend = Backend(BackendConfig(bridge_port=0, api_port=0, sim=False, params_glob="max_*"))
     await backend.start()

@@ -127,6 +127,36 @@ def test_robots_appear_a_killed_one_is_lost_within_its_lease_and_alive_after_a_r
     )
 
 
+def test_a_robot_whose_router_is_not_there_says_so_in_its_health_and_its_log(cleanup):
+    """Issue 54, item 6: pointed at a closed port the backend does not look healthy: /api/health's
+    ``fleet`` key says connecting and why, the log says it once; then connected, then retrying when the
+    router goes, each change logged once."""
+    procs, _ = cleanup
+    port = free_port()
+    bot = robot(f"tcp/127.0.0.1:{port}", "r9")
+    procs.append(bot)
+
+    def link():
+        return get_json(f"{bot.api}/api/health")["fleet"]
+
+    first = link()
+    assert first["state"] == "connecting" and first["endpoints"] == [f"tcp/127.0.0.1:{port}"], first
+    assert wait_for(lambda: link()["last_error"] is not None, timeout=15), link()
+    health = get_json(f"{bot.api}/api/health")
+    assert health["status"] == "ok" and health["fleet"]["state"] == "connecting"  # the other keys as ever
+    r = open_router(port)
+    try:
+        assert wait_for(lambda: link()["state"] == "connected", timeout=20), link()
+        since = link()["since"]
+    finally:
+        r.close()
+    assert wait_for(lambda: link()["state"] == "retrying", timeout=15), link()
+    assert link()["since"] > since
+    bot.stop()
+    log = bot.proc.stderr.read()
+    assert [log.count(w) for w in ("cannot reach", "reached tcp/", "lost tcp/")] == [1, 1, 1], log
+
+
 def test_while_the_consoles_own_link_is_down_no_robot_is_called_lost_or_alive(cleanup):
     """The router goes away: the rows read "unknown since" (never "lost": the robots did not go, this
     console's link did) and the header says the console reconnects; the router back, the robots are

@@ -1,6 +1,7 @@
 """The robot's install (issue 48, item 6): ``pip install ./robot`` into a fresh environment installs the
 backend alone -- no Textual, roslibpy, Twisted, httpx, mcap or rosbags -- and that backend runs: it
-binds, serves the API, and refuses ``--transport ros`` without rclpy in one line."""
+binds, serves the API, and refuses ``--transport ros`` without rclpy in one line; ``--zenoh`` without Zenoh
+names the robot's own ``[fleet]`` extra (issue 54, item 5), never the console's package."""
 
 import subprocess
 import sys
@@ -62,4 +63,17 @@ def test_the_robot_installs_backend_runs(robot_env):
     refused = subprocess.run([str(robot_env.parent / "arbiter-backend"), "--transport", "ros"],
                              capture_output=True, text=True, cwd="/", timeout=60)  # fmt: skip
     assert refused.returncode != 0 and "rclpy is not importable" in refused.stderr
+    assert len(refused.stderr.strip().splitlines()) == 1
+
+
+def test_the_robots_backend_names_the_robots_fleet_extra(robot_env):
+    probe = "import importlib.metadata as m; print(m.metadata('arbiter-backend').get_all('Provides-Extra'))"
+    extras = subprocess.run([str(robot_env), "-c", probe], capture_output=True, text=True, cwd="/",
+                            timeout=60)  # fmt: skip
+    assert "'fleet'" in extras.stdout, extras.stdout + extras.stderr
+    refused = subprocess.run([str(robot_env.parent / "arbiter-backend"), "--zenoh", "tcp/127.0.0.1:7447"],
+                             capture_output=True, text=True, cwd="/", timeout=60)  # fmt: skip
+    assert refused.returncode == 2 and "--zenoh needs eclipse-zenoh" in refused.stderr, refused.stderr
+    assert "pip install './robot[fleet]'" in refused.stderr, refused.stderr
+    assert "arbiter-tui" not in refused.stderr, refused.stderr
     assert len(refused.stderr.strip().splitlines()) == 1

@@ -42,7 +42,7 @@ def lint_imports(cwd: Path) -> subprocess.CompletedProcess:
 def test_import_contracts_are_kept():
     r = lint_imports(ROOT)
     assert r.returncode == 0, r.stdout + r.stderr
-    assert "11 kept, 0 broken" in r.stdout
+    assert "12 kept, 0 broken" in r.stdout
 
 
 def test_import_contracts_catch_a_console_import_of_the_backend_and_textual_in_core(tmp_path):
@@ -55,6 +55,19 @@ def test_import_contracts_catch_a_console_import_of_the_backend_and_textual_in_c
     assert r.returncode != 0
     assert "arbiter_tui.shell.app -> arbiter_backend.tracker" in r.stdout
     assert "arbiter_core.stats -> textual" in r.stdout
+
+
+def test_the_backends_transports_never_import_each_other_and_sit_over_the_shared_config(tmp_path):
+    """Issue 54, item 9: the configuration both transports use is neither's module."""
+    copy_packages(tmp_path)
+    with (tmp_path / "arbiter_backend" / "ros" / "nodes.py").open("a") as f:
+        f.write("\nimport arbiter_backend.server  # noqa\n")
+    with (tmp_path / "arbiter_backend" / "config.py").open("a") as f:
+        f.write("\nimport arbiter_backend.servers  # noqa\n")
+    r = lint_imports(tmp_path)
+    assert r.returncode != 0
+    assert "arbiter_backend.ros.nodes -> arbiter_backend.server" in r.stdout
+    assert "arbiter_backend.config -> arbiter_backend.servers" in r.stdout
 
 
 def modules_of(package) -> list[str]:

@@ -11,7 +11,7 @@ import logging
 
 import pytest
 
-from arbiter_backend.server import BackendConfig
+from arbiter_backend.config import BackendConfig
 from arbiter_backend.supervise import Supervisor, WorkerRecord
 from arbiter_backend.topicwatch import TopicWatch
 from arbiter_core import envelope, topics
