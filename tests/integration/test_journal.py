@@ -63,7 +63,12 @@ def launch(data: Path, export_dir: Path) -> str:
 
 def recorded(session: str) -> int:
     """The status line's count of samples recorded (``● REC 145``)."""
-    line = tmux("capture-pane", "-p", "-t", session).splitlines()[:1]
+    return recorded_in(tmux("capture-pane", "-p", "-t", session))
+
+
+def recorded_in(screen: str) -> int:
+    """The count of samples recorded on a screen's status line (its first), 0 when it shows none."""
+    line = screen.splitlines()[:1]
     words = line[0].split() if line else []
     return int(words[words.index("REC") + 1]) if "REC" in words[:-1] else 0
 

@@ -215,6 +215,17 @@ class SshRig:
         )
 
     def _laptop(self) -> None:
+        self.connect()
+        self._stack.callback(self.tmux, "kill-server")
+        self.screen_until("CONNECTED", 60)
+        if not self.trace.up.wait(30):
+            raise RuntimeError("the probe never reached the backend")
+        deadline = time.monotonic() + 20
+        while not self.trace.odom and time.monotonic() < deadline:
+            time.sleep(0.05)
+
+    def connect(self) -> None:
+        """The laptop's ``ssh -tt`` to the Pi, running the console there, in a new tmux session."""
         t = self.tmp
         ssh = (
             f"ssh -tt -i {t / 'user_key'} -p {SSH_PORT} -o StrictHostKeyChecking=no "
@@ -223,13 +234,25 @@ class SshRig:
         )
         w, h = self.size
         self.tmux("new-session", "-d", "-s", self.session, "-x", str(w), "-y", str(h), ssh)
-        self._stack.callback(self.tmux, "kill-server")
-        self.screen_until("CONNECTED", 60)
-        if not self.trace.up.wait(30):
-            raise RuntimeError("the probe never reached the backend")
-        deadline = time.monotonic() + 20
-        while not self.trace.odom and time.monotonic() < deadline:
-            time.sleep(0.05)
+
+    def drop(self) -> int:
+        """The link drops as the laptop sees it: its ``ssh`` client killed (SIGKILL, nothing said to the
+        server); sshd sees the connection end and hangs up on the console (SIGHUP). The client's pid."""
+        pane = int(self.tmux("display-message", "-p", "-t", self.session, "#{pane_pid}").strip())
+        pid = pane
+        if Path(f"/proc/{pane}/comm").read_text().strip() != "ssh":  # a shell that runs it
+            children = subprocess.run(["pgrep", "-P", str(pane), "-x", "ssh"], capture_output=True, text=True)
+            pid = int(children.stdout.split()[0])
+        os.kill(pid, signal.SIGKILL)
+        return pid
+
+    def bridge_free(self) -> bool:
+        """Nothing listens on the backend's port in the namespace (the console that held it is gone)."""
+        out = subprocess.run(
+            ["ip", "netns", "exec", self.netns, "ss", "-Htln", f"sport = :{BRIDGE_PORT}"],
+            capture_output=True, text=True,
+        ).stdout  # fmt: skip
+        return not out.strip()
 
     # -- the laptop's terminal ----------------------------------------------------------------------
     def tmux(self, *args: str) -> str:
