@@ -385,6 +385,35 @@ class SshRig:
             return None
         return round(1000.0 * (zero - arrival), 1)
 
+    def mission_stall(self, stall_s: float = STALL_S, driving_s: float = 1.0) -> dict[str, float | None]:
+        """A mission (``a``: the next controller, ``g``: its mission) driving on its own for ``driving_s``;
+        then the link stalls for ``stall_s`` (the person can neither see nor stop it). From the stall's
+        start to the first zero command (s; None: it drove on through the stall, the heartbeat's absence)
+        and the path driven during the stall (m, odometry). Stopped (space) once the link is back."""
+        t_g = self.key("a")
+        self.key("g")
+        deadline = time.monotonic() + 20
+
+        def driving_since() -> float | None:
+            moving = [c[0] for c in self.trace.cmds_between(t_g, math.inf) if (c[1], c[2]) != (0.0, 0.0)]
+            return moving[0] if moving else None
+
+        while (first := driving_since()) is None or time.monotonic() - first < driving_s:
+            if time.monotonic() > deadline:
+                raise AssertionError(f"the mission never drove:\n{self.screen()}")
+            time.sleep(0.05)
+        t0 = time.monotonic()
+        end = self.link.stall(stall_s)
+        time.sleep(max(0.0, end - time.monotonic()) + 0.3)  # the stall, and odometry of its last motion
+        zero = next((c[0] for c in self.trace.cmds_between(t0, end) if (c[1], c[2]) == (0.0, 0.0)), None)
+        driven = self.trace.path_m(t0, end)
+        self.key("Space")
+        self.settle(end, quiet_s=0.6, timeout=30)  # the stop key over TCP's retransmissions
+        return {
+            "mission_hold_after_stall_s": None if zero is None else round(zero - t0, 2),
+            "driven_during_stall_m": round(driven, 3),
+        }
+
     def key_echo(self, key: str = "q", timeout: float = 5.0) -> float | None:
         """From typing ``key`` (q: faster by 10 %, z: slower) to the laptop's screen showing the new max
         speed, ms; None when it did not show within ``timeout``."""
