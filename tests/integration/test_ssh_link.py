@@ -85,6 +85,7 @@ def test_a_dropped_link_loses_nothing_and_the_next_start_offers_the_journal(lab)
     (journal,) = list(journal_dir.glob("session_*.mcap"))
     sent = lab.hold_keys("i", 1.5)
     lab.settle(sent[-1])  # the robot commanded still
+    lab.key("Space")  # the run ends before the export (a hang-up would end a running one: not the same)
     counts: list[tuple[float, int]] = []
 
     def held_still() -> bool:  # the samples journaled: none new for a second (the robot at rest)
