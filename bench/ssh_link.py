@@ -12,7 +12,9 @@ roslibpy (``tests/support/sshlink.py``, the rig the tests use). Per profile and 
   into a hold and the key is let go 1 s into the stall;
 * stop key -> zero command (ms, p95 of ``--trials``): from the stop key's TCP segment delivered on the
   Pi to the first zero on /cmd_vel_measured;
-* the mission's hold after a stall begins: n/a here (the heartbeat is another branch's);
+* the mission's hold after a stall begins (s): a mission (``a``, ``g``) driving for a second, the link
+  stalls 3 s; from the stall's start to the first zero command, or "never (drives on)" with the path
+  driven during the stall (m);
 * bytes a second toward the laptop (IP, headers included) at 80x24 and 200x60, idle and with a key held;
 * key-to-echo (ms, p50/p95 of ``--trials``, at each size): from ``q`` (or ``z``) typed in tmux to the
   laptop's screen showing the new max speed, the robot standing still.
@@ -21,6 +23,7 @@ Root, /dev/net/tun, sshd, ssh and tmux needed. Run it where the load average is 
 
     python bench/ssh_link.py                                   # this checkout, every profile
     python bench/ssh_link.py --console main=/path/to/old --console new=.   # rows side by side
+    python bench/ssh_link.py --only-mission            # that column alone (a rig and one stall a profile)
 """
 
 from __future__ import annotations
@@ -62,6 +65,7 @@ def measure(profile: str, root: Path, holds: int, trials: int) -> dict:
         echoes = [rig.key_echo("q" if i % 2 == 0 else "z") for i in range(trials)]
         stall = rig.stall_release()
         stops = [rig.stop_trial() for _ in range(trials)]
+        mission = rig.mission_stall()
         rig.resize(200, 60)
         idle_big = rig.screen_bytes(3.0)
         held_big = rig.hold(3.0)["bytes_per_s_down"]
@@ -83,7 +87,8 @@ def measure(profile: str, root: Path, holds: int, trials: int) -> dict:
         "burst_after_stall_end_s": stall["burst_after_stall_end_s"],
         "stop_to_zero_ms": stops,
         "stop_to_zero_p95_ms": pct(found, 0.95),
-        "mission_hold_after_stall_s": None,
+        "mission_hold_after_stall_s": mission["mission_hold_after_stall_s"],
+        "driven_during_stall_m": mission["driven_during_stall_m"],
         "bytes_per_s_80x24_idle": idle_small,
         "bytes_per_s_80x24_held": round(statistics.median(h["bytes_per_s_down"] for h in hold)),
         "bytes_per_s_200x60_idle": idle_big,
@@ -103,6 +108,18 @@ def _echo(all_ms: list, p50: float | None, p95: float | None) -> str:
     return shown + (f" ({lost} of {len(all_ms)} not shown in 5 s)" if lost else "")
 
 
+def _mission(r: dict) -> str:
+    held = r["mission_hold_after_stall_s"]
+    if held is None:
+        return f"never (drives on: {r['driven_during_stall_m']:.2f} m in the stall)"
+    return f"{held:.2f} s ({r['driven_during_stall_m']:.2f} m in the stall)"
+
+
+def measure_mission(profile: str, root: Path) -> dict:
+    with SshRig(PROFILES[profile], console_root=root) as rig:
+        return {"profile": profile, "console": str(root), **rig.mission_stall()}
+
+
 def row(label: str, r: dict) -> str:
     cells = (
         label,
@@ -110,7 +127,7 @@ def row(label: str, r: dict) -> str:
         f"{r['cutouts_per_min']:g}",
         f"{r['motion_after_release_m']:.3f} m",
         "n/a" if r["stop_to_zero_p95_ms"] is None else f"{r['stop_to_zero_p95_ms']:.0f} ms",
-        "n/a",
+        _mission(r),
         f"{r['bytes_per_s_80x24_idle']:,} / {r['bytes_per_s_80x24_held']:,}",
         f"{r['bytes_per_s_200x60_idle']:,} / {r['bytes_per_s_200x60_held']:,}",
         _echo(r["key_echo_ms"], r["key_echo_p50_ms"], r["key_echo_p95_ms"]),
@@ -134,6 +151,9 @@ def main() -> None:
     p.add_argument(
         "--trials", type=int, default=10, help="stop keys and echoed keys per profile (default 10)"
     )
+    p.add_argument(
+        "--only-mission", action="store_true", help="the mission's hold after a stall alone, per profile"
+    )
     a = p.parse_args()
     if (why := missing()) is not None:
         sys.exit(f"ssh_link: {why}")
@@ -151,11 +171,16 @@ def main() -> None:
             "| " + " | ".join(COLUMNS) + " |",
             "|---" * len(COLUMNS) + "|",
         ]
+        if a.only_mission:
+            lines[2:] = ["| console | mission's hold after a stall begins |", "|---|---|"]
         for label, root in consoles:
-            r = measure(profile, root, a.holds, a.trials)
+            if a.only_mission:
+                r = measure_mission(profile, root)
+            else:
+                r = measure(profile, root, a.holds, a.trials)
             r["label"] = label
             results.append(r)
-            lines.append(row(label, r))
+            lines.append(f"| {label} | {_mission(r)} |" if a.only_mission else row(label, r))
         print("\n".join(lines) + "\n", flush=True)
     emit({"bench": "ssh_link", "load_at_start": round(load, 2), "results": results})
 

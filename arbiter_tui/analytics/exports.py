@@ -39,6 +39,16 @@ MCAP_POINT_TOPIC = "/arbiter/data_point"
 MCAP_STATS_TOPIC = "/arbiter/stats"
 MCAP_POINT_TYPE = "arbiter_msgs/msg/DataPoint"
 MCAP_STATS_TYPE = "arbiter_msgs/msg/AnalyticsStats"
+MCAP_PLANS_TOPIC = "/arbiter/plans"
+MCAP_PLAN_TYPE = "arbiter_msgs/msg/RunPlan"
+MCAP_PLAN_DEF = "\n".join(
+    [
+        "uint32 run_id",
+        "float64 timestamp  # when the console took it as the run's reference, epoch ms",
+        "float64[] x  # the reference path's positions, m, odometry's frame",
+        "float64[] y",
+    ]
+)
 MCAP_POINT_DEF = "\n".join(
     [
         "float64 timestamp  # ms since the epoch",
@@ -261,6 +271,7 @@ class McapChannels:
         self._algorithm = (
             self.writer.register_msgdef(MCAP_ALGORITHM_TYPE, MCAP_ALGORITHM_DEF) if algorithms else None
         )
+        self._plan: Any = None  # registered with the first plan: an export without plans has no channel
 
     def point(self, p: DataPoint, row: dict[str, Any] | None = None) -> int:
         """A sample on the data point and odometry channels; its log time (ns)."""
@@ -283,6 +294,19 @@ class McapChannels:
             row = a if isinstance(a, dict) else _mcap_algorithm(a)
             topic, schema = MCAP_ALGORITHMS_TOPIC, self._algorithm
             self.writer.write_message(topic, schema, row, log_time=t_ns, publish_time=t_ns)
+
+    def plan(self, run_id: int, t_ms: float, xy: Sequence[Sequence[float]]) -> None:
+        """A run's reference path from ``t_ms`` on (``xy``: its positions)."""
+        if self._plan is None:
+            self._plan = self.writer.register_msgdef(MCAP_PLAN_TYPE, MCAP_PLAN_DEF)
+        row = {
+            "run_id": run_id,
+            "timestamp": t_ms,
+            "x": [float(p[0]) for p in xy],
+            "y": [float(p[1]) for p in xy],
+        }
+        t_ns = max(0, int(t_ms * 1_000_000))
+        self.writer.write_message(MCAP_PLANS_TOPIC, self._plan, row, log_time=t_ns, publish_time=t_ns)
 
     def stats(self, s: AnalyticsStats | dict[str, Any], t_ns: int) -> None:
         row = s if isinstance(s, dict) else _mcap_stats(s)
@@ -395,6 +419,16 @@ class Export:
     runs: tuple[RunSummary, ...] | None = None
     algorithms: tuple[AlgorithmSummary, ...] | None = None
     notes: tuple[str, ...] = ()  # what the figures cannot vouch for (a journal cut short)
+    plans: tuple[Plan, ...] = ()  # each run's reference paths as they came (a journal carries them)
+
+
+@dataclass(frozen=True)
+class Plan:
+    """A run's reference path from ``t_ms`` on (the first, and each replan): positions in odometry's frame."""
+
+    run_id: int
+    t_ms: float
+    xy: tuple[tuple[float, float], ...]
 
 
 def _opt_number(raw: Any, where: str) -> float | None:
@@ -543,7 +577,7 @@ def read_mcap(data: bytes) -> Export:
         raise ExportFormatError(f"corrupt MCAP: {str(exc) or type(exc).__name__}") from None
 
 
-_READ_TOPICS = (MCAP_POINT_TOPIC, MCAP_RUNS_TOPIC, MCAP_ALGORITHMS_TOPIC)
+_READ_TOPICS = (MCAP_POINT_TOPIC, MCAP_RUNS_TOPIC, MCAP_ALGORITHMS_TOPIC, MCAP_PLANS_TOPIC)
 
 
 def recover_journal(data: bytes) -> tuple[list[tuple[str, Any]], str] | None:
@@ -592,6 +626,7 @@ def _collect(messages: Iterable[tuple[str, Any]], summary: Any, notes: tuple[str
     points: list[DataPoint] = []
     runs: dict[int, dict[str, Any]] = {}
     algorithms: dict[tuple[str, str], dict[str, Any]] = {}
+    plans: list[Plan] = []
     seen: set[str] = set()
     topic = ""
     try:
@@ -604,6 +639,10 @@ def _collect(messages: Iterable[tuple[str, Any]], summary: Any, notes: tuple[str
                     "final_error_m": m.final_error_m, "stats": _mcap_stats_dict(m.stats),
                     "tracking": _mcap_tracking_dict(m),
                 }  # fmt: skip
+                continue
+            if topic == MCAP_PLANS_TOPIC:
+                xy = tuple(zip(map(float, m.x), map(float, m.y), strict=True))
+                plans.append(Plan(int(m.run_id), float(m.timestamp), xy))
                 continue
             if topic == MCAP_ALGORITHMS_TOPIC:
                 algorithms[(m.mission, m.algorithm)] = {
@@ -625,6 +664,7 @@ def _collect(messages: Iterable[tuple[str, Any]], summary: Any, notes: tuple[str
             runs_from(list(runs.values()), samples_per_run(points)) if MCAP_RUNS_TOPIC in seen else None,
             algorithms_from(list(algorithms.values())) if MCAP_ALGORITHMS_TOPIC in seen else None,
             notes,
+            tuple(plans),
         )
     except ExportFormatError as exc:
         if str(exc).startswith(NOT_ARBITER_MCAP):

@@ -402,3 +402,10 @@ def runs_copy(store: AnalyticsStore) -> RunLog:
     class: the store has all the methods a class may.)"""
     with store._lock:
         return store._runs.snapshot()
+
+
+def paths_in_force(store: AnalyticsStore) -> list[tuple[int, np.ndarray]]:
+    """Each run's reference path in force now (the array itself, never written again: a replan replaces
+    it), read under ``store``'s lock: what the journal writes as the runs' plans when one changed."""
+    with store._lock:
+        return [(r.id, r.path) for r in store._runs._runs if r.path is not None]

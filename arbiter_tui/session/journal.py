@@ -4,7 +4,8 @@
 What: every sample (the store's DataPoints, with the odometry beside them, as an MCAP export has
 them), every run's summary and every per-(mission, algorithm) row each time it changes (a reader keeps
 the last of each), the tracker's latency window (each command's latency as it is polled) and the
-console's own link figures (each matched command's round trip, one-way and corrected delay). How: an
+console's own link figures (each matched command's round trip, one-way and corrected delay), and each
+run's reference path (plan) when a new one is in force (``/arbiter/plans``). How: an
 MCAP file written in zstd chunks by the export's own channel set (``exports.McapChannels``), one chunk
 every ``FLUSH_S`` (0.5 s) handed to the kernel and fsync'ed, so what ``kill -9`` or a power cut leaves
 is a file whose whole chunks are all there; ``arbiter-tui stats`` and screen 2's ``f`` read such a file
@@ -37,7 +38,7 @@ from typing import IO, Any
 
 from ..analytics.exports import JOURNAL_END_METADATA, JOURNAL_METADATA, McapChannels
 from ..analytics.runs import AlgorithmSummary, RunSummary
-from ..analytics.store import AnalyticsStore, runs_copy
+from ..analytics.store import AnalyticsStore, paths_in_force, runs_copy
 from ..latency.clocksync import Sample
 from . import journal_files as F
 
@@ -125,6 +126,7 @@ class Journal:
         self._active: int | None = None  # the store's active run when the summaries were last written
         self._runs_at = -math.inf
         self._rows: dict[tuple[str, str], AlgorithmSummary] = {}
+        self._plans: dict[int, Any] = {}  # each run's path last written (the array: a replan replaces it)
         self._latency: deque[tuple[float, float]] = deque()  # the poller's thread appends, the step takes
         self._latency_t = -math.inf  # the poller's thread alone
         self.offered: Found | None = None  # what the start found of a session that did not end cleanly
@@ -295,7 +297,16 @@ class Journal:
             row = {"timestamp": t, "latency_ms": v}
             w.write_message(LATENCY_TOPIC, schema, row, log_time=t_ns, publish_time=t_ns)
         self._link(w)
+        self._plans_changed(channels)
         channels.flush()
+
+    def _plans_changed(self, channels: McapChannels) -> None:
+        """Each run's reference path, when it is new since the last chunk (a replan within one flush
+        replaced by another is not written: the one in force is)."""
+        for run_id, path in paths_in_force(self.sources.store):
+            if self._plans.get(run_id) is not path:
+                self._plans[run_id] = path
+                channels.plan(run_id, time.time() * 1000.0, path[:, :2].tolist())
 
     def _summaries(self, channels: McapChannels, t_ns: int) -> None:
         """The runs and per-(mission, algorithm) rows that changed since they were last written."""
@@ -332,6 +343,7 @@ class Journal:
         self._shut()
         self._runs.clear()
         self._rows.clear()
+        self._plans.clear()
         self._runs_at = -math.inf  # the summaries again, in the new file
         self._open()
 

@@ -67,5 +67,6 @@ def recording_view(graded: Graded, now: float | None = None) -> AnalyticsView:
         ring=len(points),
         source=f"{name} ({graded.what})",
         notes=tuple(notes),
+        plans=len(export.plans),
         no_reference=graded.no_reference,
     )

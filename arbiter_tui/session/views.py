@@ -266,6 +266,7 @@ class AnalyticsView:
     goal: tuple[float, float] | None = None
     source: str = ""  # a recording shown instead of the live session: what it is ("" = live)
     notes: tuple[str, ...] = ()  # what the recording's figures cannot vouch for
+    plans: int = 0  # the recording's runs' reference paths (a journal's, an export's), each replan counted
     no_reference: str = ""  # why the recording's error stats have no reference ("" where they have one)
 
     @property

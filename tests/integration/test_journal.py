@@ -17,6 +17,7 @@ import time
 import uuid
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from arbiter_tui.analytics.exports import ExportFormatError
@@ -25,6 +26,7 @@ from arbiter_tui.analytics.model import stats_of_points
 from arbiter_tui.analytics.store import AnalyticsStore, DataPoint
 from arbiter_tui.session import journal_files as F
 from arbiter_tui.session.journal import Journal, Sources
+from arbiter_tui.session.recording import open_recording
 
 from ..support.waits import wait_for
 
@@ -63,7 +65,12 @@ def launch(data: Path, export_dir: Path) -> str:
 
 def recorded(session: str) -> int:
     """The status line's count of samples recorded (``● REC 145``)."""
-    line = tmux("capture-pane", "-p", "-t", session).splitlines()[:1]
+    return recorded_in(tmux("capture-pane", "-p", "-t", session))
+
+
+def recorded_in(screen: str) -> int:
+    """The count of samples recorded on a screen's status line (its first), 0 when it shows none."""
+    line = screen.splitlines()[:1]
     words = line[0].split() if line else []
     return int(words[words.index("REC") + 1]) if "REC" in words[:-1] else 0
 
@@ -178,9 +185,13 @@ def test_a_journal_cut_anywhere_reads_up_to_its_last_whole_chunk(tmp_path):
     journal = Journal(Sources(store), tmp_path, 10**8, flush_s=3600)  # chunks only when stepped below
     journal.start()
     wait_for(lambda: journal._channels is not None, timeout=5)
-    run = store.begin_run("pure_pursuit", "square", 1.8e12)
+    first = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]])
+    replan = np.array([[0.5, 0.0], [0.5, 2.0]])
+    run = store.begin_run("pure_pursuit", "square", 1.8e12, path=first)
     sizes = []
     for chunk in range(4):
+        if chunk == 2:
+            store.follow_path(replan)  # the plans: the run's first reference, then a replan
         for i in range(10 * chunk, 10 * chunk + 10):
             store.record(_point(i, run))
         with journal._lock:
@@ -196,9 +207,19 @@ def test_a_journal_cut_anywhere_reads_up_to_its_last_whole_chunk(tmp_path):
             assert stats_of_points(got.points) == stats_of_points(store.points()[: 10 * (chunk + 1)])
             assert got.runs is not None and got.runs[0].stats.sampleCount == 10 * (chunk + 1)
             assert "a journal cut short" in got.notes[0]
+            assert [(p.run_id, p.xy) for p in got.plans] == [(run, _xy(first)), (run, _xy(replan))][
+                : 1 + (chunk >= 2)
+            ]
     finished = load_export(journal.path)  # closed: read as any export, the run's last summary kept
     assert len(finished.points) == 40 and not finished.notes
     assert finished.runs is not None and [r.stats for r in finished.runs] == [r.stats for r in store.runs()]
+    assert [(p.run_id, p.xy) for p in finished.plans] == [(run, _xy(first)), (run, _xy(replan))]
+    view = open_recording(journal.path)  # the file view (screen 2's f, R) says them
+    assert view.plans == 2
+
+
+def _xy(path: np.ndarray) -> tuple[tuple[float, float], ...]:
+    return tuple((float(x), float(y)) for x, y in path)
 
 
 def test_an_export_cut_short_is_still_refused(tmp_path):

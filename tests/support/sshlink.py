@@ -215,6 +215,17 @@ class SshRig:
         )
 
     def _laptop(self) -> None:
+        self.connect()
+        self._stack.callback(self.tmux, "kill-server")
+        self.screen_until("CONNECTED", 60)
+        if not self.trace.up.wait(30):
+            raise RuntimeError("the probe never reached the backend")
+        deadline = time.monotonic() + 20
+        while not self.trace.odom and time.monotonic() < deadline:
+            time.sleep(0.05)
+
+    def connect(self) -> None:
+        """The laptop's ``ssh -tt`` to the Pi, running the console there, in a new tmux session."""
         t = self.tmp
         ssh = (
             f"ssh -tt -i {t / 'user_key'} -p {SSH_PORT} -o StrictHostKeyChecking=no "
@@ -223,13 +234,25 @@ class SshRig:
         )
         w, h = self.size
         self.tmux("new-session", "-d", "-s", self.session, "-x", str(w), "-y", str(h), ssh)
-        self._stack.callback(self.tmux, "kill-server")
-        self.screen_until("CONNECTED", 60)
-        if not self.trace.up.wait(30):
-            raise RuntimeError("the probe never reached the backend")
-        deadline = time.monotonic() + 20
-        while not self.trace.odom and time.monotonic() < deadline:
-            time.sleep(0.05)
+
+    def drop(self) -> int:
+        """The link drops as the laptop sees it: its ``ssh`` client killed (SIGKILL, nothing said to the
+        server); sshd sees the connection end and hangs up on the console (SIGHUP). The client's pid."""
+        pane = int(self.tmux("display-message", "-p", "-t", self.session, "#{pane_pid}").strip())
+        pid = pane
+        if Path(f"/proc/{pane}/comm").read_text().strip() != "ssh":  # a shell that runs it
+            children = subprocess.run(["pgrep", "-P", str(pane), "-x", "ssh"], capture_output=True, text=True)
+            pid = int(children.stdout.split()[0])
+        os.kill(pid, signal.SIGKILL)
+        return pid
+
+    def bridge_free(self) -> bool:
+        """Nothing listens on the backend's port in the namespace (the console that held it is gone)."""
+        out = subprocess.run(
+            ["ip", "netns", "exec", self.netns, "ss", "-Htln", f"sport = :{BRIDGE_PORT}"],
+            capture_output=True, text=True,
+        ).stdout  # fmt: skip
+        return not out.strip()
 
     # -- the laptop's terminal ----------------------------------------------------------------------
     def tmux(self, *args: str) -> str:
@@ -361,6 +384,35 @@ class SshRig:
         if arrival is None or zero is None:
             return None
         return round(1000.0 * (zero - arrival), 1)
+
+    def mission_stall(self, stall_s: float = STALL_S, driving_s: float = 1.0) -> dict[str, float | None]:
+        """A mission (``a``: the next controller, ``g``: its mission) driving on its own for ``driving_s``;
+        then the link stalls for ``stall_s`` (the person can neither see nor stop it). From the stall's
+        start to the first zero command (s; None: it drove on through the stall, the heartbeat's absence)
+        and the path driven during the stall (m, odometry). Stopped (space) once the link is back."""
+        t_g = self.key("a")
+        self.key("g")
+        deadline = time.monotonic() + 20
+
+        def driving_since() -> float | None:
+            moving = [c[0] for c in self.trace.cmds_between(t_g, math.inf) if (c[1], c[2]) != (0.0, 0.0)]
+            return moving[0] if moving else None
+
+        while (first := driving_since()) is None or time.monotonic() - first < driving_s:
+            if time.monotonic() > deadline:
+                raise AssertionError(f"the mission never drove:\n{self.screen()}")
+            time.sleep(0.05)
+        t0 = time.monotonic()
+        end = self.link.stall(stall_s)
+        time.sleep(max(0.0, end - time.monotonic()) + 0.3)  # the stall, and odometry of its last motion
+        zero = next((c[0] for c in self.trace.cmds_between(t0, end) if (c[1], c[2]) == (0.0, 0.0)), None)
+        driven = self.trace.path_m(t0, end)
+        self.key("Space")
+        self.settle(end, quiet_s=0.6, timeout=30)  # the stop key over TCP's retransmissions
+        return {
+            "mission_hold_after_stall_s": None if zero is None else round(zero - t0, 2),
+            "driven_during_stall_m": round(driven, 3),
+        }
 
     def key_echo(self, key: str = "q", timeout: float = 5.0) -> float | None:
         """From typing ``key`` (q: faster by 10 %, z: slower) to the laptop's screen showing the new max

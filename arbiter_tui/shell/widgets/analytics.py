@@ -180,6 +180,8 @@ class FileBanner(Bound[AnalyticsView]):
         if not v.source:
             return Text()
         runs = f"{len(v.runs)} run{'s' if len(v.runs) != 1 else ''}"
+        if v.plans:
+            runs += f" ({v.plans} plan{'s' if v.plans != 1 else ''})"
         text = Text(f"FILE {v.source}: {v.points} samples, {runs}, graded as `arbiter-tui stats` grades "
                     "it · esc: the live session", no_wrap=False)  # fmt: skip
         for note in v.notes:
