@@ -124,10 +124,6 @@ def ros_side():
 
     domain = rosmod.use_test_domain()
     next(domain)
-    from rclpy.action import ActionServer
-    from std_srvs.srv import SetBool
-    from test_msgs.action import Fibonacci
-
     peer = rosmod.Peer("arbiter_py_peer", threads=3)
     backend: BackendProc | None = None
     client: roslibpy.Ros | None = None
@@ -140,21 +136,7 @@ def ros_side():
             lambda m: (m.header.stamp.sec, m.header.stamp.nanosec, m.header.frame_id, m.twist.linear.x),
         )
 
-        def set_flag(request, response):
-            response.success, response.message = request.data, f"flag set to {request.data}"
-            return response
-
-        node.create_service(SetBool, SERVICE, set_flag)
-
-        def fibonacci(goal_handle):
-            seq = [0, 1]
-            for i in range(1, goal_handle.request.order):
-                seq.append(seq[i] + seq[i - 1])
-                goal_handle.publish_feedback(Fibonacci.Feedback(sequence=seq))
-            goal_handle.succeed()
-            return Fibonacci.Result(sequence=seq)
-
-        server = ActionServer(node, Fibonacci, ACTION, fibonacci)
+        server = rosmod.serve_flag_and_fibonacci(node, SERVICE, ACTION)
         backend = start_backend("--transport", "ros", "--no-sim", timeout=30)
         client = connect(backend.bridge_port)
         truth = expected.GraphTruth(node)

@@ -228,10 +228,6 @@ def ros_graph(node_bin: str):
 
     saved = ros.use_test_domain()
     next(saved)
-    from rclpy.action import ActionServer
-    from std_srvs.srv import SetBool
-    from test_msgs.action import Fibonacci
-
     peer = ros.Peer("arbiter_js_peer", threads=3)
     backend = None
     try:
@@ -240,21 +236,7 @@ def ros_graph(node_bin: str):
         node.create_publisher(ros.String, "/arbiter_js/chatter", 10)
         received = peer.collect(ros.String, ROUND_TOPIC, lambda m: m.data)
 
-        def set_flag(request, response):
-            response.success, response.message = request.data, f"flag set to {request.data}"
-            return response
-
-        node.create_service(SetBool, SERVICE, set_flag)
-
-        def fibonacci(goal_handle):
-            seq = [0, 1]
-            for i in range(1, goal_handle.request.order):
-                seq.append(seq[i] + seq[i - 1])
-                goal_handle.publish_feedback(Fibonacci.Feedback(sequence=seq))
-            goal_handle.succeed()
-            return Fibonacci.Result(sequence=seq)
-
-        server = ActionServer(node, Fibonacci, ACTION, fibonacci)
+        server = ros.serve_flag_and_fibonacci(node, SERVICE, ACTION)
         backend = start_backend("--transport", "ros", "--no-sim", timeout=30)
         plan = {
             "node": "/arbiter_js_peer",

@@ -92,3 +92,28 @@ class Peer:
         self.thread.join(2)
         self.node.destroy_node()
         self.context.try_shutdown()
+
+
+def serve_flag_and_fibonacci(node, service: str, action: str):
+    """What the client tests call on the peer: a ``std_srvs/SetBool`` ``service`` that says what it set, and
+    a ``test_msgs/action/Fibonacci`` ``action`` that sends each partial sequence as feedback. Returns the
+    action server (the caller keeps it alive)."""
+    from rclpy.action import ActionServer
+    from std_srvs.srv import SetBool
+    from test_msgs.action import Fibonacci
+
+    def set_flag(request, response):
+        response.success, response.message = request.data, f"flag set to {request.data}"
+        return response
+
+    node.create_service(SetBool, service, set_flag)
+
+    def fibonacci(goal_handle):
+        seq = [0, 1]
+        for i in range(1, goal_handle.request.order):
+            seq.append(seq[i] + seq[i - 1])
+            goal_handle.publish_feedback(Fibonacci.Feedback(sequence=seq))
+        goal_handle.succeed()
+        return Fibonacci.Result(sequence=seq)
+
+    return ActionServer(node, Fibonacci, action, fibonacci)
