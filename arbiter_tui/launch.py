@@ -232,7 +232,7 @@ def build_parser() -> argparse.ArgumentParser:
         type=bounded_float(*KEY_TIMEOUT_S, "s"),
         default=D.key_timeout,
         help=f"the longest a held key moves the robot after its last repeat arrived, s: a fresh press holds "
-        f"this long, a repeating key twice the longest gap between its recent repeats, at least 0.15 s "
+        f"this long, a repeating key twice the longest gap between its recent repeats, at least 0.25 s "
         f"or this (docs/drive.md, 'Over a jittery link'; {KEY_TIMEOUT_S[0]:g}-{KEY_TIMEOUT_S[1]:g}; "
         f"{D.key_timeout:g})",
     )

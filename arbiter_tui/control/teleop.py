@@ -100,7 +100,8 @@ def cap_setting(name: str, value: float, limit: float, unit: str) -> tuple[float
 
 
 BUNCH_S = 0.01  # keys closer than this came together (no terminal repeats faster than 100 Hz)
-MIN_GRACE_S = 0.15  # a hold outlasts its last repeat at least this long (a paint, a GC pause on a Pi)
+MIN_GRACE_S = 0.25  # a hold outlasts its last repeat at least this long (a paint, a GC pause, a loaded Pi;
+# 0.15 s cut a 5 s hold over the lab link once while the test suite loaded both cores: a 157 ms gap)
 GRACE_GAPS = 2.0  # ...and this many times the longest recent gap between its repeats
 GAPS_KEPT = 30  # recent gaps: a second of a 30 Hz auto-repeat
 MAX_REPEAT_HZ = 60.0  # no terminal's auto-repeat is faster (30 Hz is a laptop's; 60 a fast X setting)
