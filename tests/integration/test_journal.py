@@ -28,25 +28,17 @@ from arbiter_tui.session import journal_files as F
 from arbiter_tui.session.journal import Journal, Sources
 from arbiter_tui.session.recording import open_recording
 
+from ..support.tmux import screen_until as _screen_until
+from ..support.tmux import tmux
 from ..support.waits import wait_for
 
 ROOT = Path(__file__).resolve().parents[2]
 tmux_missing = pytest.mark.skipif(shutil.which("tmux") is None, reason="tmux is not installed")
 
 
-def tmux(*args: str) -> str:
-    return subprocess.run(["tmux", *args], capture_output=True, text=True, timeout=10).stdout
-
-
 def screen_until(session: str, *texts: str, timeout: float = 15.0) -> str:
-    deadline = time.monotonic() + timeout
-    out = ""
-    while time.monotonic() < deadline:
-        out = tmux("capture-pane", "-p", "-J", "-t", session)
-        if all(t in out for t in texts):
-            return out
-        time.sleep(0.1)
-    raise AssertionError(f"{texts!r} not on screen:\n{out}")
+    """The screen once all ``texts`` are on it, wrapped lines read as one."""
+    return _screen_until(session, *texts, timeout=timeout, join=True)
 
 
 def launch(data: Path, export_dir: Path) -> str:

@@ -3,28 +3,17 @@
 import shutil
 import subprocess
 import sys
+import threading
 import time
 import uuid
 from pathlib import Path
 
 import pytest
 
+from ..support.tmux import screen_until, tmux
+from ..support.waits import wait_for
+
 pytestmark = pytest.mark.skipif(shutil.which("tmux") is None, reason="tmux is not installed")
-
-
-def tmux(*args: str) -> str:
-    return subprocess.run(["tmux", *args], capture_output=True, text=True, timeout=10).stdout
-
-
-def screen_until(session: str, text: str, timeout: float = 10.0) -> str:
-    deadline = time.monotonic() + timeout
-    out = ""
-    while time.monotonic() < deadline:
-        out = tmux("capture-pane", "-p", "-t", session)
-        if text in out:
-            return out
-        time.sleep(0.1)
-    raise AssertionError(f"{text!r} not on screen:\n{out}")
 
 
 def launch_tui(tmp_path: Path, args: str, linger: bool = False) -> tuple[str, Path]:
@@ -95,16 +84,22 @@ def test_hangup_stops_the_robot_exits_and_restores_the_terminal(tmp_path, backen
         f"--key-timeout 2 --export-dir {tmp_path}"
     )
     session, done = launch_tui(tmp_path, args, linger=True)
+    released = threading.Event()
     try:
         screen_until(session, "CONNECTED")
         pid = _tui_pid(session)
-        for _ in range(4):
-            tmux("send-keys", "-t", session, "i")
-            time.sleep(0.1)
+        # the key held as a terminal repeats it (30 Hz) until the hangup: a hold judged by its repeats
+        # ends a fraction of a second after the last one, so a few presses then a wait could read a stop
+
+        def hold() -> None:
+            while not released.wait(1 / 30):
+                tmux("send-keys", "-t", session, "i")
+
+        holder = threading.Thread(target=hold, daemon=True)
+        holder.start()
         screen_until(session, "(teleop)")
-        tmux("send-keys", "-t", session, "i")  # held for another 2 s (--key-timeout's ceiling)
-        records = get_json(f"{backend.api}/api/latency")["records"]
-        assert records and records[-1]["linear_x"] == 0.5  # driving, the key held
+        latest = lambda: get_json(f"{backend.api}/api/latency")["records"][-1:]  # noqa: E731
+        assert wait_for(lambda: [r["linear_x"] for r in latest()] == [0.5], 5)  # driving, the key held
         if how == "sighup":
             subprocess.run(["kill", "-HUP", str(pid)], check=True)
         else:
@@ -113,6 +108,8 @@ def test_hangup_stops_the_robot_exits_and_restores_the_terminal(tmp_path, backen
         while _alive(pid) and time.monotonic() < deadline:
             time.sleep(0.05)
         assert not _alive(pid), "arbiter-tui still running after the hangup"
+        released.set()
+        holder.join(2)
         last = get_json(f"{backend.api}/api/latency")["records"][-1]
         assert (last["linear_x"], last["angular_z"]) == (0.0, 0.0)  # the best-effort zero went out
         if how == "sighup":
@@ -123,6 +120,7 @@ def test_hangup_stops_the_robot_exits_and_restores_the_terminal(tmp_path, backen
             )
             assert state.split() == ["0", "1", "0"], state
     finally:
+        released.set()
         tmux("kill-session", "-t", session)
 
 
