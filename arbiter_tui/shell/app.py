@@ -34,6 +34,7 @@ from ..session.config import save_theme
 from ..session.frames import CONTROL, Frame, FrameClock, FrameSampler, Shown
 from ..session.robot import RobotSession
 from ..session.settings import Settings
+from ..terminal import fewer_bytes
 from . import lifecycle, operator, palette, perf, robot_side, sweep
 from .dialogs import Dialogs
 from .keys import STOP_BINDINGS, TYPING, KeyRouter, direct_keys
@@ -229,7 +230,7 @@ class ArbiterApp(RegistryTheme):
 
     # -- keys --------------------------------------------------------------------------------------------
     def get_driver_class(self) -> type[Driver]:
-        return direct_keys(super().get_driver_class(), lambda: self.keys)
+        return fewer_bytes(direct_keys(super().get_driver_class(), lambda: self.keys))
 
     async def on_event(self, event: events.Event) -> None:
         if isinstance(event, events.Key) and not event.is_forwarded:
