@@ -37,7 +37,7 @@ from arbiter_core.stats import percentile
 from arbiter_core.topicstats import Expectation, TopicFigures
 
 from .autonomy import AutonomyService
-from .bus import Bus, TopicBus
+from .bus import Bus, GraphBus, TopicBus
 from .supervise import Supervisor
 from .topicwatch import TopicWatch
 from .tracker import LatencyTracker
@@ -45,6 +45,7 @@ from .tracker import LatencyTracker
 if TYPE_CHECKING:
     from .bridge import RosbridgeEndpoint
     from .config import BackendConfig
+    from .rosapi import Graph
 
 log = logging.getLogger(__name__)
 TICK_S = 0.25  # the announcer's beat: what is due is published on it
@@ -757,38 +758,44 @@ class RobotStop:
             return False
         return True
 
-    def _actions(self) -> list[str]:
-        """The action servers a stop cancels (Nav2's, under the robot's namespace) that are there."""
+    def _graph(self) -> Graph | None:
+        """The ROS graph the cancels go over: the endpoint's, or the bus's where no endpoint runs
+        (``--transport ros --no-bridge``: the stock rosbridge_server beside it); None on the embedded bus."""
         endpoint = self.backend.endpoint
-        if endpoint is None:
-            return []
-        room = endpoint.service_room
+        if endpoint is not None:
+            return endpoint.service_room.graph
+        bus = self.backend.bus
+        return bus.graph if isinstance(bus, GraphBus) else None
+
+    def _actions(self) -> list[str]:
+        """The action servers a stop cancels (Nav2's, under the robot's namespace) that are there: provided
+        by a client of the endpoint, or on the ROS graph."""
+        endpoint, graph = self.backend.endpoint, self._graph()
         ns = self.announcer.src.namespace
         wanted = [topics.resolve(a, ns, what="action") for a in stopping.NAV2_ACTIONS]
         on_graph: set[str] = set()
-        if room.graph is not None:
+        if graph is not None:
             with contextlib.suppress(Exception):
-                on_graph = {name for name, _ in room.graph.service_names_and_types()}
+                on_graph = {name for name, _ in graph.service_names_and_types()}
+        provided = () if endpoint is None else endpoint.service_room.provided
         there = [a + stopping.CANCEL_SUFFIX for a in wanted]
-        return [a for a, srv in zip(wanted, there, strict=True) if srv in room.provided or srv in on_graph]
+        return [a for a, srv in zip(wanted, there, strict=True) if srv in provided or srv in on_graph]
 
     async def _cancel(self, action: str) -> stopping.ActionCancel:
         """Every goal of ``action`` cancelled: through the bridge's client that provides it, else on the
         ROS graph; bounded by ``CANCEL_TIMEOUT_S``."""
-        endpoint = self.backend.endpoint
-        assert endpoint is not None  # _actions found none without it
-        room = endpoint.service_room
+        endpoint, graph = self.backend.endpoint, self._graph()
         service = action + stopping.CANCEL_SUFFIX
         try:
-            provided = room.provided.get(service)
+            provided = None if endpoint is None else endpoint.service_room.provided.get(service)
             if provided is not None:
                 ok, values = await provided.call(stopping.CANCEL_ALL, stopping.CANCEL_TIMEOUT_S)
                 if not ok:
                     return stopping.cancel_failure(action, str(values))
-            elif room.graph is None:
+            elif graph is None:
                 return stopping.cancel_failure(action, "no provider and no ROS graph")
             else:
-                call = room.graph.call_service(service, stopping.CANCEL_ALL)
+                call = graph.call_service(service, stopping.CANCEL_ALL)
                 values = await asyncio.wait_for(call, stopping.CANCEL_TIMEOUT_S)
         except (TimeoutError, asyncio.TimeoutError):
             return stopping.cancel_failure(action, f"no answer in {stopping.CANCEL_TIMEOUT_S:g} s")

@@ -108,6 +108,10 @@ class RosBackend(Servers):
             bus, beat = self.bus, self.supervisor.beat
             # QoS follows the publishers
             self._watch = self.supervisor.task("qos-follower", lambda: bus.watch_publishers(beat=beat))
+        else:  # no endpoint (the stock rosbridge_server beside it): a bus on the tracker node all the same,
+            # for a fleet console's stop (the action servers' cancels on the graph, zeros on a foreign
+            # controller's cmd_vel)
+            self.bus = RosBus(self.tracker_node, asyncio.get_running_loop())
         autonomy = self.autonomy_node.service if self.autonomy_node is not None else None
         await self.start_servers(self.endpoint, self.tracker, self.topics, autonomy)
         if self.bridge_node is not None:

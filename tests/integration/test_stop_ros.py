@@ -14,39 +14,10 @@ from arbiter_tui.session.robot import RobotSession
 from arbiter_tui.session.settings import CONNECT, Settings
 
 from ..support.backend import start_backend
-from ..support.ros import Peer, use_test_domain
+from ..support.ros import Navigator, Peer, use_test_domain
 from ..support.waits import wait_for
 
 ros_domain = pytest.fixture(scope="module", autouse=True)(use_test_domain)
-
-
-def navigator(peer: Peer, cmd_topic: str):
-    """``/navigate_to_pose`` (the Fibonacci type stands in for NavigateToPose: a cancel is the same
-    service for every action): while a goal runs, Twist 0.3 m/s on ``cmd_topic`` at 20 Hz."""
-    from geometry_msgs.msg import Twist
-    from rclpy.action import ActionServer, CancelResponse, GoalResponse
-    from test_msgs.action import Fibonacci
-
-    drive = peer.node.create_publisher(Twist, cmd_topic, 10)
-
-    def execute(goal):
-        cmd = Twist()
-        cmd.linear.x = 0.3
-        deadline = time.monotonic() + 60
-        while time.monotonic() < deadline:
-            if goal.is_cancel_requested:
-                goal.canceled()
-                return Fibonacci.Result()
-            drive.publish(cmd)
-            time.sleep(0.05)
-        goal.abort()
-        return Fibonacci.Result()
-
-    server = ActionServer(
-        peer.node, Fibonacci, "/navigate_to_pose", execute_callback=execute,
-        goal_callback=lambda _g: GoalResponse.ACCEPT, cancel_callback=lambda _g: CancelResponse.ACCEPT,
-    )  # fmt: skip
-    return server, Fibonacci
 
 
 def test_a_stop_cancels_a_ros_action_servers_goal_through_rosbridge(tmp_path):
@@ -59,7 +30,8 @@ def test_a_stop_cancels_a_ros_action_servers_goal_through_rosbridge(tmp_path):
     link = RosLink("127.0.0.1", backend.bridge_port)
     session = RobotSession(settings, link)
     try:
-        server, action = navigator(peer, "/cmd_vel_measured")
+        nav = Navigator(peer, "/cmd_vel_measured")
+        action = nav.action_type
         client = ActionClient(peer.node, action, "/navigate_to_pose")
         assert client.wait_for_server(timeout_sec=15)
         assert wait_for(lambda: link.state == CONNECTED and link.telemetry.odom_count > 0, 20)
@@ -77,7 +49,7 @@ def test_a_stop_cancels_a_ros_action_servers_goal_through_rosbridge(tmp_path):
         assert not report.unsure and took <= 1.0, (took, report.cancels)
         # the other Nav2 servers are not there: said as such, not as failures
         assert "could not cancel" not in report.text()
-        server.destroy()
+        nav.destroy()
         client.destroy()
     finally:
         session.close()

@@ -11,6 +11,7 @@ import itertools
 import os
 import random
 import threading
+import time
 
 import pytest
 
@@ -117,3 +118,53 @@ def serve_flag_and_fibonacci(node, service: str, action: str):
         return Fibonacci.Result(sequence=seq)
 
     return ActionServer(node, Fibonacci, action, fibonacci)
+
+
+class Navigator:
+    """``action`` on ``peer`` as Nav2's navigator serves it (the Fibonacci type stands in for
+    NavigateToPose: a cancel is the same service for every action): while a goal runs, Twist 0.3 m/s on
+    ``cmd_topic`` at 20 Hz, for up to a minute; a cancel request is accepted and ends the goal canceled.
+    What it saw is kept: ``cancels`` (the monotonic time of each cancel request) and ``ended`` (each goal's
+    end, "canceled" or "aborted"). The peer needs ``threads`` > 1 (``execute`` blocks while it drives)."""
+
+    def __init__(self, peer: Peer, cmd_topic: str, action: str = "/navigate_to_pose") -> None:
+        from geometry_msgs.msg import Twist
+        from rclpy.action import ActionServer, CancelResponse, GoalResponse
+        from test_msgs.action import Fibonacci
+
+        self.action_type = Fibonacci
+        self.cancels: list[float] = []
+        self.ended: list[str] = []
+        self.executing = 0  # goals executing now
+        self._drive = peer.node.create_publisher(Twist, cmd_topic, 10)
+        self._cmd = Twist()
+        self._cmd.linear.x = 0.3
+
+        def cancel(_goal) -> CancelResponse:
+            self.cancels.append(time.monotonic())
+            return CancelResponse.ACCEPT
+
+        self.server = ActionServer(
+            peer.node, Fibonacci, action, execute_callback=self._execute,
+            goal_callback=lambda _g: GoalResponse.ACCEPT, cancel_callback=cancel,
+        )  # fmt: skip
+
+    def _execute(self, goal):
+        self.executing += 1
+        try:
+            deadline = time.monotonic() + 60
+            while time.monotonic() < deadline:
+                if goal.is_cancel_requested:
+                    goal.canceled()
+                    self.ended.append("canceled")
+                    return self.action_type.Result()
+                self._drive.publish(self._cmd)
+                time.sleep(0.05)
+            goal.abort()
+            self.ended.append("aborted")
+            return self.action_type.Result()
+        finally:
+            self.executing -= 1
+
+    def destroy(self) -> None:
+        self.server.destroy()
