@@ -255,9 +255,13 @@ class FrameSampler:
         return mission
 
     # -- one frame -----------------------------------------------------------------------------------------
-    def sample(self, shown: Shown, force: bool = False) -> Frame:
+    def sample(self, shown: Shown, force: bool = False, echo: bool = False) -> Frame:
         """The next frame: what ``shown`` shows, sampled now; ``force`` (a user action, a screen shown)
-        takes every part at once.
+        takes every part at once; ``echo`` (a key that changed a command or a limit) the robot panel
+        alone, and the status line where more than its count changed: the key's echo is a frame of what
+        the key changed, the size of the panel, not of everything that changed since the last frame (on
+        a slow link a frame's bytes are its time on the wire: docs/benchmarks/screen-bytes.md). The
+        map and the rest follow with the next frame.
 
         Fast parts (the robot panel, the map) change at every frame; each slow part (analytics, latency,
         topics; the status line's sample count with any of them) at most ``analytics_rate`` times a
@@ -269,6 +273,8 @@ class FrameSampler:
         s = self.session
         now = self.clock()
         f = self.frame
+        if echo and not force:
+            return self._echo(shown, now)
         period = self.slow_stretch / self.settings.analytics_rate
         due = [part for part, at in self._slow_at.items() if shown.shows(part) and now - at >= period]
         slow = set(self._slow_at) if force else set(due and [min(due, key=self._slow_at.__getitem__)])
@@ -305,6 +311,17 @@ class FrameSampler:
         if any(new is not old for new, old in zip(parts, astuple_shallow(f), strict=True)):
             self.frame = Frame(*parts)
         return self.frame  # nothing changed: the same frame, which the shell then does not hand on
+
+    def _echo(self, shown: Shown, now: float) -> Frame:
+        f = self.frame
+        status = _kept(f.status, self._status(f.status, now, False, False))
+        robot = f.robot
+        if shown.screen == CONTROL:
+            robot = _kept(f.robot, robot_view(self.session.link, self.session.loop, self.session.too_small,
+                                              observed=self.observed()))  # fmt: skip
+        if status is not f.status or robot is not f.robot:
+            self.frame = replace(f, status=status, robot=robot)
+        return self.frame
 
     def latency_polled(self, answer: TrackerAnswer) -> None:
         """The tracker's poller brought an answer: shown with the next frame that takes it."""

@@ -209,21 +209,22 @@ class ArbiterApp(RegistryTheme):
         limit shows at once; a held key's repeats that change nothing wait for the UI tick), or
         ``force`` (past every rate gate: a selection, a screen shown)."""
         if force or self.sampler.user_state() != self._shown_state:
-            self.sample_frame(force)
+            self.sample_frame(force, echo=not force)
 
-    def sample_frame(self, force: bool = False) -> None:
+    def sample_frame(self, force: bool = False, echo: bool = False) -> None:
         """A new frame for the screens shown (the UI tick: ``ui_rate`` frames a second, each just after a
-        control tick)."""
+        control tick); ``echo``: what a key changed alone (``FrameSampler.sample``)."""
         stack = _screens(self)
         if not stack:
             return
         state = self.sampler.user_state()
         self._shown_state = state
         shown = _shown(self)
-        frame = self.sampler.sample(shown, force)
+        frame = self.sampler.sample(shown, force, echo)
         for screen in stack:
             if isinstance(screen, BaseScreen) and (frame is not screen.frame or screen.plot_budget.waiting):
-                screen.plot_budget.renew(None if force else 1)  # a tick's frame draws at most one plot
+                # a tick's frame draws at most one plot, a key's echo none
+                screen.plot_budget.renew(None if force else 0 if echo else 1)
                 screen.frame = frame  # (the same frame again: only for the plots that waited)
         if shown.shows("analytics"):
             sweep.start_if_wanted(self, self.session, self.sampler)
