@@ -12,8 +12,10 @@ link"), because over SSH on Wi-Fi they do not arrive at the terminal's pace:
   out within that grace, not a fixed 0.6 s later;
 * keys that arrive faster than any terminal repeats (more of them within ``PACE_WINDOW_S`` than
   ``MAX_REPEAT_HZ`` allows in the time they took, with ``PACE_SLACK_S`` of a link's jitter) were held
-  back and replayed (a stall's burst, whether it comes in one read or split across several): the hold
-  they belong to is cancelled at once (one zero) and the rest ignored; the hold resumes only with keys
+  back and replayed (a stall's burst, whether it comes in one read or split across several): where the
+  hold they belong to has run out, it stays ended (one zero) and the rest are ignored; where it still
+  runs (a short stall: one lost packet's retransmission, 0.2-0.4 s), they are its repeats, late, and the
+  hold goes on without a gap; the hold resumes only with keys
   at a pace a terminal repeats at, and not on the first such key after a burst but on the one after it:
   TCP brings a stall's keys back in flights one round trip apart (its retransmission, then what its
   window held back), so a burst's next flight starts with a key at a hand's pace and the rest bunched
@@ -189,7 +191,11 @@ class Teleop:
             self._hold(key, now, FRESH)  # a new key, or the same one pressed again after its hold ended
             return
         self._arrivals.append(now)
-        if too_fast(self._arrivals, now):  # replayed from a stall: no hand sends keys this fast
+        live = self._state == STEADY and self.deadline is not None and now < self.deadline
+        # replayed from a stall (no hand sends keys this fast), after the hold ran out; a burst that
+        # comes while the hold still runs is the hold's own keys, late (a lost packet's retransmission:
+        # the deadman cut in on every one, a lurch every 15 s over lab Wi-Fi): repeats, as any late key
+        if too_fast(self._arrivals, now) and not live:
             if self.deadline is not None:
                 self.bursts += 1
                 self.stop()
