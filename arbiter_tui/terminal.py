@@ -19,9 +19,13 @@ code after it, until a plain reset: never a guess. Pure: no Textual, no I/O.
 
 from __future__ import annotations
 
+import logging
 import re
 from functools import lru_cache
 from typing import Protocol, TypeVar
+
+log = logging.getLogger(__name__)
+_failed = False  # the rewrite raised once (said once in the log)
 
 # (attributes bitmask, foreground, background, underline colour): each colour its SGR parameters as
 # written ("31", "38;5;253", "38;2;1;2;3") or None for the terminal's default
@@ -167,7 +171,15 @@ def fewer_bytes(base: type[W]) -> type[W]:
 
     class FewerBytes(base):  # type: ignore[misc, valid-type]  # the driver class Textual chose at run time
         def write(self, data: str) -> None:
-            super().write(fewer_sgr(data))
+            try:
+                shorter = fewer_sgr(data)
+            except Exception:  # never a screen lost to this: the write as Textual made it, said once
+                global _failed
+                if not _failed:
+                    _failed = True
+                    log.exception("terminal output: written as it came (the rewrite failed)")
+                shorter = data
+            super().write(shorter)
 
     FewerBytes.__name__ = f"FewerBytes{base.__name__}"
     return FewerBytes

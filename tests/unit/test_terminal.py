@@ -110,3 +110,29 @@ def test_a_change_is_the_shorter_of_a_step_and_a_reset():
     assert change(apply(RESET, "2;1;38;5;24"), apply(RESET, "2;38;5;24")) == "\x1b[22;2m"
     assert change(bold_blue, RESET) == "\x1b[0m"
     assert change(apply(RESET, "1;4;7;9;38;5;24;48;5;233"), apply(RESET, "31")) == "\x1b[0;31m"
+
+
+def test_the_driver_writes_the_shorter_stream_and_the_original_if_the_rewrite_fails(monkeypatch, caplog):
+    import arbiter_tui.terminal as terminal
+
+    class Recorder:
+        def __init__(self) -> None:
+            self.written: list[str] = []
+
+        def write(self, data: str) -> None:
+            self.written.append(data)
+
+    driver = terminal.fewer_bytes(Recorder)()
+    stream = "\x1b[38;5;24ma\x1b[0m\x1b[38;5;24mb\x1b[0m"
+    driver.write(stream)
+    assert driver.written == ["\x1b[38;5;24mab\x1b[0m"]
+
+    def broken(data: str) -> str:
+        raise ValueError("a bug")
+
+    monkeypatch.setattr(terminal, "fewer_sgr", broken)
+    monkeypatch.setattr(terminal, "_failed", False)
+    driver.write(stream)
+    driver.write(stream)
+    assert driver.written[1:] == [stream, stream]  # the screen as Textual made it, never lost
+    assert caplog.text.count("the rewrite failed") == 1  # said once
