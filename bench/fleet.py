@@ -139,11 +139,11 @@ def tmux(*args: str) -> str:
     return subprocess.run(["tmux", *args], capture_output=True, text=True, timeout=10).stdout
 
 
-def start_console(listen: str, size: tuple[int, int]) -> int:
+def start_console(listen: str, size: tuple[int, int], root: Path | None = None) -> int:
     """The fleet screen in tmux; its process id (``exec``: the pane's process is the console). Its code:
-    ``--console-root`` (another checkout, to compare two versions in alternating runs), else this one."""
+    ``root`` (another checkout, to compare two versions in alternating runs), else this one."""
     tmux("kill-session", "-t", SESSION)
-    root = ARGS.console_root or ROOT
+    root = root or ROOT
     cmd = f"exec env PYTHONPATH={root} {sys.executable} -m arbiter_tui.cli fleet --listen {listen}"
     # started in ``root``: ``python -m`` puts its working directory before PYTHONPATH
     tmux("new-session", "-d", "-s", SESSION, "-c", str(root), "-x", str(size[0]), "-y", str(size[1]), cmd)
@@ -289,7 +289,7 @@ def obs_state(c, name: str) -> str | None:
 def scale(n: int, seconds: float, size: tuple[int, int]) -> dict:
     port = free_port()
     endpoint = f"tcp/127.0.0.1:{port}"
-    pid = start_console(endpoint, size)
+    pid = start_console(endpoint, size, ARGS.console_root)
     procs: list[subprocess.Popen] = []
     obs = None
     try:
