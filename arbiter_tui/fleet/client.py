@@ -28,10 +28,12 @@ from typing import Any
 from arbiter_core import fleet
 from arbiter_core.hostclock import HostClock
 
+from . import memory
 from .rows import FleetModel, FleetView, Row, clock_time
 
 log = logging.getLogger(__name__)
 SYNC_REFRESH_S = 30.0
+TRIM_S = 10.0
 HISTORY_TIMEOUT_S = 3.0
 BACKFILL_WORKERS = 8  # history questions asked at once
 BACKFILL_MINUTES = 1.0  # a robot first seen: its latest latency, topics and runs from its history
@@ -41,6 +43,7 @@ BACKFILL_MINUTES = 1.0  # a robot first seen: its latest latency, topics and run
 # woken, the GIL taken and a cold interpreter for each of 850 payloads a second (bench/fleet.py)
 DRAIN_S = 0.1
 QUEUED = 16384  # payloads queued at most between two drains (~160,000 a second)
+SHARED_MEMORY = "transport/shared_memory/enabled"  # off in the console (zenoh_config)
 
 
 class FleetUnavailable(Exception):
@@ -88,6 +91,10 @@ def zenoh_config(zenoh: Any, settings: ConsoleSettings, connect_timeout_ms: int 
             settings.lease_ms,
             settings.config_file is not None,
         )
+        # no shared memory: a robot on this host would send its big payloads (over 3 KB: nothing a
+        # console reads, a topics payload is at most 4 KB) through a 16 MB pool of its own that this
+        # process maps and keeps resident after they are dropped (bench/fleet_flood.py: +17 MB for good)
+        values[SHARED_MEMORY] = False
         if connect_timeout_ms is not None and settings.connect:
             values["connect/timeout_ms"] = connect_timeout_ms
             values["connect/exit_on_failure"] = True
@@ -181,12 +188,17 @@ class FleetClient:
                 self.session.close()
 
     def _sync_loop(self) -> None:
-        """This host's clock sync (for the offset bounds), read now and every SYNC_REFRESH_S."""
+        """This host's clock sync (for the offset bounds), read now and every SYNC_REFRESH_S; the heap's
+        free pages given back every TRIM_S (a flood's peak does not stay resident)."""
+        synced: float | None = None
         while not self._closed.is_set():
-            sync = self.host_clock.read()
-            with self._lock:
-                self.model.console_sync = sync
-            self._closed.wait(SYNC_REFRESH_S)
+            if synced is None or self.mono() - synced >= SYNC_REFRESH_S:
+                synced = self.mono()
+                sync = self.host_clock.read()
+                with self._lock:
+                    self.model.console_sync = sync
+            memory.trim()
+            self._closed.wait(TRIM_S)
 
     # -- what arrives (on Zenoh's threads) --------------------------------------------------------
     def _on_token(self, sample: Any) -> None:
