@@ -21,6 +21,9 @@ Zenoh client of the console) counts the bytes each robot sends and sees the toke
   throttled in, and how soon a killed robot's row is the first on the screen;
 - ``--stops K``: at the largest N, the stop from the fleet (``arbiter/<name>/stop``) asked K times of a
   real backend through the console's router by the observer: its latency, p50/p95/max;
+- ``--cpu-only``: the CPU (whole and per thread) and the rows alone, without the kill/restart, stops and
+  quota; ``--console-root DIR``: the console's code from another checkout (to compare two versions in
+  alternating runs: the machine's load moves the figures by a point or two between runs);
 - ``--netem``: a 4th backend in a network namespace (root) behind a link that delays and drops packets
   both ways (``--delay-ms``, ``--loss``; ``tunlink.py``: this kernel has no ``sch_netem``, so the link is
   impaired in user space, packet by packet), for ``--netem-seconds``: the time its row was not "alive",
@@ -28,6 +31,7 @@ Zenoh client of the console) counts the bytes each robot sends and sees the toke
 
     nice -n 10 python bench/fleet.py --robots 10,50,200 --seconds 20 --netem
     python bench/fleet.py --robots 200,500 --seconds 20 --stops 100 --quota 25
+    nice -n 10 python bench/fleet.py --robots 200,500 --cpu-only --console-root ../base
 """
 
 from __future__ import annotations
