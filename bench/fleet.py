@@ -21,6 +21,9 @@ Zenoh client of the console) counts the bytes each robot sends and sees the toke
   throttled in, and how soon a killed robot's row is the first on the screen;
 - ``--stops K``: at the largest N, the stop from the fleet (``arbiter/<name>/stop``) asked K times of a
   real backend through the console's router by the observer: its latency, p50/p95/max;
+- ``--cpu-only``: the CPU (whole and per thread) and the rows alone, without the kill/restart, stops and
+  quota; ``--console-root DIR``: the console's code from another checkout (to compare two versions in
+  alternating runs: the machine's load moves the figures by a point or two between runs);
 - ``--netem``: a 4th backend in a network namespace (root) behind a link that delays and drops packets
   both ways (``--delay-ms``, ``--loss``; ``tunlink.py``: this kernel has no ``sch_netem``, so the link is
   impaired in user space, packet by packet), for ``--netem-seconds``: the time its row was not "alive",
@@ -28,6 +31,7 @@ Zenoh client of the console) counts the bytes each robot sends and sees the toke
 
     nice -n 10 python bench/fleet.py --robots 10,50,200 --seconds 20 --netem
     python bench/fleet.py --robots 200,500 --seconds 20 --stops 100 --quota 25
+    nice -n 10 python bench/fleet.py --robots 200,500 --cpu-only --console-root ../base
 """
 
 from __future__ import annotations
@@ -47,7 +51,7 @@ from pathlib import Path
 from _common import emit, free_port, pct
 
 ROOT = Path(__file__).resolve().parents[1]
-SESSION = "fleetbench"
+SESSION = f"fleetbench-{os.getpid()}"  # its own: two benches at once must not kill each other's
 NS, HOST_IP, BOT_IP = "fleetbot", "10.201.0.1", "10.201.0.2"
 CLK_TCK = os.sysconf("SC_CLK_TCK")
 CGROUP = Path("/sys/fs/cgroup/cpu/fleetbench")
@@ -139,11 +143,14 @@ def tmux(*args: str) -> str:
     return subprocess.run(["tmux", *args], capture_output=True, text=True, timeout=10).stdout
 
 
-def start_console(listen: str, size: tuple[int, int]) -> int:
-    """The fleet screen in tmux; its process id (``exec``: the pane's process is the console)."""
+def start_console(listen: str, size: tuple[int, int], root: Path | None = None) -> int:
+    """The fleet screen in tmux; its process id (``exec``: the pane's process is the console). Its code:
+    ``root`` (another checkout, to compare two versions in alternating runs), else this one."""
     tmux("kill-session", "-t", SESSION)
-    cmd = f"exec env PYTHONPATH={ROOT} {sys.executable} -m arbiter_tui.cli fleet --listen {listen}"
-    tmux("new-session", "-d", "-s", SESSION, "-x", str(size[0]), "-y", str(size[1]), cmd)
+    root = root or ROOT
+    cmd = f"exec env PYTHONPATH={root} {sys.executable} -m arbiter_tui.cli fleet --listen {listen}"
+    # started in ``root``: ``python -m`` puts its working directory before PYTHONPATH
+    tmux("new-session", "-d", "-s", SESSION, "-c", str(root), "-x", str(size[0]), "-y", str(size[1]), cmd)
     return int(tmux("display-message", "-p", "-t", SESSION, "#{pane_pid}").strip())
 
 
@@ -246,6 +253,19 @@ def cpu_s(pid: int) -> float:
     return (int(fields[11]) + int(fields[12])) / CLK_TCK
 
 
+def thread_cpu_s(pid: int) -> dict[str, float]:
+    """Each of the process's threads' utime+stime so far (s), summed by thread name (Zenoh's runtime
+    threads share names: ``rx-0``, ``net-0``, ...)."""
+    out: dict[str, float] = {}
+    for task in Path(f"/proc/{pid}/task").iterdir():
+        with contextlib.suppress(OSError):
+            head, rest = task.joinpath("stat").read_text().rsplit(")", 1)
+            name = head.split("(", 1)[1]
+            fields = rest.split()
+            out[name] = out.get(name, 0.0) + (int(fields[11]) + int(fields[12])) / CLK_TCK
+    return out
+
+
 def wait(pred, timeout: float, interval: float = 0.05) -> float | None:
     """Seconds until ``pred()`` holds, or None after ``timeout``."""
     t0 = time.monotonic()
@@ -273,7 +293,7 @@ def obs_state(c, name: str) -> str | None:
 def scale(n: int, seconds: float, size: tuple[int, int]) -> dict:
     port = free_port()
     endpoint = f"tcp/127.0.0.1:{port}"
-    pid = start_console(endpoint, size)
+    pid = start_console(endpoint, size, ARGS.console_root)
     procs: list[subprocess.Popen] = []
     obs = None
     try:
@@ -295,9 +315,12 @@ def scale(n: int, seconds: float, size: tuple[int, int]) -> dict:
             quota(pid, ARGS.quota)
             time.sleep(2.0)  # the quota's first periods
             p0, th0 = throttling()
-        c0, t0 = cpu_s(pid), time.monotonic()
+        c0, threads0, t0 = cpu_s(pid), thread_cpu_s(pid), time.monotonic()
         time.sleep(seconds)
-        cpu = 100.0 * (cpu_s(pid) - c0) / (time.monotonic() - t0)
+        window = time.monotonic() - t0
+        cpu = 100.0 * (cpu_s(pid) - c0) / window
+        threads1 = thread_cpu_s(pid)
+        by_thread = {k: round(100.0 * (v - threads0.get(k, 0.0)) / window, 1) for k, v in threads1.items()}
         listed = screen().split("────")[0].splitlines()  # the list, above the detail pane's rule
         rows_on_screen = sum(
             1 for line in listed if line.split()[:1] and line.split()[0].startswith(("sim-", "real-"))
@@ -308,6 +331,7 @@ def scale(n: int, seconds: float, size: tuple[int, int]) -> dict:
         result = {
             "robots": n + 3,
             "console_cpu_percent": round(cpu, 1),
+            "console_cpu_percent_by_thread": {k: v for k, v in sorted(by_thread.items()) if v > 0},
             **({} if not ARGS.quota else quota_figures(cpu, p0, th0)),
             "rows_on_screen": rows_on_screen,
             "all_rows_after_s": None if shown is None else round(shown, 2),
@@ -315,6 +339,8 @@ def scale(n: int, seconds: float, size: tuple[int, int]) -> dict:
             "real_bytes_per_s": [round(v, 1) for v in real_rates],
         }
         wait(lambda: obs.view().total >= n + 3, 10)
+        if ARGS.cpu_only:
+            return result
         if n == max(ARGS.robots) and ARGS.stops:
             result["stop"] = stop_latency(obs, "real-1", ARGS.stops)
         if n == max(ARGS.robots) or ARGS.quota:
@@ -504,6 +530,12 @@ def main() -> None:
     p.add_argument("--size", default="200x60")
     p.add_argument("--quota", type=float, help="the console under this %% of a core (cgroup v1; root)")
     p.add_argument("--stops", type=int, default=0, help="stops asked of a robot at the largest N")
+    p.add_argument("--cpu-only", action="store_true", help="the CPU and rows alone (no kill, stop, restart)")
+    p.add_argument(
+        "--console-root",
+        type=Path,
+        help="the console's code from this checkout (default: this one), to compare two in alternating runs",
+    )
     p.add_argument("--netem", action="store_true", help="also the robot behind netem (root)")
     p.add_argument("--delay-ms", type=float, default=200.0)
     p.add_argument("--loss", type=float, default=0.05)

@@ -3,10 +3,11 @@
 A client of the site's router (``--connect``), or the router itself (``--listen``, for a site with
 none). It subscribes to ``arbiter/*/alive`` liveliness (with history: the robots already there are
 listed at once) and to ``arbiter/*/*`` payloads, and asks ``arbiter/<name>/history`` on demand, and
-``arbiter/<name>/stop`` when the person stops a robot (who may is the router's access control). Every
-payload is checked by ``arbiter_core.fleet.decode`` (its size before it is copied) on Zenoh's thread,
-outside the model's lock; the model is then changed under the lock, and the screen takes frozen views.
-Nothing a robot sends can raise out of a callback: it marks that robot's row, or is counted.
+``arbiter/<name>/stop`` when the person stops a robot (who may is the router's access control). The
+payloads wait in Zenoh's queue and one thread of the console takes them in batches (``DRAIN_S``); each is
+checked by ``arbiter_core.fleet.decode`` (its size before it is copied) outside the model's lock; the
+model is then changed under the lock, and the screen takes frozen views. Nothing a robot sends can raise
+out of that thread or a callback: it marks that robot's row, or is counted.
 
 The only module of the console that imports Zenoh, and only when asked for (``import_zenoh``).
 """
@@ -16,6 +17,7 @@ from __future__ import annotations
 import contextlib
 import json
 import logging
+import os
 import threading
 import time
 from collections.abc import Callable
@@ -27,13 +29,23 @@ from typing import Any
 from arbiter_core import fleet
 from arbiter_core.hostclock import HostClock
 
+from . import memory
 from .rows import FleetModel, FleetView, Row, clock_time
 
 log = logging.getLogger(__name__)
 SYNC_REFRESH_S = 30.0
+TRIM_S = 10.0
 HISTORY_TIMEOUT_S = 3.0
 BACKFILL_WORKERS = 8  # history questions asked at once
 BACKFILL_MINUTES = 1.0  # a robot first seen: its latest latency, topics and runs from its history
+# payloads are taken in batches: Zenoh queues them (a ring: a flood beyond what Python can take drops the
+# oldest there, the console's memory stays bounded and Zenoh's threads never wait on it), one thread
+# takes what is queued this often. A callback per payload cost 3-4 times the CPU at 500 robots: a thread
+# woken, the GIL taken and a cold interpreter for each of 850 payloads a second (bench/fleet.py)
+DRAIN_S = 0.1
+QUEUED = 16384  # payloads queued at most between two drains (~160,000 a second)
+SHARED_MEMORY = "transport/shared_memory/enabled"  # off in the console (zenoh_config)
+RUNTIME = "(acc: (handover: rx))"  # ZENOH_RUNTIME (import_zenoh)
 
 
 class FleetUnavailable(Exception):
@@ -41,6 +53,10 @@ class FleetUnavailable(Exception):
 
 
 def import_zenoh() -> Any:
+    # Zenoh's accept runtime handed over to its rx runtime: a link accepted there had each of its packets
+    # woken through the accept thread, a thread switch per payload (1-1.5 % of a core at 500 robots).
+    # Read when Zenoh's runtime starts (the first session); a ZENOH_RUNTIME of the user's wins.
+    os.environ.setdefault("ZENOH_RUNTIME", RUNTIME)
     try:
         import zenoh
     except ImportError:
@@ -81,6 +97,10 @@ def zenoh_config(zenoh: Any, settings: ConsoleSettings, connect_timeout_ms: int 
             settings.lease_ms,
             settings.config_file is not None,
         )
+        # no shared memory: a robot on this host would send its big payloads (over 3 KB: nothing a
+        # console reads, a topics payload is at most 4 KB) through a 16 MB pool of its own that this
+        # process maps and keeps resident after they are dropped (bench/fleet_flood.py: +17 MB for good)
+        values[SHARED_MEMORY] = False
         if connect_timeout_ms is not None and settings.connect:
             values["connect/timeout_ms"] = connect_timeout_ms
             values["connect/exit_on_failure"] = True
@@ -143,8 +163,9 @@ class FleetClient:
             session.liveliness().declare_subscriber(
                 fleet.key("*", fleet.ALIVE), self._on_token, history=True
             ),
-            session.declare_subscriber(fleet.key("*", "*"), self._on_sample),
+            session.declare_subscriber(fleet.key("*", "*"), self.zenoh.handlers.RingChannel(QUEUED)),
         ]
+        samples = self._keep[-1]
         if self.settings.mode == "client":  # its own link: to its router (a router has none of its own)
             with self._lock:
                 self._link_since = self.wall()
@@ -152,6 +173,7 @@ class FleetClient:
             self._keep.append(events)
         self.opened.set()
         threading.Thread(target=self._sync_loop, name="fleet-clock", daemon=True).start()
+        threading.Thread(target=self._drain_loop, args=(samples,), name="fleet-samples", daemon=True).start()
 
     def open_in_background(self) -> None:
         def run() -> None:
@@ -172,12 +194,17 @@ class FleetClient:
                 self.session.close()
 
     def _sync_loop(self) -> None:
-        """This host's clock sync (for the offset bounds), read now and every SYNC_REFRESH_S."""
+        """This host's clock sync (for the offset bounds), read now and every SYNC_REFRESH_S; the heap's
+        free pages given back every TRIM_S (a flood's peak does not stay resident)."""
+        synced: float | None = None
         while not self._closed.is_set():
-            sync = self.host_clock.read()
-            with self._lock:
-                self.model.console_sync = sync
-            self._closed.wait(SYNC_REFRESH_S)
+            if synced is None or self.mono() - synced >= SYNC_REFRESH_S:
+                synced = self.mono()
+                sync = self.host_clock.read()
+                with self._lock:
+                    self.model.console_sync = sync
+            memory.trim()
+            self._closed.wait(TRIM_S)
 
     # -- what arrives (on Zenoh's threads) --------------------------------------------------------
     def _on_token(self, sample: Any) -> None:
@@ -236,11 +263,27 @@ class FleetClient:
         with self._lock:
             return self._pending
 
-    def _on_sample(self, sample: Any) -> None:
-        try:
-            self.take(str(sample.key_expr), sample.payload, sample.kind == self.zenoh.SampleKind.PUT)
-        except Exception:  # never out of a callback
-            log.exception("fleet: a sample was not taken")
+    def _drain_loop(self, samples: Any) -> None:
+        """What Zenoh queued on ``arbiter/*/*``, taken every DRAIN_S until the console closes."""
+        while not self._closed.wait(DRAIN_S):
+            self.drain(samples)
+
+    def drain(self, samples: Any) -> int:
+        """Every sample queued in ``samples`` (a subscriber with a channel) taken now; how many."""
+        put = self.zenoh.SampleKind.PUT
+        taken = 0
+        while True:
+            try:
+                sample = samples.try_recv()
+            except Exception:  # undeclared: the session closed meanwhile
+                return taken
+            if sample is None:
+                return taken
+            taken += 1
+            try:
+                self.take(str(sample.key_expr), sample.payload, sample.kind == put)
+            except Exception:  # nothing a robot sends stops the others' being taken
+                log.exception("fleet: a sample was not taken")
 
     def take(self, key: str, payload: Any, put: bool = True) -> None:
         """One sample on ``arbiter/*/*``: checked (its size before its bytes are copied), then into
