@@ -14,15 +14,16 @@ link"), because over SSH on Wi-Fi they do not arrive at the terminal's pace:
   ``MAX_REPEAT_HZ`` allows in the time they took, with ``PACE_SLACK_S`` of a link's jitter) were held
   back and replayed (a stall's burst, whether it comes in one read or split across several): where the
   hold they belong to has run out, it stays ended (one zero) and the rest are ignored; where it still
-  runs (a short stall: one lost packet's retransmission, 0.2-0.4 s), they are its repeats, late, and the
-  hold goes on without a gap; the hold resumes only with keys
-  at a pace a terminal repeats at, and not on the first such key after a burst but on the one after it:
-  TCP brings a stall's keys back in flights one round trip apart (its retransmission, then what its
-  window held back), so a burst's next flight starts with a key at a hand's pace and the rest bunched
-  behind it. A key sooner than ``FIRST_REPEAT_S`` after its press never makes a
-  fresh hold steady (no terminal repeats that soon): the burst's first keys cannot extend it. So a
-  stall's burst commands no motion after the person let go beyond the time its first keys took to
-  arrive, and a stop key in it acts when it arrives, whatever came before or after it in the burst;
+  runs and has been steady (``PACED_BEFORE_BURST`` repeats at a terminal's pace: a short stall, one lost
+  packet's retransmission, 0.2-0.4 s), they are its repeats, late, and the hold goes on without a gap.
+  After a dropped burst the hold resumes only with keys at a pace a terminal repeats at, and not on the
+  first such key after a burst but on the one after it: TCP brings a stall's keys back in flights one
+  round trip apart (its retransmission, then what its window held back), so a burst's next flight starts
+  with a key at a hand's pace and the rest bunched behind it. A key sooner than ``FIRST_REPEAT_S`` after
+  its press never makes a fresh hold steady (no terminal repeats that soon): the burst's first keys
+  cannot extend it. So a stall's burst commands no motion after the person let go beyond the time its
+  first keys took to arrive, and a stop key in it acts when it arrives, whatever came before or after it
+  in the burst;
 * the time of a key is when the terminal's input thread read it, taken before any lock (the session's
   ``key(name, at)``), so a lock held elsewhere never bunches or spreads the keys teleop judges;
 * where the terminal reports key releases (:meth:`Teleop.release`), a hold ends at its release.
@@ -111,6 +112,11 @@ PACE_SLACK_S = 0.05  # a link's jitter may bunch keys this much closer than they
 PACE_WINDOW_S = 0.1  # the pace is judged over the keys of the hold that arrived this recently
 FIRST_REPEAT_S = 0.1  # no terminal repeats a key this soon after its press (its initial delay)
 ARRIVALS_KEPT = 32  # more keys than this in PACE_WINDOW_S is a replay whatever came before
+# a burst is the hold's own keys, late, only in a hold that has had this many steady repeats at a
+# terminal's pace (0.1 s of them at 30 Hz): a stall's burst comes back in TCP flights a round trip apart,
+# and its second flight's first key, at a hand's pace after the first flight's, must not make the rest
+# of that flight a live hold's repeats
+PACED_BEFORE_BURST = 3
 
 
 def too_fast(arrivals: deque[float], now: float) -> bool:
@@ -146,6 +152,7 @@ class Teleop:
     bursts: int = 0  # bursts replayed after a stall and cancelled (the bench and tests read it)
     _arrivals: deque[float] = field(default_factory=lambda: deque(maxlen=ARRIVALS_KEPT))  # this hold's
     _pressed_at: float = float("-inf")  # when this hold's key was pressed (its first arrival)
+    _paced: int = 0  # this hold's repeats that came at a terminal's pace, one after another, steady
 
     def __post_init__(self) -> None:
         self.speed = bounded(self.speed, MIN_SPEED, self.limits.max_linear)
@@ -188,10 +195,11 @@ class Teleop:
             self._arrivals.clear()
             self._arrivals.append(now)
             self._pressed_at = now
+            self._paced = 0
             self._hold(key, now, FRESH)  # a new key, or the same one pressed again after its hold ended
             return
         self._arrivals.append(now)
-        live = self._state == STEADY and self.deadline is not None and now < self.deadline
+        live = self._paced >= PACED_BEFORE_BURST and self.deadline is not None and now < self.deadline
         # replayed from a stall (no hand sends keys this fast), after the hold ran out; a burst that
         # comes while the hold still runs is the hold's own keys, late (a lost packet's retransmission:
         # the deadman cut in on every one, a lurch every 15 s over lab Wi-Fi): repeats, as any late key
@@ -200,11 +208,13 @@ class Teleop:
                 self.bursts += 1
                 self.stop()
             self._state = STALE  # the rest of the burst ignored
+            self._paced = 0
         elif replayed:
             if gap > self.grace():
                 self._arrivals.clear()
                 self._arrivals.append(now)
                 self._pressed_at = now
+                self._paced = 0
                 self._hold(key, now, FRESH)  # long after the burst: pressed again
             elif gap < BUNCH_S:
                 self._state = STALE  # bunched: the burst's next flight, still replayed
@@ -217,6 +227,7 @@ class Teleop:
         else:  # a repeat at a terminal's pace
             if self._state == STEADY and self.deadline is not None:
                 self.gaps.append(gap)
+                self._paced += gap >= BUNCH_S  # (keys that came together are no pace)
             self._hold(key, now, STEADY)
 
     def _hold(self, key: str, now: float, state: str) -> None:

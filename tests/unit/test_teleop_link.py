@@ -152,6 +152,22 @@ def test_a_burst_that_tcp_brings_back_in_two_flights_drives_nothing_after_the_re
     assert sent[-1][1] == (0.0, 0.0)
 
 
+@pytest.mark.parametrize("rtt", [0.12, 0.25, 0.4])
+def test_a_burst_whose_first_flight_is_one_key_drives_nothing_after_the_release(rtt):
+    """The retransmitted segment holds one keystroke; the rest of the stall's keys come a round trip
+    later, at once. That second flight's first key is at a hand's pace after the first (a poor link's
+    round trip is longer than a terminal's first repeat), so the hold it makes must not count as a
+    steady one whose late keys the rest of the flight could be."""
+    typed = sends(0.0, 2.0)
+    stalled = [s for s in typed if 1.0 <= s < 1.7]
+    keys = [(4.5, "i")] + [(4.5 + rtt + i * 1e-5, "i") for i, _ in enumerate(stalled[1:])]
+    keys += [(4.5 + 2 * rtt + i * 1e-5, "i") for i, s in enumerate(typed) if s >= 1.7]
+    before = [(s + 0.03, "i") for s in typed if s < 1.0]
+    sent = drive(before + keys, until=7.0)
+    assert motion_after(sent, 4.5 + rtt + 1e-3, 7.0) <= 1e-3  # nothing after the second flight came
+    assert sent[-1][1] == (0.0, 0.0)
+
+
 def test_a_key_held_on_after_the_stall_resumes_with_its_next_repeat():
     """Not released: after the burst is dropped the hold resumes with the first repeat at a hand's pace."""
     rng = random.Random(7)
