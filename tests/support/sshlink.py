@@ -32,6 +32,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from .tmux import on_screen
 from .tunlink import Impairment, TunLink, unique_subnet, unique_suffix
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -268,7 +269,7 @@ class SshRig:
         out = ""
         while time.monotonic() < deadline:
             out = self.screen()
-            if text in out:
+            if on_screen(text, out):
                 return out
             time.sleep(0.05)
         raise AssertionError(f"{text!r} not on the laptop's screen:\n{out}")
