@@ -103,8 +103,11 @@ def cap_setting(name: str, value: float, limit: float, unit: str) -> tuple[float
 
 
 BUNCH_S = 0.01  # keys closer than this came together (no terminal repeats faster than 100 Hz)
-MIN_GRACE_S = 0.25  # a hold outlasts its last repeat at least this long (a paint, a GC pause, a loaded Pi;
-# 0.15 s cut a 5 s hold over the lab link once while the test suite loaded both cores: a 157 ms gap)
+# a hold outlasts its last repeat at least this long: TCP resends a lost key after at least 200 ms
+# (Linux's least retransmission timeout) plus the link's round trip, and the gap it leaves is 0.26-0.33 s
+# over lab Wi-Fi (at 0.25 s one lab hold in 14 had a cut-out: the first lost packet of a hold, before its gap
+# had raised the grace); 0.15 s cut a hold on a paint or a collection while the suite loaded both cores
+MIN_GRACE_S = 0.35
 GRACE_GAPS = 2.0  # ...and this many times the longest recent gap between its repeats
 GAPS_KEPT = 30  # recent gaps: a second of a 30 Hz auto-repeat
 MAX_REPEAT_HZ = 60.0  # no terminal's auto-repeat is faster (30 Hz is a laptop's; 60 a fast X setting)

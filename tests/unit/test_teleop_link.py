@@ -90,7 +90,7 @@ def test_a_steady_hold_over_lab_wifi_has_no_gap_and_stops_soon_after_the_last_ke
 @pytest.mark.parametrize("seed", range(5))
 def test_a_lost_packets_retransmission_within_a_hold_keeps_it_without_a_gap(seed, stall_s):
     """Lab Wi-Fi loses 0.5 % of its packets: TCP resends a lost key after its 200 ms timeout, and the
-    keys behind it arrive with it at once. The hold still runs when they come (its grace: 0.25 s at
+    keys behind it arrive with it at once. The hold still runs when they come (its grace: 0.35 s at
     least), so they are its repeats, late: no zero in the hold (tests/support/sshlink.py saw a cut-out
     every 15 s of holding when the burst ended the hold), and the zero still comes within the grace of
     the last key."""
