@@ -28,8 +28,8 @@ from arbiter_tui.session import journal_files as F
 from arbiter_tui.session.journal import Journal, Sources
 from arbiter_tui.session.recording import open_recording
 
+from ..support.tmux import new_session, tmux
 from ..support.tmux import screen_until as _screen_until
-from ..support.tmux import tmux
 from ..support.waits import wait_for
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -51,7 +51,7 @@ def launch(data: Path, export_dir: Path) -> str:
         f"{env} {sys.executable} -m arbiter_tui.cli --bridge-port 0 --api-port 0 --export-dir {export_dir} "
         f"--log-file {data / 'console.log'}; sleep 30"
     )
-    tmux("new-session", "-d", "-s", session, "-x", "120", "-y", "40", cmd)
+    new_session(session, 120, 40, cmd)
     return session
 
 

@@ -6,7 +6,6 @@ import glob
 import os
 import platform
 import shutil
-import subprocess
 import sys
 import time
 import uuid
@@ -17,6 +16,7 @@ import pytest
 from arbiter_tui.session.heartbeat import PROBE_S
 from tests.support.backend import start_backend
 from tests.support.ptyterm import PtyTerminal
+from tests.support.tmux import new_session, tmux
 from tests.support.waits import wait_for
 
 HOLD_BOUND_S = 1.5  # the bound: a mission holds within this of the answers stopping
@@ -138,10 +138,6 @@ def blocked_on_the_terminal(pid: int) -> bool:
 needs_tmux = pytest.mark.skipif(shutil.which("tmux") is None, reason="tmux is not installed")
 
 
-def tmux(*args: str) -> str:
-    return subprocess.run(["tmux", *args], capture_output=True, text=True, timeout=10).stdout
-
-
 def pane_shows(session: str, text: str, timeout: float = 10.0) -> bool:
     return wait_for(lambda: text in tmux("capture-pane", "-p", "-t", session), timeout=timeout, interval=0.1)
 
@@ -154,7 +150,7 @@ def tmux_console(tmp_path, *env_unset: str) -> str:
         f"env {unset} PYTHONPATH={os.environ.get('PYTHONPATH', '')} {sys.executable} -m arbiter_tui.cli "
         f"--sim --no-journal --log-file {tmp_path / 'console.log'}"
     )
-    tmux("new-session", "-d", "-s", session, "-x", "100", "-y", "30", cmd)
+    new_session(session, 100, 30, cmd)
     return session
 
 

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from ..support.tmux import screen_until, tmux
+from ..support.tmux import new_session, screen_until, tmux
 from ..support.waits import wait_for
 
 pytestmark = pytest.mark.skipif(shutil.which("tmux") is None, reason="tmux is not installed")
@@ -23,7 +23,7 @@ def launch_tui(tmp_path: Path, args: str, linger: bool = False) -> tuple[str, Pa
     exe = Path(sys.executable).with_name("arbiter-tui")
     done = tmp_path / "exit"
     cmd = f"{exe} {args}; echo $? > {done}" + ("; sleep 30" if linger else "")
-    tmux("new-session", "-d", "-s", session, "-x", "100", "-y", "30", cmd)
+    new_session(session, 100, 30, cmd)
     return session, done
 
 
