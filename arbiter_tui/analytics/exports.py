@@ -348,9 +348,9 @@ def _odometry(p: DataPoint, t_ns: int) -> dict[str, Any]:
 
 
 def _mcap_run(r: RunSummary) -> dict[str, Any]:
-    # the time and final error as the JSON export rounds them (``RunSummary.as_dict``): a run still open
+    # the time and final error as the JSON export rounds them (``RunSummary.rounded``): a run still open
     # has no end, its time is read back from this figure, and the two files must grade it alike
-    shown = r.as_dict()
+    time_s, final = r.rounded()
     return {
         "id": r.id,
         "algorithm": r.algorithm,
@@ -359,8 +359,8 @@ def _mcap_run(r: RunSummary) -> dict[str, Any]:
         "completed": r.completed,
         "start_ms": float(r.start_ms),
         "end_ms": math.nan if r.end_ms is None else float(r.end_ms),
-        "time_s": float(shown["time_s"]),
-        "final_error_m": math.nan if shown["final_error_m"] is None else float(shown["final_error_m"]),
+        "time_s": float(time_s),
+        "final_error_m": math.nan if final is None else float(final),
         "stats": _mcap_stats(r.stats),
         "tracking": _mcap_tracking(r.tracking),
     }

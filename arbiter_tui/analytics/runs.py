@@ -91,12 +91,18 @@ class RunSummary:
         end = self.end_ms if self.end_ms is not None else (self.last_ms or self.start_ms)
         return max(0.0, (end - self.start_ms) / 1000.0)
 
+    def rounded(self) -> tuple[float, float | None]:
+        """Its time and final error as the exports write them (to the millisecond, to 0.1 mm)."""
+        final = None if self.final_error_m is None else round(self.final_error_m, 4)
+        return round(self.time_s, 3), final
+
     @property
     def dropped(self) -> int:
         """Samples of this run the ring buffer no longer holds (its summary still counts them)."""
         return self.stats.sampleCount - self.in_ring
 
     def as_dict(self) -> dict[str, Any]:
+        time_s, final = self.rounded()
         return {
             "id": self.id,
             "algorithm": self.algorithm,
@@ -105,8 +111,8 @@ class RunSummary:
             "completed": self.completed,
             "start_ms": self.start_ms,
             "end_ms": self.end_ms,
-            "time_s": round(self.time_s, 3),
-            "final_error_m": None if self.final_error_m is None else round(self.final_error_m, 4),
+            "time_s": time_s,
+            "final_error_m": final,
             "stats": self.stats.as_dict(),
             "tracking": None if self.tracking is None else self.tracking.as_dict(),
         }
